@@ -1,0 +1,146 @@
+"""Argument checks shared by every piezolib module.
+
+Each check raises a ``ValueError`` or ``TypeError`` whose message names the
+argument and the expected form, so that bad input never reaches numpy,
+scipy or SLICOT as a silent NaN or a deep traceback.
+"""
+
+import numbers
+
+import control as ct
+import numpy as np
+
+__all__ = [
+    "check_positive", "check_nonnegative", "check_finite_array", "check_siso",
+    "check_lti", "check_stable", "check_proper", "check_same_length",
+    "check_integer",
+]
+
+
+def check_positive(name, value):
+    """Return ``value`` as a float after checking it is finite and > 0."""
+    value = _as_real_scalar(name, value)
+    if not value > 0:
+        raise ValueError(f"{name} must be positive, got {value!r}")
+    return value
+
+
+def check_nonnegative(name, value):
+    """Return ``value`` as a float after checking it is finite and >= 0."""
+    value = _as_real_scalar(name, value)
+    if value < 0:
+        raise ValueError(f"{name} must be non-negative, got {value!r}")
+    return value
+
+
+def check_integer(name, value, minimum=None):
+    """Return ``value`` as an int after checking it is an integer >= minimum."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise TypeError(f"{name} must be an integer, got {value!r}")
+    value = int(value)
+    if minimum is not None and value < minimum:
+        raise ValueError(f"{name} must be >= {minimum}, got {value}")
+    return value
+
+
+def check_finite_array(name, x, ndim=None, min_length=None, shape=None):
+    """Return ``x`` as a float (or complex) array after checking its form.
+
+    Parameters
+    ----------
+    name : str
+        Argument name used in error messages.
+    x : array_like
+        Values to check.
+    ndim : int, optional
+        Required number of dimensions.
+    min_length : int, optional
+        Required minimum length of the first axis.
+    shape : tuple, optional
+        Required shape; ``None`` entries match any size.
+    """
+    try:
+        arr = np.asarray(x)
+    except Exception as exc:  # ragged lists and the like
+        raise TypeError(f"{name} must be array-like: {exc}") from None
+    if arr.dtype == object or not np.issubdtype(arr.dtype, np.number):
+        raise TypeError(f"{name} must be numeric, got dtype {arr.dtype}")
+    if not np.issubdtype(arr.dtype, np.complexfloating):
+        arr = arr.astype(float)
+    if ndim is not None and arr.ndim != ndim:
+        raise ValueError(f"{name} must be {ndim}-dimensional, got shape {arr.shape}")
+    if shape is not None:
+        if arr.ndim != len(shape) or any(
+                want is not None and want != got for want, got in zip(shape, arr.shape)):
+            want = tuple("any" if s is None else s for s in shape)
+            raise ValueError(f"{name} must have shape {want}, got {arr.shape}")
+    if min_length is not None and (arr.ndim == 0 or arr.shape[0] < min_length):
+        got = 0 if arr.ndim == 0 else arr.shape[0]
+        raise ValueError(f"{name} must have at least {min_length} samples, got {got}")
+    if not np.all(np.isfinite(arr)):
+        bad = int(np.size(arr) - np.count_nonzero(np.isfinite(arr)))
+        raise ValueError(f"{name} contains {bad} non-finite value(s) (NaN or inf)")
+    return arr
+
+
+def check_same_length(**arrays):
+    """Check that all keyword arrays have the same first-axis length."""
+    lengths = {name: len(a) for name, a in arrays.items()}
+    if len(set(lengths.values())) > 1:
+        desc = ", ".join(f"{n} has {k}" for n, k in lengths.items())
+        raise ValueError(f"arguments must have equal lengths: {desc}")
+
+
+def check_lti(name, sys):
+    """Check that ``sys`` is a python-control LTI system."""
+    if not isinstance(sys, ct.LTI):
+        raise TypeError(
+            f"{name} must be a control.TransferFunction or control.StateSpace, "
+            f"got {type(sys).__name__}")
+    return sys
+
+
+def check_siso(name, sys):
+    """Check that ``sys`` is a single-input single-output LTI system."""
+    check_lti(name, sys)
+    if sys.ninputs != 1 or sys.noutputs != 1:
+        raise ValueError(
+            f"{name} must be SISO, got {sys.noutputs} outputs x {sys.ninputs} inputs")
+    return sys
+
+
+def check_proper(name, sys):
+    """Check that a transfer function is proper (deg num <= deg den)."""
+    check_lti(name, sys)
+    if isinstance(sys, ct.TransferFunction):
+        for i in range(sys.noutputs):
+            for j in range(sys.ninputs):
+                num = np.trim_zeros(np.atleast_1d(sys.num[i][j]), "f")
+                den = np.trim_zeros(np.atleast_1d(sys.den[i][j]), "f")
+                if len(num) > len(den):
+                    raise ValueError(
+                        f"{name} must be proper: numerator degree {len(num) - 1} "
+                        f"exceeds denominator degree {len(den) - 1}")
+    return sys
+
+
+def check_stable(name, sys):
+    """Check that a continuous-time LTI system has all poles in Re s < 0."""
+    check_lti(name, sys)
+    poles = ct.poles(sys)
+    if sys.isctime(strict=False):
+        bad = poles[poles.real >= 0]
+    else:
+        bad = poles[np.abs(poles) >= 1]
+    if bad.size:
+        raise ValueError(f"{name} must be stable; unstable poles: {np.round(bad, 6)}")
+    return sys
+
+
+def _as_real_scalar(name, value):
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{name} must be a real number, got {value!r}")
+    value = float(value)
+    if not np.isfinite(value):
+        raise ValueError(f"{name} must be finite, got {value!r}")
+    return value

@@ -1,0 +1,103 @@
+"""Paper-versus-reproduced comparison tables.
+
+Every notebook states the paper's claims it checks as rows of a
+:class:`ClaimTable` and writes them to ``data/results/<name>.csv``.  A row
+holds the section, the quantity, its unit, the paper's value, the workbook's
+value, the tolerance of the comparison, the verdict and a note.  A numeric
+claim *agrees* when ``|ours - paper| <= max(atol, rtol * |paper|)``.
+"""
+
+import numbers
+
+import numpy as np
+import pandas as pd
+
+from ._checks import check_nonnegative
+from ._paths import results_dir
+
+__all__ = ["COLUMNS", "verdict", "ClaimTable", "save_results"]
+
+COLUMNS = ["section", "quantity", "unit", "paper", "ours", "tolerance",
+           "verdict", "note"]
+
+
+def verdict(paper, ours, rtol=0.0, atol=0.0):
+    """Return ``("agrees" | "differs", tolerance_text)`` for one claim.
+
+    Numbers are compared with ``max(atol, rtol*|paper|)``; anything else
+    (booleans, strings) must be equal.  A NaN result never agrees.
+    """
+    rtol = check_nonnegative("rtol", rtol)
+    atol = check_nonnegative("atol", atol)
+    if _is_number(paper) and _is_number(ours):
+        tol = max(atol, rtol * abs(float(paper)))
+        ok = bool(np.isfinite(float(ours))) and abs(float(ours) - float(paper)) <= tol
+        text = (f"+-{rtol:.0%}" if rtol and tol == rtol * abs(float(paper))
+                else f"+-{tol:g}")
+        return ("agrees" if ok else "differs"), text
+    return ("agrees" if paper == ours else "differs"), "equal"
+
+
+class ClaimTable:
+    """Collects claims of one notebook and writes them as one CSV."""
+
+    def __init__(self, name):
+        if not isinstance(name, str) or not name.isidentifier():
+            raise ValueError(f"name must be an identifier-like file stem, got {name!r}")
+        self.name = name
+        self.rows = []
+
+    def add(self, section, quantity, paper, ours, *, unit="", rtol=0.0, atol=0.0,
+            note=""):
+        """Add one claim and return its verdict.
+
+        Parameters
+        ----------
+        section : str
+            Paper location, e.g. ``"IV-C"`` or ``"Table 4"``.
+        quantity : str
+            What is compared, e.g. ``"||H_e S||_inf"``.
+        paper, ours
+            Published and recomputed values (``None`` for paper when the
+            paper gives no number).
+        unit : str, optional
+        rtol, atol : float, optional
+            Relative and absolute tolerance of the agreement.
+        note : str, optional
+            One line: why the values differ, or how ``ours`` was obtained.
+        """
+        if paper is None:
+            result, tol = "not published", ""
+        else:
+            result, tol = verdict(paper, ours, rtol=rtol, atol=atol)
+        self.rows.append(dict(section=section, quantity=quantity, unit=unit,
+                              paper=paper, ours=_plain(ours), tolerance=tol,
+                              verdict=result, note=note))
+        return result
+
+    def frame(self):
+        """The claims as a DataFrame with columns :data:`COLUMNS`."""
+        return pd.DataFrame(self.rows, columns=COLUMNS)
+
+    def save(self):
+        """Write ``data/results/<name>.csv`` and return its path."""
+        return save_results(self.frame(), self.name)
+
+
+def save_results(frame, name):
+    """Write a DataFrame to ``data/results/<name>.csv`` (floats to 6 significant
+    digits so that reruns on other machines give the same file)."""
+    if not isinstance(frame, pd.DataFrame):
+        raise TypeError(f"frame must be a pandas DataFrame, got {type(frame).__name__}")
+    path = results_dir() / f"{name}.csv"
+    frame.to_csv(path, index=False, float_format="%.6g")
+    return path
+
+
+def _is_number(x):
+    return isinstance(x, numbers.Real) and not isinstance(x, bool)
+
+
+def _plain(x):
+    """numpy scalars to Python scalars so that CSV and display stay simple."""
+    return x.item() if isinstance(x, np.generic) else x

@@ -1,0 +1,121 @@
+"""Run the whole workbook headless: data files first, then every notebook.
+
+``python -m piezolib reproduce`` regenerates the virtual-stage experiment
+files, executes ``notebooks/NN_*.ipynb`` in order (the notebooks save the
+figures into ``figures/`` and the paper-versus-reproduced tables into
+``data/results/``), prints one progress line per step and exits non-zero,
+naming the notebook and the cell, when a step fails.  The notebooks on disk
+are never modified: they are executed in memory.
+"""
+
+import importlib
+import os
+import sys
+import time
+
+from ._paths import notebooks_dir, project_root
+
+__all__ = ["DATA_STEPS", "list_notebooks", "run_notebook", "run", "NotebookFailure"]
+
+#: Data-generating steps run before the notebooks, as "module:function" names
+#: of functions that take no arguments and return the list of files written.
+DATA_STEPS = []
+
+
+class NotebookFailure(RuntimeError):
+    """A notebook cell raised; carries the notebook name and the cell index."""
+
+    def __init__(self, notebook, cell_index, source, error):
+        self.notebook, self.cell_index, self.source, self.error = (
+            notebook, cell_index, source, error)
+        first_line = source.strip().splitlines()[0] if source.strip() else ""
+        super().__init__(f"{notebook}: cell {cell_index} failed ({first_line!r}): {error}")
+
+
+def list_notebooks(selection=None):
+    """The numbered notebooks in pipeline order, optionally only those whose
+    name starts with one of the prefixes in ``selection`` (e.g. ``["00"]``)."""
+    paths = sorted(notebooks_dir().glob("[0-9][0-9]_*.ipynb"))
+    if selection:
+        paths = [p for p in paths if any(p.name.startswith(s) for s in selection)]
+        if not paths:
+            raise ValueError(f"no notebook matches {selection!r}")
+    return paths
+
+
+def run_notebook(path, timeout=600):
+    """Execute one notebook in memory with the current interpreter.
+
+    Raises
+    ------
+    NotebookFailure
+        When a cell raises; names the notebook and the cell.
+    """
+    import nbformat
+    from nbclient import NotebookClient
+    from nbclient.exceptions import CellExecutionError
+
+    nb = nbformat.read(path, as_version=4)
+    client = NotebookClient(nb, timeout=timeout, kernel_name="python3",
+                            resources={"metadata": {"path": str(path.parent)}})
+    try:
+        client.execute()
+    except CellExecutionError as exc:
+        index, source = _failed_cell(nb)
+        raise NotebookFailure(path.name, index, source,
+                              f"{exc.ename}: {exc.evalue}") from None
+    return nb
+
+
+def run(selection=None, timeout=600, keep_going=False, data=True, stream=sys.stdout):
+    """Regenerate data, then execute the notebooks; return the number of failures."""
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    os.environ.setdefault("PIEZOLIB_ROOT", str(project_root()))
+    failures = 0
+    steps = DATA_STEPS if data and not selection else []
+    total = len(steps) + len(list_notebooks(selection))
+    k = 0
+    start_all = time.perf_counter()
+    for step in steps:
+        k += 1
+        start = time.perf_counter()
+        module, func = step.split(":")
+        try:
+            written = getattr(importlib.import_module(module), func)()
+            status = f"ok ({len(written)} files)"
+        except Exception as exc:  # report and continue or stop, like a notebook
+            failures += 1
+            status = f"FAILED: {type(exc).__name__}: {exc}"
+        _line(stream, k, total, step, time.perf_counter() - start, status)
+        if failures and not keep_going:
+            return failures
+    for path in list_notebooks(selection):
+        k += 1
+        start = time.perf_counter()
+        try:
+            run_notebook(path, timeout=timeout)
+            status = "ok"
+        except NotebookFailure as exc:
+            failures += 1
+            status = f"FAILED at cell {exc.cell_index}: {exc.error}"
+        _line(stream, k, total, path.name, time.perf_counter() - start, status)
+        if failures and not keep_going:
+            break
+    print(f"{'all done' if not failures else f'{failures} step(s) failed'} in "
+          f"{time.perf_counter() - start_all:.1f} s; figures in "
+          f"{project_root() / 'figures'}, tables in {project_root() / 'data' / 'results'}",
+          file=stream, flush=True)
+    return failures
+
+
+def _line(stream, k, total, name, seconds, status):
+    print(f"[{k}/{total}] {name:<40s} {seconds:7.1f} s  {status}", file=stream, flush=True)
+
+
+def _failed_cell(nb):
+    """Index (among all cells, from 0) and source of the cell with an error output."""
+    for index, cell in enumerate(nb.cells):
+        for out in cell.get("outputs", []):
+            if out.get("output_type") == "error":
+                return index, cell.source
+    return -1, ""
