@@ -14,7 +14,7 @@ import numpy as np
 from ._paths import figures_dir
 
 __all__ = ["STYLE", "use_style", "new_figure", "save_figure", "figure_path",
-           "db", "plot_magnitude"]
+           "db", "plot_magnitude", "block_diagram"]
 
 #: rcParams of the workbook's figures (print-sized, readable at 100 %).
 STYLE = {
@@ -92,3 +92,67 @@ def plot_magnitude(ax, omega, response, label=None, **kwargs):
     ax.set_xlabel("frequency [rad/s]")
     ax.set_ylabel("magnitude [dB]")
     return line
+
+
+def block_diagram(ax, blocks, wires, title=None):
+    """Draw a signal-flow block diagram on ``ax``.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+    blocks : dict
+        ``name -> (x, y, label)``; a label starting with ``"o"`` and of length
+        1 draws a summing junction, anything else a box.
+    wires : list of tuple
+        ``(from, to, label)`` where ``from``/``to`` are block names or
+        ``(x, y)`` points; the label (signal name and unit) is written at the
+        middle of the wire.
+    """
+    ax.set_axis_off()
+    ax.set_aspect("equal")
+    size = {}
+    for name, (x, y, label) in blocks.items():
+        if label == "o":
+            ax.add_patch(mpl.patches.Circle((x, y), 0.18, fill=False, lw=1.2))
+            ax.text(x, y, "+", ha="center", va="center", fontsize=8)
+            size[name] = (0.18, 0.18)
+        else:
+            w = 0.16 * max(len(line) for line in label.splitlines()) + 0.5
+            h = 0.35 + 0.28 * label.count("\n")
+            ax.add_patch(mpl.patches.FancyBboxPatch(
+                (x - w / 2, y - h / 2), w, h, boxstyle="round,pad=0.05",
+                fc="#eef3f8", ec="#1f4e79", lw=1.2))
+            ax.text(x, y, label, ha="center", va="center", fontsize=8)
+            size[name] = (w / 2 + 0.05, h / 2 + 0.05)
+
+    def anchor(end, toward):
+        if not isinstance(end, str):
+            return np.asarray(end, float)
+        x, y, _ = blocks[end]
+        hw, hh = size[end]
+        dx, dy = toward[0] - x, toward[1] - y
+        if abs(dx) * hh >= abs(dy) * hw:   # leave through a vertical side
+            return np.array([x + np.sign(dx) * hw, y + dy * hw / max(abs(dx), 1e-9)])
+        return np.array([x + dx * hh / max(abs(dy), 1e-9), y + np.sign(dy) * hh])
+
+    def centre(end):
+        return np.asarray(end, float) if not isinstance(end, str) else np.array(blocks[end][:2])
+
+    xs, ys = [], []
+    for start, stop, label in wires:
+        a = anchor(start, centre(stop))
+        b = anchor(stop, centre(start))
+        ax.annotate("", xy=b, xytext=a,
+                    arrowprops=dict(arrowstyle="-|>", lw=1.0, color="#333333"))
+        mid = (a + b) / 2
+        ax.text(mid[0], mid[1] + 0.12, label, ha="center", va="bottom", fontsize=7.5,
+                color="#7a1f1f")
+        xs += [a[0], b[0]]
+        ys += [a[1], b[1]]
+    for x, y, _ in blocks.values():
+        xs.append(x)
+        ys.append(y)
+    ax.set_xlim(min(xs) - 1.2, max(xs) + 1.2)
+    ax.set_ylim(min(ys) - 0.9, max(ys) + 0.9)
+    if title:
+        ax.set_title(title)

@@ -90,12 +90,18 @@ def save_results(frame, name):
     if not isinstance(frame, pd.DataFrame):
         raise TypeError(f"frame must be a pandas DataFrame, got {type(frame).__name__}")
     path = results_dir() / f"{name}.csv"
+    # object columns mix numbers and text; round their floats like the rest
+    frame = frame.apply(lambda col: col.map(_six_digits) if col.dtype == object else col)
     frame.to_csv(path, index=False, float_format="%.6g")
     return path
 
 
 def _is_number(x):
     return isinstance(x, numbers.Real) and not isinstance(x, bool)
+
+
+def _six_digits(x):
+    return float(f"{x:.6g}") if isinstance(x, float) else x
 
 
 def _plain(x):

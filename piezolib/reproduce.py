@@ -10,6 +10,7 @@ are never modified: they are executed in memory.
 
 import importlib
 import os
+import subprocess
 import sys
 import time
 
@@ -59,7 +60,9 @@ def run_notebook(path, timeout=600):
     client = NotebookClient(nb, timeout=timeout, kernel_name="python3",
                             resources={"metadata": {"path": str(path.parent)}})
     try:
-        client.execute()
+        # the kernel process's own log (a TCP-transport notice) is noise here;
+        # cell output, including stderr, still reaches the notebook
+        client.execute(stderr=subprocess.DEVNULL)
     except CellExecutionError as exc:
         index, source = _failed_cell(nb)
         raise NotebookFailure(path.name, index, source,

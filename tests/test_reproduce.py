@@ -1,0 +1,43 @@
+"""The reproduce command runs notebooks in order and names a failing cell."""
+
+import subprocess
+import sys
+
+import nbformat
+import pytest
+
+from piezolib import reproduce
+
+
+def write_notebook(path, *sources):
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(s) for s in sources])
+    nbformat.write(nb, path)
+
+
+@pytest.fixture
+def workbook(tmp_path, monkeypatch):
+    (tmp_path / "notebooks").mkdir()
+    monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
+    return tmp_path
+
+
+def test_failure_names_notebook_and_cell(workbook):
+    write_notebook(workbook / "notebooks" / "00_ok.ipynb", "x = 1")
+    write_notebook(workbook / "notebooks" / "01_bad.ipynb", "y = 2", "assert y == 3, 'y is 2'")
+    write_notebook(workbook / "notebooks" / "02_never.ipynb", "z = 3")
+    proc = subprocess.run([sys.executable, "-m", "piezolib", "reproduce", "--no-data"],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 1
+    lines = proc.stdout.splitlines()
+    assert "00_ok.ipynb" in lines[0] and lines[0].rstrip().endswith("ok")
+    assert "01_bad.ipynb" in lines[1] and "FAILED at cell 1" in lines[1]
+    assert "AssertionError: y is 2" in lines[1]
+    assert not any("02_never" in line for line in lines)   # stops at the first failure
+
+
+def test_selection_and_listing(workbook):
+    write_notebook(workbook / "notebooks" / "00_a.ipynb", "pass")
+    write_notebook(workbook / "notebooks" / "01_b.ipynb", "pass")
+    assert [p.name for p in reproduce.list_notebooks(["01"])] == ["01_b.ipynb"]
+    with pytest.raises(ValueError, match="no notebook matches"):
+        reproduce.list_notebooks(["07"])
