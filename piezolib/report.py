@@ -15,10 +15,19 @@ import pandas as pd
 from ._checks import check_nonnegative
 from ._paths import results_dir
 
-__all__ = ["COLUMNS", "verdict", "ClaimTable", "save_results"]
+__all__ = ["COLUMNS", "REASONS", "verdict", "ClaimTable", "save_results"]
 
 COLUMNS = ["section", "quantity", "unit", "paper", "ours", "tolerance",
-           "verdict", "note"]
+           "verdict", "reason", "note"]
+
+#: Why a recomputed value differs from the published one.
+REASONS = {
+    "typo": "a printing or transcription error in the paper",
+    "inconsistent parameters": "the published parameters do not produce the published value",
+    "model mismatch": "the workbook's model differs from the one the paper used",
+    "virtual stage": "the virtual stage stands in for hardware the workbook does not have",
+    "method": "the quantity was computed by a different, documented method",
+}
 
 
 def verdict(paper, ours, rtol=0.0, atol=0.0):
@@ -48,7 +57,7 @@ class ClaimTable:
         self.rows = []
 
     def add(self, section, quantity, paper, ours, *, unit="", rtol=0.0, atol=0.0,
-            note=""):
+            reason="", note=""):
         """Add one claim and return its verdict.
 
         Parameters
@@ -63,16 +72,23 @@ class ClaimTable:
         unit : str, optional
         rtol, atol : float, optional
             Relative and absolute tolerance of the agreement.
+        reason : str, optional
+            One of :data:`REASONS`: why the values may differ.  Kept only on
+            rows whose verdict is "differs".
         note : str, optional
             One line: why the values differ, or how ``ours`` was obtained.
         """
+        if reason and reason not in REASONS:
+            raise ValueError(f"reason must be one of {sorted(REASONS)}, got {reason!r}")
         if paper is None:
             result, tol = "not published", ""
         else:
             result, tol = verdict(paper, ours, rtol=rtol, atol=atol)
         self.rows.append(dict(section=section, quantity=quantity, unit=unit,
                               paper=paper, ours=_plain(ours), tolerance=tol,
-                              verdict=result, note=note))
+                              verdict=result,
+                              reason=reason if result == "differs" else "",
+                              note=note))
         return result
 
     def frame(self):

@@ -26,6 +26,8 @@ def test_claim_table_writes_csv(tmp_path, monkeypatch):
     assert path == tmp_path / "data" / "results" / "unit_test.csv"
     text = path.read_text().splitlines()
     assert text[0] == ",".join(report.COLUMNS) and len(text) == 3
+    with pytest.raises(ValueError, match="reason must be one of"):
+        table.add("V", "x", 1.0, 2.0, reason="bad luck")
 
 
 def test_figure_names(tmp_path, monkeypatch):
