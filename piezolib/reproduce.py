@@ -20,7 +20,7 @@ __all__ = ["DATA_STEPS", "list_notebooks", "run_notebook", "run", "NotebookFailu
 
 #: Data-generating steps run before the notebooks, as "module:function" names
 #: of functions that take no arguments and return the list of files written.
-DATA_STEPS = []
+DATA_STEPS = ["piezolib.stage:write_experiment_files"]
 
 
 class NotebookFailure(RuntimeError):
@@ -73,6 +73,8 @@ def run_notebook(path, timeout=600):
 def run(selection=None, timeout=600, keep_going=False, data=True, stream=sys.stdout):
     """Regenerate data, then execute the notebooks; return the number of failures."""
     os.environ.setdefault("MPLBACKEND", "Agg")
+    # kernels inherit this: threaded BLAS on small problems is slower on 2 cores
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     os.environ.setdefault("PIEZOLIB_ROOT", str(project_root()))
     failures = 0
     steps = DATA_STEPS if data and not selection else []

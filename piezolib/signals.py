@@ -5,11 +5,12 @@ sampled at ``fs`` [Hz] (default: the paper's 10 kHz).
 """
 
 import numpy as np
+import scipy.signal as sg
 
 from . import paper
 from ._checks import check_positive, check_integer
 
-__all__ = ["time_vector", "triangle"]
+__all__ = ["time_vector", "triangle", "chirp"]
 
 
 def time_vector(duration_s, fs=paper.SAMPLING_FREQUENCY_HZ):
@@ -63,3 +64,44 @@ def triangle(peak, frequency_hz, periods=1, fs=paper.SAMPLING_FREQUENCY_HZ, mini
     phase[-1] = 1.0 if phase[-1] < 0.5 else phase[-1]  # exact closure at the end
     shape = 1.0 - np.abs(2.0 * phase - 1.0)            # 0 -> 1 -> 0 per period
     return t, minimum + (peak - minimum) * shape
+
+
+def chirp(amplitude, f0_hz, f1_hz, duration_s, fs=paper.SAMPLING_FREQUENCY_HZ,
+          method="logarithmic"):
+    """Cosine sweep ``amplitude * cos(phi(t))`` from ``f0_hz`` to ``f1_hz``.
+
+    The sweep starts at its crest (phase 0 at t = 0), so ``amplitude - y``
+    starts at zero with zero slope: a sweep added to a held level enters
+    without a step.
+
+    Parameters
+    ----------
+    amplitude : float
+        Peak value (any unit), > 0.
+    f0_hz, f1_hz : float
+        Start and end frequencies [Hz], 0 < f0 < f1 < fs/2.
+    duration_s : float
+        Length [s]; the instantaneous frequency reaches ``f1_hz`` at the end.
+    fs : float, optional
+        Sampling frequency [Hz].
+    method : {"logarithmic", "linear"}, optional
+        Exponential sweep (equal time per octave) or linear sweep.
+
+    Returns
+    -------
+    t : ndarray
+        Time [s], ``round(duration_s * fs)`` samples from 0.
+    y : ndarray
+        The sweep, same unit as ``amplitude``.
+    """
+    amplitude = check_positive("amplitude", amplitude)
+    f0_hz = check_positive("f0_hz", f0_hz)
+    f1_hz = check_positive("f1_hz", f1_hz)
+    fs = check_positive("fs", fs)
+    if not f0_hz < f1_hz < fs / 2:
+        raise ValueError(f"need 0 < f0_hz < f1_hz < fs/2 = {fs / 2:g} Hz, "
+                         f"got f0_hz={f0_hz:g}, f1_hz={f1_hz:g}")
+    if method not in ("logarithmic", "linear"):
+        raise ValueError(f"method must be 'logarithmic' or 'linear', got {method!r}")
+    t = time_vector(duration_s, fs)
+    return t, amplitude * sg.chirp(t, f0_hz, duration_s, f1_hz, method=method, phi=0.0)

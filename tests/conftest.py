@@ -1,4 +1,6 @@
 import os
 
-# headless, and every kernel nbval starts inherits it
+# headless, and every kernel nbval starts inherits these settings
 os.environ.setdefault("MPLBACKEND", "Agg")
+# one BLAS thread: on 2 shared cores threaded small solves run many times slower
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")

@@ -1,0 +1,62 @@
+"""Speed of the virtual stage and of the identification (prints numbers; no asserts).
+
+Goals: one closed-loop step in a few tens of microseconds at most; a 2 s
+chirp run well under a second; identification of the chirp in about a
+second; notebook 01 in about 10 s.
+
+    python benchmarks/bench_stage.py
+"""
+
+import time
+import warnings
+
+
+from piezolib import identification as ident
+from piezolib import paper
+from piezolib import stage as vstage
+
+
+def best_of(func, repeat=3):
+    times = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        func()
+        times.append(time.perf_counter() - start)
+    return min(times)
+
+
+def main():
+    stage = vstage.VirtualStage(seed=0)
+    u, _ = vstage.chirp_input(vstage.IDENTIFICATION_CHIRP)
+    t = best_of(lambda: stage.run(u))
+    print(f"run(), 2.25 s chirp ({len(u)} samples):      {t * 1e3:7.1f} ms")
+
+    triangles = [vstage.case_I_input(A) for A in (10.0, 20.0, 30.0, 40.0)]
+    t = best_of(lambda: [stage.run(x) for x in triangles])
+    print(f"run(), four Case I triangles:              {t * 1e3:7.1f} ms")
+
+    def stepping():
+        sim = stage.start()
+        for u_k in u.tolist():
+            sim.step(u_k)
+    t = best_of(stepping)
+    print(f"step(), per sample:                        {t / len(u) * 1e6:7.1f} us")
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        t = best_of(vstage.calibrate_hysteresis, repeat=1)
+    print(f"calibrate_hysteresis():                    {t:7.2f} s")
+
+    ex = vstage.load_chirp("identification")
+    u_op, y_op = ex.operating_point
+    rec = ex.record.segment(ex.hold_start)
+    du, dy = rec.u_c_V - u_op, rec.v_y_V - y_op
+    t = best_of(lambda: ident.identify(du, dy, paper.SAMPLING_FREQUENCY_HZ), 1)
+    print(f"identify(), {len(du)} samples:              {t:7.2f} s")
+    phi, target, _ = ident.arx_regressors(du, dy, 6, 6, 1)
+    t = best_of(lambda: ident.rls(phi, target, initial_gain=1e10), 1)
+    print(f"rls(), per sample (12 parameters):         {t / len(target) * 1e6:7.1f} us")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,1112 @@
+"""Virtual stand-in for the P-752.21 stage, E-505 amplifier, D-015 sensor and
+PXIe-6361 DAQ of the paper (Sec. II).
+
+The paper's experiments ran on hardware we do not have.  :class:`VirtualStage`
+is a documented model of that chain which takes the control input u_c [V]
+sampled at 10 kHz and returns what the DAQ would measure.  Signal path, one
+sample period T = 0.1 ms::
+
+    u_c[k] --DAC (16 bit, -2...12 V, ZOH)--> amplifier (x10, -30...130 V) --> v_a
+    v_a --Prandtl-Ishlinskii hysteresis H (small-signal gain 1)--> v_h
+    v_h / 10 --G(s) of eq. 4, exact ZOH discretisation--> y   (x = 3 um/V * y)
+    y + sensor noise --ADC (16 bit, -10...10 V, sampled at kT)--> v_y[k]
+
+Where the hysteresis sits, and why nothing is counted twice
+-----------------------------------------------------------
+G(s) (eq. 4) was identified from u_c to v_y with a small chirp, so it already
+contains the small-signal gains and dynamics of amplifier, actuator, stage and
+sensor.  The stage therefore applies G once, to the amplifier voltage after a
+*normalised* rate-independent hysteresis operator H whose small-signal gain is
+exactly 1: H = v_a + sum_i w_i (F_{r_i}[v_a] - r_i), a weighted sum of play
+operators F_r with thresholds r_i >= 1 V.  Any oscillation of v_a whose
+peak-to-peak size stays below 2 r_1 = 2 V after a reversal moves no play, so
+for such signals (the identification chirps) the stage *is* the published
+G(s) exactly; this is the "virtual stage's truth" of notebook 01
+(:meth:`VirtualStage.small_signal_model`).  Larger strokes engage plays: the
+loops open and the stroke gain grows with amplitude (chord gain 1.11 ... 1.37
+for the 10 ... 40 V loops of Table 4), as piezo actuators do.  Prandtl-
+Ishlinskii rather than Bouc-Wen because it is rate-independent by
+construction, has an exact linear small-signal zone that makes the
+identification truth unambiguous, and its amplitude dependence (more plays
+engage as the stroke grows) reproduces the rising hysteresis % of Table 4
+with two parameters.  It is deliberately *not* the Dahl model of Sec. III-C,
+so the Dahl fit of notebook 03 meets genuine model mismatch.
+
+The amplifier's 3 kHz bandwidth is taken to be inside G (G is the measured
+u_c -> v_y response, amplifier included) and is not added again; the
+amplifier is a static gain of 10 with output limits, so ``v_a_V`` is
+10 u_c as produced by the DAC.  Below 100 Hz, where hysteresis matters, a
+3 kHz first-order lag would shift the phase by less than 2 degrees.
+
+The sensor is ideal inside G: ``x_um`` is 3 um/V times the noise-free output
+of G at the sampling instants (the paper's 3 um/V scale of v_r and v_y).
+
+Assumptions (defaults of :class:`StageSettings`; all overridable)
+-----------------------------------------------------------------
+
+=========================  ====================  ===========================================
+quantity                   value                 source / reason
+=========================  ====================  ===========================================
+sampling, control rate     10 kHz                paper Sec. V
+DAC                        16 bit over           PXIe-6361 16-bit (Sec. II); range = E-505
+                           -2 ... 12 V, ZOH      input range, so the DAC clips where the
+                                                 amplifier input would
+amplifier                  gain 10, output       E-505 (Sec. II); static: its 3 kHz
+                           -30 ... 130 V         bandwidth is inside G
+hysteresis                 Prandtl-Ishlinskii,   calibrated only on Table 4 Case I
+                           20 plays r_i = 1 V x  (:func:`calibrate_hysteresis`); weights
+                           1.25^(i-1), weights   w_i = c (r_i - r_{i-1}) exp(-r_i / rho),
+                           exponential in r      c = 0.0554 /V, rho = 20.96 V
+initial state              at rest, v_a = 0 on   as if last lowered to 0 V; a triangle
+                           the descending branch from 0 V is periodic from its first stroke
+linear dynamics            G(s) of eq. 4 applied exact ZOH discretisation (piecewise-
+                           to v_h / 10           constant v_a gives piecewise-constant v_h)
+sensor noise               0.5 mV rms white      assumed: a few LSB of a 16-bit DAQ input
+                           (1.5 nm), Gaussian    plus sensor electronics; the D-015's own
+                                                 0.01 nm resolution is negligible
+ADC                        16 bit over           PXIe-6361 16-bit, its +-10 V range (the
+                           -10 ... 10 V          smallest holding the D-015's 0...10 V
+                                                 output; assumed); LSB 0.31 mV = 0.92 nm
+causality                  v_y[k] from u_c[0..   ZOH DAC, ADC sampling at kT, G strictly
+                           k-1]                  proper
+not modelled               creep, drift,         the paper neglects creep for short runs
+                           temperature, load     (Sec. I); no other data to calibrate on
+=========================  ====================  ===========================================
+
+Out-of-range input is never clipped silently: a :class:`StageSaturationWarning`
+names the range and the offending values, and every record carries
+:class:`Saturation` summaries for the DAC/amplifier input, the amplifier
+output and the ADC.
+
+Experiment files
+----------------
+:func:`write_experiment_files` (also ``python -m piezolib.stage``) runs the
+experiments the notebooks read and writes them to ``data/`` as CSV:
+two chirps (identification and an independent validation chirp, paper
+Sec. III-A) and the Table 4 Case I triangles of 10/20/30/40 V actuator
+amplitude at 10 Hz.  :func:`load_chirp` and :func:`load_hysteresis_loops`
+read them back.
+"""
+
+import io
+import math
+import warnings
+from dataclasses import dataclass, field, fields, replace
+
+import control as ct
+import numpy as np
+import scipy.optimize as opt
+import scipy.signal as sg
+
+from . import paper, signals
+from ._checks import (check_finite_array, check_integer, check_nonnegative,
+                      check_positive, check_siso, check_stable)
+from ._paths import data_dir
+from .identification import zoh_coefficients
+from .metrics import hysteresis_percent
+from .robust import realize
+
+__all__ = [
+    "HysteresisLaw", "PlayHysteresis", "CALIBRATED_HYSTERESIS", "ADC_RANGE_V", "StageSettings",
+    "Saturation", "StageRecord", "StageSaturationWarning", "VirtualStage",
+    "StageSimulation", "case_I_input", "run_case_I", "case_I_hysteresis",
+    "calibrate_hysteresis", "ChirpSettings", "IDENTIFICATION_CHIRP",
+    "VALIDATION_CHIRP", "chirp_input", "ChirpExperiment", "EXPERIMENT_SEEDS",
+    "experiment_paths", "write_experiment_files", "load_chirp",
+    "load_hysteresis_loops", "load_record",
+]
+
+
+# --- hysteresis truth: Prandtl-Ishlinskii play operators ----------------------
+@dataclass(frozen=True)
+class PlayHysteresis:
+    """Prandtl-Ishlinskii operator H[v] = w0 v + sum_i w_i (F_{r_i}[v] - r_i).
+
+    F_r is the play (backlash) operator of threshold r:
+    y_k = min(max(y_{k-1}, v_k - r), v_k + r).  Subtracting r_i makes H
+    return to 0 whenever v comes back down to 0 from above.
+
+    Attributes
+    ----------
+    thresholds_V : tuple of float
+        Play thresholds r_i [V of v_a], positive and increasing.
+    weights : tuple of float
+        Play weights w_i >= 0 (dimensionless).
+    linear_weight : float
+        w0, the slope right after a reversal: the small-signal gain.
+    """
+
+    thresholds_V: tuple
+    weights: tuple
+    linear_weight: float = 1.0
+
+    def __post_init__(self):
+        r = check_finite_array("thresholds_V", self.thresholds_V, ndim=1, min_length=1)
+        w = check_finite_array("weights", self.weights, ndim=1)
+        if len(w) != len(r):
+            raise ValueError(f"weights must have one value per threshold: "
+                             f"{len(w)} weights, {len(r)} thresholds")
+        if r[0] <= 0 or np.any(np.diff(r) <= 0):
+            raise ValueError("thresholds_V must be positive and strictly increasing")
+        if np.any(w < 0):
+            raise ValueError("weights must be non-negative")
+        check_positive("linear_weight", self.linear_weight)
+        object.__setattr__(self, "thresholds_V", tuple(float(x) for x in r))
+        object.__setattr__(self, "weights", tuple(float(x) for x in w))
+        object.__setattr__(self, "linear_weight", float(self.linear_weight))
+
+    def initial_state(self, v0=0.0):
+        """Play outputs on the descending branch at v0 (as if lowered to v0)."""
+        return tuple(v0 + r for r in self.thresholds_V)
+
+    def apply(self, v, state=None):
+        """Evaluate H on a sampled input, one monotone stroke at a time.
+
+        Within a stroke in which v does not decrease, every play output is
+        max(y_start, v_k - r) (and min(y_start, v_k + r) when v does not
+        increase), so each stroke is one numpy operation over samples and
+        plays.  The arithmetic is the same as the sample-by-sample recursion
+        of :class:`StageSimulation`, so both give identical floats.
+
+        Parameters
+        ----------
+        v : array_like
+            Input samples [V], 1-D.
+        state : sequence of float, optional
+            Play outputs before the first sample; default
+            :meth:`initial_state` at 0 V (at rest).
+
+        Returns
+        -------
+        v_h : ndarray
+            Operator output [V], same length as ``v``.
+        state : tuple of float
+            Play outputs after the last sample.
+        """
+        v = check_finite_array("v", v, ndim=1, min_length=1)
+        r = np.asarray(self.thresholds_V)
+        y = np.asarray(self.initial_state(0.0) if state is None else state, dtype=float)
+        if y.shape != r.shape:
+            raise ValueError(f"state must hold {len(r)} play outputs, got {y.shape}")
+        Y = np.empty((len(v), len(r)))
+        Y[0] = y = np.minimum(np.maximum(y, v[0] - r), v[0] + r)
+        # direction of each later sample; a repeated value changes nothing,
+        # so it joins the stroke it is in
+        d = np.sign(np.diff(v))
+        idx = np.maximum.accumulate(np.where(d != 0, np.arange(len(d)), 0))
+        d = d[idx]
+        d[d == 0] = 1
+        bounds = np.concatenate(([1], np.flatnonzero(np.diff(d)) + 2, [len(v)]))
+        for a, b in zip(bounds[:-1], bounds[1:]):
+            if b <= a:
+                continue
+            seg = v[a:b, None]
+            if d[a - 1] > 0:
+                Y[a:b] = np.maximum(y, seg - r)
+            else:
+                Y[a:b] = np.minimum(y, seg + r)
+            y = Y[b - 1]
+        out = self.linear_weight * v
+        for i, (ri, wi) in enumerate(zip(self.thresholds_V, self.weights)):
+            out = out + wi * (Y[:, i] - ri)
+        return out, tuple(float(x) for x in y)
+
+    def chord_gain(self, stroke_V):
+        """Gain (H change)/(v change) of a monotone stroke of ``stroke_V``
+        volts that starts at a reversal of a periodic loop (or from rest):
+        w0 + sum_i w_i max(0, 1 - 2 r_i / stroke)."""
+        stroke_V = check_positive("stroke_V", stroke_V)
+        r = np.asarray(self.thresholds_V)
+        return float(self.linear_weight
+                     + np.sum(np.asarray(self.weights) * np.maximum(0.0, 1 - 2 * r / stroke_V)))
+
+
+@dataclass(frozen=True)
+class HysteresisLaw:
+    """Two-parameter family of :class:`PlayHysteresis` operators.
+
+    Thresholds r_i = r_1 q^(i-1), i = 1..n, and weights
+    w_i = c (r_i - r_{i-1}) exp(-r_i / rho) with r_0 = 0: a play density
+    that decays exponentially with the threshold.  w0 = 1 (small-signal gain
+    1).  Only ``density_per_V`` (c) and ``decay_V`` (rho) are calibrated.
+    """
+
+    density_per_V: float
+    decay_V: float
+    first_threshold_V: float = 1.0
+    threshold_ratio: float = 1.25
+    count: int = 20
+
+    def __post_init__(self):
+        check_positive("density_per_V", self.density_per_V)
+        check_positive("decay_V", self.decay_V)
+        check_positive("first_threshold_V", self.first_threshold_V)
+        if not self.threshold_ratio > 1:
+            raise ValueError(f"threshold_ratio must exceed 1, got {self.threshold_ratio}")
+        check_integer("count", self.count, minimum=1)
+
+    def operator(self):
+        """The :class:`PlayHysteresis` operator of this law."""
+        r = self.first_threshold_V * self.threshold_ratio ** np.arange(self.count)
+        cell = np.diff(np.concatenate(([0.0], r)))
+        w = self.density_per_V * cell * np.exp(-r / self.decay_V)
+        return PlayHysteresis(tuple(r), tuple(w), 1.0)
+
+
+#: Calibrated on Table 4 Case I only; re-derive with :func:`calibrate_hysteresis`.
+CALIBRATED_HYSTERESIS = HysteresisLaw(density_per_V=0.0553682, decay_V=20.9598)
+
+
+# --- settings, records, saturation --------------------------------------------
+#: ADC input range [V]: the PXIe-6361's +-10 V range, the smallest that holds
+#: the sensor's 0 ... 10 V output (paper.SENSOR_OUTPUT_RANGE_V) with margin, so
+#: that noise and the small dynamic undershoot around 0 um are measured, not
+#: rectified.  An assumption: the paper does not state the DAQ input range.
+ADC_RANGE_V = (-10.0, 10.0)
+
+@dataclass(frozen=True)
+class StageSettings:
+    """Everything :class:`VirtualStage` assumes (see the module table).
+
+    Attributes
+    ----------
+    plant : control.LTI
+        Linear dynamics from u_c [V] to v_y [V] (strictly proper, stable).
+    sample_rate_Hz : float
+    amplifier_gain : float
+        v_a / u_c [V/V].
+    dac_range_V, dac_bits
+        DAC (= amplifier input) range [V] and resolution.
+    amplifier_output_range_V : tuple
+        Amplifier output limits [V].
+    adc_range_V, adc_bits
+        ADC range for v_y [V] and resolution.
+    noise_rms_V : float
+        White Gaussian sensor noise on v_y [V rms].
+    hysteresis : HysteresisLaw, PlayHysteresis or None
+        Hysteresis truth; ``None`` gives a linear stage (H = identity).
+    """
+
+    plant: object = field(default_factory=paper.plant)
+    sample_rate_Hz: float = paper.SAMPLING_FREQUENCY_HZ
+    amplifier_gain: float = paper.AMPLIFIER_GAIN
+    dac_range_V: tuple = paper.AMPLIFIER_INPUT_RANGE_V
+    dac_bits: int = paper.DAQ_BITS
+    amplifier_output_range_V: tuple = paper.AMPLIFIER_OUTPUT_RANGE_V
+    adc_range_V: tuple = ADC_RANGE_V
+    adc_bits: int = paper.DAQ_BITS
+    noise_rms_V: float = 0.5e-3
+    hysteresis: object = CALIBRATED_HYSTERESIS
+
+
+class StageSaturationWarning(UserWarning):
+    """A signal of the virtual stage left its range and was limited."""
+
+
+@dataclass(frozen=True)
+class Saturation:
+    """Summary of how often one stage of the chain was driven out of range.
+
+    Attributes
+    ----------
+    where : str
+        ``"DAC/amplifier input"``, ``"amplifier output"`` or ``"ADC"``.
+    limits_V : tuple
+        The allowed range [V].
+    count : int
+        Number of samples outside the range (they were limited to it).
+    first_index : int or None
+        First offending sample.
+    requested_min_V, requested_max_V : float or None
+        Extremes of the signal that was asked for (before limiting).
+    """
+
+    where: str
+    limits_V: tuple
+    count: int = 0
+    first_index: object = None
+    requested_min_V: object = None
+    requested_max_V: object = None
+
+    @property
+    def occurred(self):
+        """True when at least one sample was limited."""
+        return self.count > 0
+
+    def message(self, fs=paper.SAMPLING_FREQUENCY_HZ):
+        """One sentence naming the range and the offending values."""
+        if not self.occurred:
+            return f"{self.where}: within {self.limits_V[0]:g} ... {self.limits_V[1]:g} V"
+        return (f"{self.where}: requested {self.requested_min_V:.6g} ... "
+                f"{self.requested_max_V:.6g} V exceeds the range {self.limits_V[0]:g} ... "
+                f"{self.limits_V[1]:g} V in {self.count} sample(s), first at sample "
+                f"{self.first_index} (t = {self.first_index / fs:.4f} s); the output "
+                "was held at the range limit")
+
+    @classmethod
+    def of(cls, where, limits, requested, first_index_offset=0):
+        """Summarise the samples of ``requested`` outside ``limits``."""
+        requested = np.asarray(requested, dtype=float)
+        bad = np.flatnonzero((requested < limits[0]) | (requested > limits[1]))
+        if bad.size == 0:
+            return cls(where, tuple(limits))
+        return cls(where, tuple(limits), int(bad.size), int(bad[0]) + first_index_offset,
+                   float(requested.min()), float(requested.max()))
+
+
+@dataclass(frozen=True, eq=False)
+class StageRecord:
+    """One run of the virtual stage, sample k at t = k T.
+
+    Attributes
+    ----------
+    t_s : ndarray
+        Time [s].
+    u_c_V : ndarray
+        Control input as the DAC produced it (quantised, limited) [V].
+    v_a_V : ndarray
+        Amplifier output = actuator voltage [V].
+    x_um : ndarray
+        True displacement [um] (3 um/V x noise-free output of G).
+    v_y_V : ndarray
+        Measured sensor output [V]: noise and ADC quantisation included;
+        v_y[k] depends on u_c[0..k-1] only.
+    input_saturation, output_saturation, adc_saturation : Saturation
+        What was limited at the DAC/amplifier input, the amplifier output and
+        the ADC (whole run).
+    seed : int or None
+        Noise seed of the run.
+    """
+
+    t_s: np.ndarray
+    u_c_V: np.ndarray
+    v_a_V: np.ndarray
+    x_um: np.ndarray
+    v_y_V: np.ndarray
+    input_saturation: Saturation
+    output_saturation: Saturation
+    adc_saturation: Saturation
+    seed: object = None
+
+    _ARRAYS = ("t_s", "u_c_V", "v_a_V", "x_um", "v_y_V")
+
+    def __post_init__(self):
+        n = None
+        for name in self._ARRAYS:
+            arr = np.array(getattr(self, name), dtype=float)
+            if arr.ndim != 1 or (n is not None and len(arr) != n):
+                raise ValueError(f"{name} must be 1-D with the length of t_s")
+            n = len(arr)
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+
+    def __len__(self):
+        return len(self.t_s)
+
+    @property
+    def x_measured_um(self):
+        """Displacement as measured: 3 um/V x v_y [um]."""
+        return paper.UM_PER_VOLT * self.v_y_V
+
+    @property
+    def saturated(self):
+        """True when any part of the chain was driven out of range."""
+        return any(s.occurred for s in
+                   (self.input_saturation, self.output_saturation, self.adc_saturation))
+
+    def segment(self, start=None, stop=None):
+        """Samples start:stop as a record (saturation info of the whole run)."""
+        cut = slice(start, stop)
+        return replace(self, **{name: getattr(self, name)[cut] for name in self._ARRAYS})
+
+    def columns(self):
+        """The signals as a dict of arrays, in file column order."""
+        return {name: getattr(self, name) for name in self._ARRAYS}
+
+
+# --- the stage --------------------------------------------------------------------
+class VirtualStage:
+    """Virtual P-752.21 stage with amplifier, sensor and DAQ (module docstring).
+
+    Parameters
+    ----------
+    seed : int, optional
+        Seed of the sensor noise.  Every :meth:`run` and :meth:`start`
+        begins from the same state with a fresh generator of this seed, so a
+        stage is deterministic.
+    **overrides
+        Any field of :class:`StageSettings`, e.g. ``noise_rms_V=0`` or
+        ``hysteresis=None`` (linear stage).
+
+    Attributes
+    ----------
+    settings : StageSettings
+        Everything assumed (defaults plus overrides).
+    fs, gain : float
+        Sample rate [Hz] and amplifier gain [V/V].
+    hysteresis : PlayHysteresis or None
+        The hysteresis operator in use.
+    b, a : ndarray
+        Direct-form coefficients of the ZOH-discretised plant (b[0] = 0).
+
+    Examples
+    --------
+    >>> stage = VirtualStage(seed=0)
+    >>> rec = stage.run(np.full(1000, 1.0))        # 0.1 s at u_c = 1 V
+    >>> sim = stage.start()                        # closed-loop use
+    >>> v_y = sim.v_y_V                            # measurement at k = 0
+    >>> for k in range(1000):
+    ...     u_c = 1.0 + 0.5 * (1.0 - v_y)          # any causal controller
+    ...     v_y = sim.step(u_c)                    # measurement at k + 1
+    """
+
+    def __init__(self, seed=0, **overrides):
+        self.seed = check_integer("seed", seed, minimum=0)
+        names = {f.name for f in fields(StageSettings)}
+        unknown = set(overrides) - names
+        if unknown:
+            raise TypeError(f"unknown stage setting(s) {sorted(unknown)}; "
+                            f"expected some of {sorted(names)}")
+        self.settings = s = StageSettings(**overrides)
+        self.fs = check_positive("sample_rate_Hz", s.sample_rate_Hz)
+        self.gain = check_positive("amplifier_gain", s.amplifier_gain)
+        self.dac = _Converter("dac_range_V", s.dac_range_V, s.dac_bits)
+        self.adc = _Converter("adc_range_V", s.adc_range_V, s.adc_bits)
+        self.out_lo, self.out_hi = _range("amplifier_output_range_V",
+                                          s.amplifier_output_range_V)
+        self.noise_rms = check_nonnegative("noise_rms_V", s.noise_rms_V)
+        if isinstance(s.hysteresis, HysteresisLaw):
+            self.hysteresis = s.hysteresis.operator()
+        elif isinstance(s.hysteresis, PlayHysteresis) or s.hysteresis is None:
+            self.hysteresis = s.hysteresis
+        else:
+            raise TypeError("hysteresis must be a HysteresisLaw, a PlayHysteresis or "
+                            f"None, got {type(s.hysteresis).__name__}")
+        self.b, self.a = _zoh_filter(s.plant, 1.0 / self.fs)
+
+    def __repr__(self):
+        return f"VirtualStage(seed={self.seed})"
+
+    # -- models of the truth -------------------------------------------------------
+    def small_signal_model(self):
+        """The stage's exact model for small signals: w0 G(s), u_c -> v_y.
+
+        Valid for any input that, after its last reversal, oscillates with a
+        peak-to-peak size below :attr:`small_signal_limit_V` at the amplifier
+        input: then no play moves and H is v_a plus a constant.
+        """
+        w0 = 1.0 if self.hysteresis is None else self.hysteresis.linear_weight
+        G = ct.tf(self.settings.plant)
+        return ct.tf(w0 * G.num[0][0], G.den[0][0], inputs="u_c", outputs="v_y",
+                     name="G_small_signal")
+
+    @property
+    def small_signal_limit_V(self):
+        """Largest peak-to-peak u_c [V] of the exactly linear zone (2 r_1 / gain)."""
+        if self.hysteresis is None:
+            return float("inf")
+        return 2 * self.hysteresis.thresholds_V[0] / self.gain
+
+    def assumptions(self):
+        """The stage's assumptions, as used, in a table (see the module docstring).
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns ``quantity``, ``value``, ``source / reason``.
+        """
+        import pandas as pd
+        s, h = self.settings, self.hysteresis
+        if h is None:
+            hyst = ("none (linear stage)", "override")
+        else:
+            law = s.hysteresis if isinstance(s.hysteresis, HysteresisLaw) else None
+            hyst = (f"Prandtl-Ishlinskii, {len(h.thresholds_V)} plays, r = "
+                    f"{h.thresholds_V[0]:g} ... {h.thresholds_V[-1]:.3g} V, w0 = "
+                    f"{h.linear_weight:g}" + (f", c = {law.density_per_V:g} /V, rho = "
+                                              f"{law.decay_V:g} V" if law else ""),
+                    "calibrated on Table 4 Case I only (calibrate_hysteresis)")
+        rows = [
+            ("sampling / control rate", f"{self.fs:g} Hz", "paper Sec. V"),
+            ("DAC", f"{s.dac_bits} bit, {self.dac.lo:g} ... {self.dac.hi:g} V, ZOH, "
+                    f"LSB {self.dac.lsb * 1e3:.3g} mV",
+             "PXIe-6361 16 bit; range = E-505 input range (Sec. II)"),
+            ("amplifier", f"static gain {self.gain:g}, output {self.out_lo:g} ... "
+                          f"{self.out_hi:g} V", "E-505 (Sec. II)"),
+            ("amplifier bandwidth", f"{paper.AMPLIFIER_BANDWIDTH_HZ:g} Hz: not added",
+             "inside G, which was identified from u_c to v_y"),
+            ("hysteresis", *hyst),
+            ("hysteresis placement", "on v_a, small-signal gain 1, before G/10",
+             "G is the small-signal model: counted once"),
+            ("initial state", "rest, v_a = 0 V, plays on the descending branch",
+             "as if last lowered to 0 V"),
+            ("linear dynamics", "G(s) of eq. 4 on v_h / 10, exact ZOH discretisation",
+             "paper eq. 4"),
+            ("sensor noise", f"{s.noise_rms_V * 1e3:g} mV rms white Gaussian "
+                             f"({s.noise_rms_V * paper.UM_PER_VOLT * 1e3:.3g} nm)",
+             "assumed: a few LSB of a 16-bit DAQ input plus sensor electronics"),
+            ("ADC", f"{s.adc_bits} bit, {self.adc.lo:g} ... {self.adc.hi:g} V, "
+                    f"LSB {self.adc.lsb * 1e3:.3g} mV", "PXIe-6361 +-10 V range (assumed)"),
+            ("sensor", f"ideal inside G, x = {paper.UM_PER_VOLT:g} um/V x y",
+             "paper's 3 um/V scale"),
+            ("causality", "v_y[k] depends on u_c[0 .. k-1]", "ZOH DAC, sampling ADC"),
+            ("not modelled", "creep, drift, temperature, load", "paper neglects creep (Sec. I)"),
+        ]
+        return pd.DataFrame(rows, columns=["quantity", "value", "source / reason"])
+
+    # -- batch run ------------------------------------------------------------------
+    def run(self, u_c):
+        """Apply a sampled control input and return the record.
+
+        Parameters
+        ----------
+        u_c : array_like
+            Control input [V] at the stage's sample rate, 1-D; held constant
+            over each sample period.  Values outside the DAC/amplifier input
+            range are limited with a :class:`StageSaturationWarning`.
+
+        Returns
+        -------
+        StageRecord
+            Identical, float for float, to stepping a :meth:`start`
+            simulation through the same input.
+        """
+        u = check_finite_array("u_c", u_c, ndim=1, min_length=1)
+        n = len(u)
+        u_dac = self.dac.convert(u)
+        sat_in = Saturation.of("DAC/amplifier input", self.dac.limits, u)
+        v_cmd = self.gain * u_dac
+        v_a = np.minimum(np.maximum(v_cmd, self.out_lo), self.out_hi)
+        sat_out = Saturation.of("amplifier output", (self.out_lo, self.out_hi), v_cmd)
+        v_h = v_a if self.hysteresis is None else self.hysteresis.apply(v_a)[0]
+        y = sg.lfilter(self.b, self.a, v_h / self.gain)
+        noise = self.noise_rms * np.random.default_rng(self.seed).standard_normal(n)
+        analog = y + noise
+        v_y = self.adc.convert(analog)
+        sat_adc = Saturation.of("ADC", self.adc.limits, analog)
+        record = StageRecord(np.arange(n) / self.fs, u_dac, v_a, paper.UM_PER_VOLT * y,
+                             v_y, sat_in, sat_out, sat_adc, self.seed)
+        self._warn(record)
+        return record
+
+    def start(self):
+        """Begin a sample-by-sample simulation (for closed loops); see
+        :class:`StageSimulation`."""
+        return StageSimulation(self)
+
+    def _warn(self, record):
+        for sat in (record.input_saturation, record.output_saturation,
+                    record.adc_saturation):
+            if sat.occurred:
+                warnings.warn(sat.message(self.fs), StageSaturationWarning, stacklevel=3)
+
+
+class StageSimulation:
+    """Sample-by-sample run of a :class:`VirtualStage` in plain Python floats.
+
+    Causality: at sample k the DAQ first reads v_y[k] (:attr:`v_y_V`), which
+    depends on u_c[0..k-1] only; then u_c[k] is written to the DAC and held
+    for one period.  :meth:`step` applies u_c[k] and returns v_y[k+1], the
+    measurement the controller uses for u_c[k+1]:
+
+    >>> sim = VirtualStage().start()
+    >>> v_y = sim.v_y_V
+    >>> for r_k in reference:
+    ...     v_y = sim.step(controller(r_k - v_y))
+    >>> record = sim.record()          # == stage.run(all u_c applied)
+
+    One step costs about 10-20 us.
+    """
+
+    _BLOCK = 4096
+
+    def __init__(self, stage):
+        self._stage = stage
+        self._rng = np.random.default_rng(stage.seed)
+        self._noise = []
+        self._noise_start = 0
+        self._z = [0.0] * (len(stage.a) - 1)
+        self._b = [float(x) for x in stage.b]
+        self._a = [float(x) for x in stage.a]
+        hyst = stage.hysteresis
+        if hyst is None:
+            self._plays = None
+        else:
+            self._plays = list(hyst.initial_state(0.0))
+            self._r = list(hyst.thresholds_V)
+            self._w = list(hyst.weights)
+            self._w0 = hyst.linear_weight
+        self._k = 0
+        self._u, self._u_dac, self._v_cmd, self._v_a, self._y, self._analog, self._v_y = (
+            [], [], [], [], [], [], [])
+        self._warned = set()
+        self._current = self._measure(0.0)
+
+    @property
+    def k(self):
+        """Number of samples applied so far (index of the current measurement)."""
+        return self._k
+
+    @property
+    def v_y_V(self):
+        """Measurement v_y[k] at the current sample [V]."""
+        return self._current[1]
+
+    def _noise_at(self, k):
+        while k >= self._noise_start + len(self._noise):
+            self._noise_start += len(self._noise)
+            self._noise = (self._stage.noise_rms
+                           * self._rng.standard_normal(self._BLOCK)).tolist()
+        return self._noise[k - self._noise_start]
+
+    def _measure(self, y):
+        analog = y + self._noise_at(self._k)
+        return analog, self._stage.adc.convert_scalar(analog)
+
+    def step(self, u_c):
+        """Apply u_c[k] [V] for one period; return the next measurement v_y[k+1] [V]."""
+        u = float(u_c)
+        if not math.isfinite(u):
+            raise ValueError(f"u_c must be finite, got {u_c!r} at sample {self._k}")
+        st = self._stage
+        u_dac = st.dac.convert_scalar(u)
+        if (u < st.dac.lo or u > st.dac.hi) and "in" not in self._warned:
+            self._warned.add("in")
+            warnings.warn(Saturation.of("DAC/amplifier input", st.dac.limits, [u],
+                                        self._k).message(st.fs),
+                          StageSaturationWarning, stacklevel=2)
+        v_cmd = st.gain * u_dac
+        v_a = min(max(v_cmd, st.out_lo), st.out_hi)
+        if v_a != v_cmd and "out" not in self._warned:
+            self._warned.add("out")
+            warnings.warn(Saturation.of("amplifier output", (st.out_lo, st.out_hi), [v_cmd],
+                                        self._k).message(st.fs),
+                          StageSaturationWarning, stacklevel=2)
+        if self._plays is None:
+            v_h = v_a
+        else:
+            plays, r = self._plays, self._r
+            v_h = self._w0 * v_a
+            for i in range(len(plays)):
+                y = plays[i]
+                lo = v_a - r[i]
+                if y < lo:
+                    y = lo
+                else:
+                    hi = v_a + r[i]
+                    if y > hi:
+                        y = hi
+                plays[i] = y
+                v_h = v_h + self._w[i] * (y - r[i])
+        x_in = v_h / st.gain
+        # direct form II transposed, the same arithmetic as scipy.signal.lfilter
+        z, b, a = self._z, self._b, self._a
+        y_k = z[0] + b[0] * x_in
+        last = len(z) - 1
+        for i in range(last):
+            z[i] = z[i + 1] + x_in * b[i + 1] - y_k * a[i + 1]
+        z[last] = x_in * b[last + 1] - y_k * a[last + 1]
+        analog, v_y = self._current
+        self._u.append(u)
+        self._u_dac.append(u_dac)
+        self._v_cmd.append(v_cmd)
+        self._v_a.append(v_a)
+        self._y.append(y_k)
+        self._analog.append(analog)
+        self._v_y.append(v_y)
+        self._k += 1
+        self._current = self._measure(z[0])
+        analog = self._current[0]
+        if not st.adc.lo <= analog <= st.adc.hi and "adc" not in self._warned:
+            self._warned.add("adc")
+            warnings.warn(Saturation.of("ADC", st.adc.limits, [analog], self._k).message(st.fs),
+                          StageSaturationWarning, stacklevel=2)
+        return self._current[1]
+
+    def record(self):
+        """The samples applied so far as a :class:`StageRecord`."""
+        st = self._stage
+        u = np.array(self._u)
+        y = np.array(self._y)
+        return StageRecord(
+            np.arange(len(u)) / st.fs, np.array(self._u_dac), np.array(self._v_a),
+            paper.UM_PER_VOLT * y,
+            np.array(self._v_y),
+            Saturation.of("DAC/amplifier input", st.dac.limits, u),
+            Saturation.of("amplifier output", (st.out_lo, st.out_hi), np.array(self._v_cmd)),
+            Saturation.of("ADC", st.adc.limits, np.array(self._analog)), st.seed)
+
+
+class _Converter:
+    """Uniform quantiser on the grid k * lsb (0 V is a code, as on a bipolar
+    converter), lsb = (hi - lo) / (2**bits - 1), limited to [lo, hi]."""
+
+    def __init__(self, name, limits, bits):
+        self.lo, self.hi = _range(name, limits)
+        bits = check_integer(f"{name.split('_')[0]}_bits", bits, minimum=1)
+        self.lsb = (self.hi - self.lo) / (2 ** bits - 1)
+        self.code_lo = math.ceil(self.lo / self.lsb)
+        self.code_hi = math.floor(self.hi / self.lsb)
+        self.limits = (self.lo, self.hi)
+
+    def convert(self, v):
+        return np.clip(np.rint(v / self.lsb), self.code_lo, self.code_hi) * self.lsb
+
+    def convert_scalar(self, v):
+        # round() is round-half-even like np.rint, so both paths agree exactly
+        return min(max(round(v / self.lsb), self.code_lo), self.code_hi) * self.lsb
+
+
+def _range(name, limits):
+    try:
+        lo, hi = (float(x) for x in limits)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be a pair (low, high) of volts, got {limits!r}") from None
+    if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
+        raise ValueError(f"{name} must be finite with low < high, got {limits!r}")
+    return lo, hi
+
+
+def _zoh_filter(plant, dt):
+    """Exact ZOH discretisation of a strictly proper stable plant as (b, a)
+    of a direct-form filter with b[0] = 0 (no direct feedthrough)."""
+    check_siso("plant", plant)
+    if not plant.isctime(strict=True):
+        raise ValueError("plant must be a continuous-time model")
+    check_stable("plant", plant)
+    sys = realize(plant)
+    if sys.nstates == 0 or np.any(sys.D != 0):
+        raise ValueError("plant must be strictly proper (no direct feedthrough), so "
+                         "that v_y[k] depends on u_c up to sample k-1")
+    return zoh_coefficients(plant, dt)
+
+
+# --- Table 4 Case I experiment and calibration --------------------------------
+def case_I_input(amplitude_V, stage=None, periods=3, frequency_Hz=None):
+    """u_c [V] of the Table 4 experiment: a triangle of the actuator voltage
+    from 0 to ``amplitude_V`` [V] (u_c from 0 to amplitude/gain)."""
+    gain = paper.AMPLIFIER_GAIN if stage is None else stage.gain
+    fs = paper.SAMPLING_FREQUENCY_HZ if stage is None else stage.fs
+    f = paper.HYSTERESIS_TEST["frequency_Hz"] if frequency_Hz is None else frequency_Hz
+    return signals.triangle(check_positive("amplitude_V", amplitude_V) / gain, f,
+                            periods=periods, fs=fs)[1]
+
+
+def run_case_I(stage, amplitudes_V=None, periods=3):
+    """Run the Table 4 Case I experiment (open loop, no compensator).
+
+    Returns
+    -------
+    dict
+        {actuator amplitude [V]: StageRecord}.
+    """
+    amplitudes_V = paper.HYSTERESIS_TEST["actuator_amplitudes_V"] if amplitudes_V is None \
+        else amplitudes_V
+    return {float(A): stage.run(case_I_input(A, stage, periods)) for A in amplitudes_V}
+
+
+def case_I_hysteresis(records):
+    """Hysteresis % (eq. 25-26) of each loop: measured displacement
+    (3 um/V x v_y) against actuator voltage v_a, as an experimenter sees it.
+
+    Parameters
+    ----------
+    records : dict
+        {amplitude: StageRecord}, e.g. from :func:`run_case_I` or
+        :func:`load_hysteresis_loops`.
+
+    Returns
+    -------
+    dict
+        {amplitude [V]: hysteresis %}.
+    """
+    return {A: hysteresis_percent(rec.v_a_V, rec.x_measured_um) for A, rec in records.items()}
+
+
+def calibrate_hysteresis(law=CALIBRATED_HYSTERESIS, targets=None):
+    """Re-derive the hysteresis parameters from Table 4 Case I only.
+
+    Least squares on (log c, log rho) of :class:`HysteresisLaw` so that the
+    noise-free stage's Case I hysteresis % matches Table 4's first row.  The
+    noise is switched off so that the parameters do not depend on one noise
+    realisation; everything else (DAC, ADC, dynamics of G) is as in the
+    experiment files.
+
+    Parameters
+    ----------
+    law : HysteresisLaw, optional
+        Starting point; its fixed fields (threshold grid) are kept.
+    targets : dict, optional
+        {amplitude [V]: %}; default Table 4 Case I.
+
+    Returns
+    -------
+    law : HysteresisLaw
+        Calibrated law (c and rho rounded to 6 significant digits).
+    achieved : dict
+        {amplitude: %} of the noise-free stage with that law.
+    """
+    if targets is None:
+        targets = paper.table4().loc["case_I"].to_dict()
+    amplitudes = sorted(targets)
+    want = np.array([targets[A] for A in amplitudes])
+
+    def percents(law_):
+        stage = VirtualStage(seed=0, noise_rms_V=0.0, hysteresis=law_)
+        got = case_I_hysteresis(run_case_I(stage, amplitudes))
+        return np.array([got[A] for A in amplitudes])
+
+    def residual(p):
+        return percents(replace(law, density_per_V=math.exp(p[0]), decay_V=math.exp(p[1]))) - want
+
+    sol = opt.least_squares(residual, [math.log(law.density_per_V), math.log(law.decay_V)],
+                            diff_step=1e-4, xtol=1e-10, ftol=1e-10)
+    fitted = replace(law, density_per_V=float(f"{math.exp(sol.x[0]):.6g}"),
+                     decay_V=float(f"{math.exp(sol.x[1]):.6g}"))
+    return fitted, dict(zip(amplitudes, percents(fitted).tolist()))
+
+
+# --- chirp experiments ------------------------------------------------------------
+@dataclass(frozen=True)
+class ChirpSettings:
+    """A small-signal chirp experiment (paper Sec. III-A, Step I).
+
+    u_c rises from 0 to ``top_V`` along a raised cosine (``ramp_s``), holds
+    for ``hold_s`` (the operating point is read there), then follows
+    ``top_V - amplitude_V (1 - cos phi(t))``: a cosine sweep from ``f0_Hz``
+    to ``f1_Hz`` that starts at its crest and never exceeds ``top_V``.
+    Approaching from below and staying below the last maximum keeps every
+    play still when 2 ``amplitude_V`` is below the stage's small-signal limit.
+    """
+
+    name: str
+    top_V: float
+    amplitude_V: float
+    f0_Hz: float
+    f1_Hz: float
+    duration_s: float
+    method: str
+    seed: int
+    ramp_s: float = 0.2
+    hold_s: float = 0.05
+
+
+IDENTIFICATION_CHIRP = ChirpSettings("identification", top_V=2.0, amplitude_V=0.08,
+                                     f0_Hz=5.0, f1_Hz=4500.0, duration_s=2.0,
+                                     method="logarithmic", seed=1)
+VALIDATION_CHIRP = ChirpSettings("validation", top_V=3.0, amplitude_V=0.06,
+                                 f0_Hz=20.0, f1_Hz=4500.0, duration_s=1.5,
+                                 method="linear", seed=2)
+
+#: Noise seeds of the Table 4 Case I files (one per amplitude).
+EXPERIMENT_SEEDS = {10.0: 10, 20.0: 20, 30.0: 30, 40.0: 40}
+
+
+def chirp_input(settings, fs=paper.SAMPLING_FREQUENCY_HZ):
+    """u_c [V] of a chirp experiment and the index where the sweep starts."""
+    n_ramp = int(round(settings.ramp_s * fs))
+    n_hold = int(round(settings.hold_s * fs))
+    ramp = settings.top_V * (1 - np.cos(np.pi * np.arange(n_ramp) / n_ramp)) / 2
+    _, sweep = signals.chirp(settings.amplitude_V, settings.f0_Hz, settings.f1_Hz,
+                             settings.duration_s, fs, settings.method)
+    # top - a (1 - cos): exactly top at the crests, never above it
+    u = np.concatenate((ramp, np.full(n_hold, settings.top_V),
+                        settings.top_V - (settings.amplitude_V - sweep)))
+    return u, n_ramp + n_hold
+
+
+@dataclass(frozen=True)
+class ChirpExperiment:
+    """A chirp record with its segments.
+
+    Attributes
+    ----------
+    record : StageRecord
+        The whole run (ramp, hold, sweep).
+    start : int
+        Index of the first sweep sample.
+    hold_start : int
+        Index of the first hold sample (operating point read between
+        ``hold_start`` and ``start``).
+    metadata : dict
+        Header of the file (settings, seed, units).
+    """
+
+    record: StageRecord
+    start: int
+    hold_start: int
+    metadata: dict
+
+    @property
+    def sweep(self):
+        """The sweep part of the record."""
+        return self.record.segment(self.start)
+
+    @property
+    def operating_point(self):
+        """(u_c [V], v_y [V]) at the operating point: the held input and the
+        mean measured output over the hold."""
+        r = self.record
+        return float(r.u_c_V[self.start - 1]), float(np.mean(r.v_y_V[self.hold_start:self.start]))
+
+
+# --- experiment files ---------------------------------------------------------------
+_COLUMNS = ("t_s", "u_c_V", "v_a_V", "x_um", "v_y_V")
+_FORMATS = ("%.4f", "%.7f", "%.6f", "%.6f", "%.7f")
+_UNITS = ("time [s]", "control input u_c as produced by the DAC [V]",
+          "actuator voltage v_a = amplifier output [V]",
+          "true displacement x [um] (not available on real hardware)",
+          "measured sensor output v_y [V], noise and ADC quantisation included")
+
+
+def experiment_paths(directory=None):
+    """{key: path} of the experiment files (keys 'identification',
+    'validation' and the Case I amplitudes 10.0 ... 40.0)."""
+    d = data_dir() if directory is None else directory
+    paths = {"identification": d / "chirp_identification.csv",
+             "validation": d / "chirp_validation.csv"}
+    for A in paper.HYSTERESIS_TEST["actuator_amplitudes_V"]:
+        paths[float(A)] = d / f"hysteresis_loop_{int(A)}V.csv"
+    return paths
+
+
+def write_experiment_files(directory=None):
+    """Run the experiments on the default virtual stage and write the CSVs.
+
+    Deterministic: fixed seeds and fixed float formats make reruns
+    byte-identical.  Returns the list of written paths.
+    """
+    from pathlib import Path
+    paths = experiment_paths(None if directory is None else Path(directory))
+    written = []
+    for settings in (IDENTIFICATION_CHIRP, VALIDATION_CHIRP):
+        stage = VirtualStage(seed=settings.seed)
+        u, start = chirp_input(settings, stage.fs)
+        record = stage.run(u)
+        meta = {"experiment": f"{settings.name} chirp (paper Sec. III-A, Step I)",
+                **{f.name: getattr(settings, f.name) for f in fields(ChirpSettings)},
+                "hold_start_index": start - int(round(settings.hold_s * stage.fs)),
+                "sweep_start_index": start}
+        written.append(_write(paths[settings.name], record, stage, meta))
+    for A, seed in EXPERIMENT_SEEDS.items():
+        stage = VirtualStage(seed=seed)
+        record = stage.run(case_I_input(A, stage))
+        meta = {"experiment": "Table 4 Case I: open loop, no compensator",
+                "actuator_amplitude_V": A,
+                "frequency_Hz": paper.HYSTERESIS_TEST["frequency_Hz"], "periods": 3,
+                "seed": seed,
+                "hysteresis_percent": round(case_I_hysteresis({A: record})[A], 4)}
+        written.append(_write(paths[A], record, stage, meta))
+    return written
+
+
+def _write(path, record, stage, meta):
+    s = stage.settings
+    lines = [f"# piezolib virtual stage experiment, written by python -m piezolib.stage",
+             "# see data/README.md; stage settings are the VirtualStage defaults",
+             f"# sample_rate_Hz = {stage.fs:g}"]
+    lines += [f"# {k} = {v}" for k, v in meta.items()]
+    lines += [f"# noise_rms_V = {s.noise_rms_V:g}",
+              f"# hysteresis = {s.hysteresis!r}"]
+    for sat in (record.input_saturation, record.output_saturation, record.adc_saturation):
+        lines.append(f"# saturation {sat.where}: count = {sat.count}")
+    lines += [f"# column {c}: {u}" for c, u in zip(_COLUMNS, _UNITS)]
+    body = io.StringIO()
+    np.savetxt(body, np.column_stack([getattr(record, c) for c in _COLUMNS]),
+               fmt=list(_FORMATS), delimiter=",")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "w", newline="\n") as fh:
+        fh.write("\n".join(lines) + "\n" + ",".join(_COLUMNS) + "\n" + body.getvalue())
+    return path
+
+
+def load_record(path):
+    """Read an experiment CSV; return (StageRecord, metadata dict)."""
+    meta, sat_counts, rows = {}, {}, []
+    try:
+        text = open(path).read().splitlines()
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{path} is missing: regenerate the experiment files with "
+                                "`python -m piezolib.stage`") from None
+    header_done = False
+    for line in text:
+        if line.startswith("#"):
+            body = line[1:].strip()
+            if body.startswith("saturation ") and "count =" in body:
+                where, count = body[len("saturation "):].split(": count =")
+                sat_counts[where.strip()] = int(count)
+            elif " = " in body:
+                key, value = body.split(" = ", 1)
+                meta[key.strip()] = _parse_value(value.strip())
+        elif not header_done:
+            if tuple(line.split(",")) != _COLUMNS:
+                raise ValueError(f"{path}: expected columns {_COLUMNS}, got {line!r}")
+            header_done = True
+        else:
+            rows.append(line)
+    data = np.loadtxt(rows, delimiter=",", ndmin=2)
+    sats = [Saturation(where, limits, sat_counts.get(where, 0)) for where, limits in
+            (("DAC/amplifier input", paper.AMPLIFIER_INPUT_RANGE_V),
+             ("amplifier output", paper.AMPLIFIER_OUTPUT_RANGE_V),
+             ("ADC", ADC_RANGE_V))]
+    record = StageRecord(*data.T, *sats, seed=meta.get("seed"))
+    return record, meta
+
+
+def _parse_value(text):
+    for conv in (int, float):
+        try:
+            return conv(text)
+        except ValueError:
+            pass
+    return text
+
+
+def load_chirp(which="identification", directory=None):
+    """Load the identification or the validation chirp experiment.
+
+    Parameters
+    ----------
+    which : {"identification", "validation"}
+    directory : path, optional
+        Default ``data/``.
+
+    Returns
+    -------
+    ChirpExperiment
+    """
+    if which not in ("identification", "validation"):
+        raise ValueError(f"which must be 'identification' or 'validation', got {which!r}")
+    record, meta = load_record(experiment_paths(directory)[which])
+    return ChirpExperiment(record, int(meta["sweep_start_index"]),
+                           int(meta["hold_start_index"]), meta)
+
+
+def load_hysteresis_loops(directory=None):
+    """Load the Table 4 Case I loops.
+
+    Returns
+    -------
+    dict
+        {actuator amplitude [V] (10.0, 20.0, 30.0, 40.0): StageRecord} with
+        time, u_c, v_a, x and v_y of three periods of the 10 Hz triangle.
+    """
+    paths = experiment_paths(directory)
+    return {A: load_record(paths[A])[0] for A in EXPERIMENT_SEEDS}
+
+
+def _main():
+    import time
+    start = time.perf_counter()
+    for path in write_experiment_files():
+        print(path)
+    loops = load_hysteresis_loops()
+    got = case_I_hysteresis(loops)
+    paper_row = paper.table4().loc["case_I"]
+    for A, value in got.items():
+        print(f"Case I hysteresis at {A:4.0f} V: {value:6.2f} %  (paper {paper_row[A]:.2f} %)")
+    print(f"done in {time.perf_counter() - start:.1f} s")
+
+
+if __name__ == "__main__":
+    _main()

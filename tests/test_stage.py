@@ -1,0 +1,229 @@
+"""Virtual stage: determinism, step == run, causality, saturation, calibration, files."""
+
+import warnings
+
+import control as ct
+import numpy as np
+import pytest
+
+from piezolib import identification, paper, signals
+from piezolib import stage as S
+
+
+@pytest.fixture(scope="module")
+def stage():
+    return S.VirtualStage(seed=0)
+
+
+def chirp_u():
+    return S.chirp_input(S.IDENTIFICATION_CHIRP)[0][:6000]
+
+
+def test_same_seed_same_record_other_seed_other_noise(stage):
+    u = chirp_u()
+    a, b = stage.run(u), S.VirtualStage(seed=0).run(u)
+    c = S.VirtualStage(seed=1).run(u)
+    for name in ("u_c_V", "v_a_V", "x_um", "v_y_V"):
+        assert np.array_equal(getattr(a, name), getattr(b, name))
+    assert np.array_equal(a.x_um, c.x_um)             # noise does not touch the truth
+    assert not np.array_equal(a.v_y_V, c.v_y_V)
+
+
+@pytest.mark.parametrize("make_u", [
+    chirp_u,
+    lambda: S.case_I_input(40.0, periods=1),
+    lambda: np.r_[np.linspace(0, 13, 300), np.linspace(13, -3, 300)],   # saturates
+])
+def test_step_equals_run_exactly(stage, make_u):
+    u = make_u()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", S.StageSaturationWarning)
+        rec = stage.run(u)
+        sim = stage.start()
+        measured = [sim.v_y_V]
+        for u_k in u:
+            measured.append(sim.step(u_k))
+    stepped = sim.record()
+    for name in ("t_s", "u_c_V", "v_a_V", "x_um", "v_y_V"):
+        assert np.array_equal(getattr(rec, name), getattr(stepped, name)), name
+    assert np.array_equal(np.array(measured[:-1]), rec.v_y_V)
+    assert rec.input_saturation == stepped.input_saturation
+    assert rec.adc_saturation == stepped.adc_saturation
+
+
+def test_measurement_at_k_does_not_depend_on_input_at_k(stage):
+    u = chirp_u()
+    changed = u.copy()
+    changed[3000:] += 0.05
+    a, b = stage.run(u), stage.run(changed)
+    assert np.array_equal(a.v_y_V[:3001], b.v_y_V[:3001])   # v_y[3000] uses u[..2999]
+    assert not np.array_equal(a.v_y_V[3001:], b.v_y_V[3001:])
+
+
+def test_linear_part_is_the_exact_zoh_discretisation_of_G():
+    quiet = S.VirtualStage(noise_rms_V=0.0, hysteresis=None)
+    u = np.full(400, 1.0)
+    rec = quiet.run(u)
+    t = np.arange(400) / paper.SAMPLING_FREQUENCY_HZ
+    _, y = ct.forced_response(ct.c2d(ct.ss(paper.plant()), 1e-4, "zoh"), t,
+                              quiet.dac.convert(u))
+    assert np.allclose(rec.x_um / paper.UM_PER_VOLT, y, rtol=1e-9, atol=1e-12)
+    settled = quiet.run(np.full(3000, 2.0))
+    assert settled.x_um[-1] / 3 == pytest.approx(
+        paper.plant().dcgain() * quiet.dac.convert_scalar(2.0), rel=1e-9)
+
+
+def test_small_chirp_sees_exactly_the_small_signal_model():
+    settings = S.IDENTIFICATION_CHIRP
+    u, start = S.chirp_input(settings)
+    hyst = S.VirtualStage(noise_rms_V=0.0).run(u)
+    lin = S.VirtualStage(noise_rms_V=0.0, hysteresis=None).run(u)
+    offset = (hyst.x_um - lin.x_um)[start:]
+    # during the sweep H is v_a plus a constant: the difference is a constant
+    assert np.ptp(offset) < 1e-9 * np.max(np.abs(hyst.x_um))
+    assert 2 * settings.amplitude_V < S.VirtualStage().small_signal_limit_V
+    assert S.VirtualStage().small_signal_model().dcgain() == pytest.approx(
+        paper.plant().dcgain())
+
+
+def test_play_operator_matches_its_definition():
+    h = S.CALIBRATED_HYSTERESIS.operator()
+    rng = np.random.default_rng(3)
+    v = np.cumsum(rng.normal(0, 2.0, 3000))
+    v[100:120] = v[99]                                 # repeated samples
+    out, state = h.apply(v)
+    y = np.array(h.initial_state(0.0))
+    r, w = np.array(h.thresholds_V), np.array(h.weights)
+    ref = []
+    for vk in v:
+        y = np.minimum(np.maximum(y, vk - r), vk + r)
+        ref.append(vk + w @ (y - r))
+    assert np.allclose(out, ref, rtol=0, atol=1e-12)
+    assert np.allclose(state, y)
+
+
+def test_chord_gain_and_return_to_zero():
+    h = S.CALIBRATED_HYSTERESIS.operator()
+    _, v = signals.triangle(40.0, 10.0, periods=2)
+    out, _ = h.apply(v)
+    assert out[0] == pytest.approx(0.0, abs=1e-12) and out[-1] == pytest.approx(0.0, abs=1e-12)
+    assert out.max() / 40.0 == pytest.approx(h.chord_gain(40.0), rel=1e-12)
+    assert h.chord_gain(0.5) == h.linear_weight == 1.0
+
+
+def test_calibration_targets_hold_on_the_default_stage(stage):
+    got = S.case_I_hysteresis(S.run_case_I(stage))
+    target = paper.table4().loc["case_I"]
+    for A, value in got.items():
+        assert abs(value - target[A]) <= 0.5, (A, value)
+
+
+def test_calibration_rederives_the_stored_parameters():
+    law, achieved = S.calibrate_hysteresis()
+    assert law.density_per_V == pytest.approx(S.CALIBRATED_HYSTERESIS.density_per_V, rel=1e-3)
+    assert law.decay_V == pytest.approx(S.CALIBRATED_HYSTERESIS.decay_V, rel=1e-3)
+    target = paper.table4().loc["case_I"]
+    assert all(abs(achieved[A] - target[A]) <= 0.5 for A in achieved)
+
+
+def test_out_of_range_input_is_limited_and_reported(stage):
+    u = np.r_[np.zeros(10), np.full(20, 13.0), np.full(5, -2.5), np.zeros(10)]
+    with pytest.warns(S.StageSaturationWarning) as caught:
+        rec = stage.run(u)
+    messages = [str(w.message) for w in caught]
+    assert any("DAC/amplifier input" in m and "-2 ... 12 V in 25 sample" in m
+               for m in messages), messages
+    # the 13 V step also overshoots the sensor beyond the ADC's +-10 V: reported too
+    assert any(m.startswith("ADC") for m in messages) and rec.adc_saturation.occurred
+    sat = rec.input_saturation
+    assert (sat.count, sat.first_index, sat.requested_min_V, sat.requested_max_V) == (
+        25, 10, -2.5, 13.0)
+    assert rec.u_c_V.max() <= 12.0 and rec.u_c_V.min() >= -2.0 and rec.saturated
+    sim = stage.start()
+    with pytest.warns(S.StageSaturationWarning, match="DAC/amplifier input"):
+        sim.step(20.0)
+    assert sim.record().input_saturation.count == 1
+
+
+def test_amplifier_output_limit_is_reported():
+    tight = S.VirtualStage(amplifier_output_range_V=(-30.0, 50.0))
+    with pytest.warns(S.StageSaturationWarning, match="amplifier output"):
+        rec = tight.run(np.full(50, 6.0))
+    assert rec.output_saturation.count == 50 and rec.v_a_V.max() == 50.0
+
+
+@pytest.mark.parametrize("kwargs, error, match", [
+    (dict(gain=3), TypeError, "unknown stage setting"),
+    (dict(noise_rms_V=-1.0), ValueError, "noise_rms_V"),
+    (dict(dac_range_V=(12.0, -2.0)), ValueError, "dac_range_V"),
+    (dict(plant=ct.tf([1.0], [1.0, -1.0])), ValueError, "stable"),
+    (dict(plant=ct.tf([1.0, 0.0], [1.0, 1.0])), ValueError, "strictly proper"),
+    (dict(hysteresis="PI"), TypeError, "hysteresis"),
+])
+def test_bad_settings_raise(kwargs, error, match):
+    with pytest.raises(error, match=match):
+        S.VirtualStage(**kwargs)
+
+
+@pytest.mark.parametrize("u, match", [
+    (np.r_[0.0, np.nan], "non-finite"),
+    (np.zeros((3, 2)), "1-dimensional"),
+    (np.array([]), "at least 1"),
+])
+def test_bad_input_raises(stage, u, match):
+    with pytest.raises(ValueError, match=match):
+        stage.run(u)
+
+
+def test_step_rejects_nan(stage):
+    with pytest.raises(ValueError, match="u_c must be finite"):
+        stage.start().step(float("nan"))
+
+
+def test_experiment_files_are_reproducible_and_current(tmp_path):
+    first = S.write_experiment_files(tmp_path / "a")
+    second = S.write_experiment_files(tmp_path / "b")
+    for p, q in zip(first, second):
+        assert p.read_bytes() == q.read_bytes()
+    committed = S.experiment_paths()
+    for p in first:
+        stored = [c for c in committed.values() if c.name == p.name][0]
+        assert stored.exists(), f"{stored} missing: run python -m piezolib.stage"
+        assert stored.read_bytes() == p.read_bytes(), f"{stored} is out of date"
+
+
+def test_loaders_round_trip(stage):
+    loops = S.load_hysteresis_loops()
+    assert sorted(loops) == [10.0, 20.0, 30.0, 40.0]
+    rec = loops[20.0]
+    assert len(rec) == 3001 and rec.v_a_V.max() == pytest.approx(20.0, abs=1e-3)
+    fresh = S.VirtualStage(seed=S.EXPERIMENT_SEEDS[20.0]).run(S.case_I_input(20.0))
+    assert np.allclose(rec.v_y_V, fresh.v_y_V, atol=1e-7)
+    chirp = S.load_chirp("validation")
+    u_op, y_op = chirp.operating_point
+    assert u_op == pytest.approx(S.VALIDATION_CHIRP.top_V, abs=1e-3)
+    assert chirp.sweep.u_c_V.max() <= u_op + 1e-7
+    assert chirp.metadata["seed"] == S.VALIDATION_CHIRP.seed
+    with pytest.raises(ValueError, match="which"):
+        S.load_chirp("other")
+
+
+def test_one_step_is_fast_enough_for_closed_loops(stage):
+    # not a timing test: only checks the state stays plain Python floats
+    sim = stage.start()
+    sim.step(1.0)
+    assert all(type(z) is float for z in sim._z) and all(type(y) is float for y in sim._plays)
+
+
+def test_zoh_helper_is_shared_with_identification(stage):
+    b, a = identification.zoh_coefficients(paper.plant(), 1e-4)
+    assert np.array_equal(b, stage.b) and np.array_equal(a, stage.a)
+
+
+def test_chirp_starts_at_its_crest_and_checks_its_band():
+    t, y = signals.chirp(0.5, 10.0, 1000.0, 0.5)
+    assert len(t) == 5000 and y[0] == 0.5 and np.max(np.abs(y)) <= 0.5
+    with pytest.raises(ValueError, match="f1_hz"):
+        signals.chirp(0.5, 10.0, 6000.0, 0.5)
+    with pytest.raises(ValueError, match="method"):
+        signals.chirp(0.5, 10.0, 100.0, 0.5, method="quadratic")
