@@ -15,7 +15,8 @@ import pandas as pd
 from ._checks import check_nonnegative
 from ._paths import results_dir
 
-__all__ = ["COLUMNS", "REASONS", "verdict", "ClaimTable", "save_results"]
+__all__ = ["COLUMNS", "REASONS", "NOTEBOOK_TABLES", "verdict", "ClaimTable", "save_results",
+           "load_claims", "reproduction_table", "verdict_counts"]
 
 COLUMNS = ["section", "quantity", "unit", "paper", "ours", "tolerance",
            "verdict", "reason", "note"]
@@ -123,3 +124,71 @@ def _six_digits(x):
 def _plain(x):
     """numpy scalars to Python scalars so that CSV and display stay simple."""
     return x.item() if isinstance(x, np.generic) else x
+
+
+#: The comparison table each notebook writes, in pipeline order.
+NOTEBOOK_TABLES = {
+    "audit": "00_published_design_audit",
+    "identification": "01_identification",
+    "uncertainty": "02_uncertainty",
+    "hysteresis": "03_dahl_hysteresis",
+    "weights": "04_weighting_design",
+    "mu_synthesis": "05_mu_synthesis",
+    "tracking": "06_tracking_experiments",
+}
+
+
+def load_claims(names=None):
+    """Concatenate the comparison tables written by the notebooks.
+
+    Parameters
+    ----------
+    names : sequence of str, optional
+        Table names (keys of :data:`NOTEBOOK_TABLES`); default all.
+
+    Returns
+    -------
+    pandas.DataFrame
+        :data:`COLUMNS` plus ``source``, the notebook that wrote each row.
+
+    Raises
+    ------
+    FileNotFoundError
+        Naming the notebook to run when a table is missing.
+    """
+    names = list(NOTEBOOK_TABLES) if names is None else list(names)
+    frames = []
+    for name in names:
+        if name not in NOTEBOOK_TABLES:
+            raise ValueError(f"unknown table {name!r}; expected one of {list(NOTEBOOK_TABLES)}")
+        path = results_dir() / f"{name}.csv"
+        if not path.exists():
+            raise FileNotFoundError(
+                f"{path} is missing: run notebook {NOTEBOOK_TABLES[name]} "
+                f"(python -m piezolib reproduce {NOTEBOOK_TABLES[name][:2]})")
+        frame = pd.read_csv(path, dtype=str, keep_default_na=False)
+        missing = set(COLUMNS) - set(frame.columns)
+        if missing:
+            raise ValueError(f"{path.name} lacks column(s) {sorted(missing)}")
+        frame.insert(0, "source", NOTEBOOK_TABLES[name])
+        frames.append(frame[["source"] + COLUMNS])
+    return pd.concat(frames, ignore_index=True)
+
+
+def reproduction_table(claims):
+    """The published claims only (rows with a paper value), one verdict each.
+
+    A row that differs without a reason is marked ``"unexplained"`` in the
+    ``reason`` column so that it cannot pass unnoticed.
+    """
+    published = claims[claims["verdict"] != "not published"].copy()
+    unexplained = (published["verdict"] == "differs") & (published["reason"] == "")
+    published.loc[unexplained, "reason"] = "unexplained"
+    return published.reset_index(drop=True)
+
+
+def verdict_counts(table):
+    """Agrees / differs counts per source notebook (rows) as a DataFrame."""
+    counts = pd.crosstab(table["source"], table["verdict"])
+    counts.loc["all"] = counts.sum()
+    return counts

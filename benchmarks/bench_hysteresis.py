@@ -1,0 +1,64 @@
+"""Speed of the Dahl model, its fit and the feedforward (prints numbers; no assertions).
+
+    python benchmarks/bench_hysteresis.py
+
+Goals: one feedforward step well under the 100 us sample period of the 10 kHz
+loop; a voltage-driven simulation of a 3000-sample loop in a few ms; the joint
+fit of the four Table 4 loops in about a second.
+"""
+
+import time
+
+import numpy as np
+
+from piezolib import hysteresis as hy
+
+MODEL = hy.DahlModel(alpha1=3.0, alpha2=4.0, beta1=0.0, beta2=0.2 * 4 / 30, gamma_a=30.0,
+                     g_a=0.95, form="bliman_sorine")
+
+
+def best_of(fn, repeat=5):
+    times = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - start)
+    return min(times)
+
+
+def main():
+    t, v = hy.table4_reference(40.0)                     # 3 periods at 10 kHz: 3001 samples
+    ff = hy.DahlFeedforward(MODEL)
+    n = 100_000
+    refs = 2.0 + 2.0 * np.sin(np.linspace(0, 200 * np.pi, n))
+    refs = refs.tolist()
+
+    def steps():
+        ff.reset()
+        step = ff.step
+        for r in refs:
+            step(r)
+
+    print(f"DahlFeedforward.step: {best_of(steps, 3) / n * 1e6:.2f} us per sample")
+    print(f"feedforward (array, {v.size} samples): "
+          f"{best_of(lambda: hy.feedforward(MODEL, v)) * 1e3:.2f} ms")
+    print(f"dahl_hysteresis (array, {v.size} samples): "
+          f"{best_of(lambda: hy.dahl_hysteresis(MODEL, v)) * 1e3:.2f} ms")
+    for form in hy.FORMS:
+        m = MODEL.with_form(form)
+        print(f"simulate_dahl {form} ({v.size} samples): "
+              f"{best_of(lambda: hy.simulate_dahl(m, v)) * 1e3:.2f} ms")
+    loops = []
+    for amplitude in (10.0, 20.0, 30.0, 40.0):
+        t, u = hy.table4_reference(amplitude)
+        x = hy.simulate_dahl(MODEL, u).x
+        loops.append((u, x + np.random.default_rng(0).normal(0, 5e-4, x.size)))
+    for form in hy.FORMS:
+        start = time.perf_counter()
+        fit = hy.fit_dahl(loops, form=form, discard=1000, stride=10)
+        print(f"fit_dahl {form}, 4 loops, stride 10: {time.perf_counter() - start:.2f} s "
+              f"({fit.result.nfev} evaluations, worst RMS {fit.rms_percent.max():.3f} %)")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,1038 @@
+"""Dahl hysteresis model, its fit and the inverse-free feedforward (Sec. III-C, IV-A).
+
+The model (eq. 10-13)
+---------------------
+Two forms are implemented, both rate independent (they depend on the path of
+the displacement x, not on time):
+
+``"printed"``  eq. 10-12 exactly as printed::
+
+    dz/dt = A_H(sgn x') z x' + B_H x',   A_H = [[0, 1], [-a2, -a1 sgn x']]
+    H     = [b2, b1 sgn x'] z,            B_H = [0, g]
+
+``"bliman_sorine"``  the sign moved onto the state term (second-order
+Bliman-Sorine / Dahl model)::
+
+    dz/dt = A_0 z |x'| + B_H x',          A_0 = [[0, 1], [-a2, -a1]]
+
+with ``a1 = alpha1``, ``a2 = alpha2``, ``b1 = beta1``, ``b2 = beta2``,
+``g = gamma_a``.  The displacement obeys eq. 13, x = g_a v - H, where H
+depends on the history of x itself: an implicit relation, solved exactly here.
+
+Along one monotone stroke (direction s = sgn x', path length sigma = |x - x0|)
+both forms are a *linear* system in sigma,
+
+    dz/dsigma = N_s z + s B_H,   so   z(sigma) = z_ss + expm(N_s sigma) (z0 - z_ss),
+
+with N_+ = A_0 for both forms, N_- = A_0 (Bliman-Sorine) or
+[[0, -1], [a2, -a1]] (printed), and z_ss = -s N_s^-1 B_H.  Every N_s has the
+characteristic polynomial lambda^2 + a1 lambda + a2, so it is stable for
+a1, a2 > 0.  The 2x2 exponential is evaluated in closed form, which makes
+the integration exact for any step size.
+
+What the two forms predict (see notebook 03):
+
+* printed: z_ss = (g/a2, 0) in *both* directions, so after a long stroke H
+  settles to the same b2 g / a2 whichever way x moves: no loop.  Loops only
+  exist while strokes are short compared with the transient length 1/(a1/2).
+* Bliman-Sorine: z_ss = s (g/a2, 0), H tends to +-b2 g / a2: a loop of full
+  height 2 b2 g / a2 in H.
+
+Only the products b1 g and b2 g enter H (z is proportional to g), so
+``gamma_a`` and the betas cannot be identified separately; fits keep
+``gamma_a`` at its published value.
+
+Units (workbook convention)
+---------------------------
+The model is unit agnostic: x and H share one unit, v another, ``alpha1``
+is per x-unit, ``alpha2`` per x-unit squared, ``g_a`` in x-unit per v-unit.
+The workbook takes **v = u_c, the amplifier input [V], and x = v_y, the
+displacement in sensor volts [V] (x [um] = 3 um/V * v_y)**.  This is the only
+natural convention in which the published g_a = 0.925 is close to the static
+gain of the chain (0.8976 V/V, the DC gain of G), and it is the one eq. 14
+needs: u_f is added to the controller output u_b (amplifier-input volts) and
+x_r is compared with v_y in volts.  Hence g_a [V/V], alpha1 [1/V],
+alpha2 [1/V^2], H [V].  Multiply v by 10 for actuator volts and x by 3 for um.
+
+Contents
+--------
+* :class:`DahlModel` (parameters and form), :func:`dahl_hysteresis` (H driven
+  by a displacement record), :func:`simulate_dahl` (x driven by the input v,
+  eq. 13 solved exactly);
+* :func:`feedforward` and :class:`DahlFeedforward`: eq. 14 on arrays and
+  sample by sample;
+* :func:`fit_dahl`: least-squares fit to one or several loops;
+* :func:`table4_reference`, :func:`table4_measure`, :func:`run_case_II`: how the
+  Table 4 loops are produced and measured (shared by Cases I-III);
+* :func:`hysteresis_percent` / :func:`hysteresis_measure` (eq. 25-26),
+  re-exported from :mod:`piezolib.metrics`.
+
+Conventions of this implementation
+----------------------------------
+* sgn(x') at rest (x' = 0) keeps the last direction, so H does not change at
+  rest; the first direction is +1 unless given.
+* The initial state is z = 0 (virgin actuator) unless given.
+* The voltage-driven model (:func:`simulate_dahl`) needs beta1 = 0 (the
+  published value): with beta1 != 0, H jumps by 2 beta1 z2 at every reversal,
+  and so would x = g_a v - H with the input at rest.
+"""
+
+import math
+from dataclasses import dataclass, fields, replace
+from typing import NamedTuple
+
+import numpy as np
+import scipy.optimize as opt
+
+from . import paper, signals
+from ._checks import check_finite_array, check_positive, check_integer
+from .metrics import HysteresisMeasure, hysteresis_measure, hysteresis_percent
+
+__all__ = [
+    "FORMS", "DahlModel", "DahlResponse", "NotInvertibleError",
+    "dahl_hysteresis", "simulate_dahl", "feedforward", "DahlFeedforward",
+    "DahlFit", "fit_dahl", "ALPHA1_BOUNDS", "ALPHA2_BOUNDS", "G_A_BOUNDS", "strokes",
+    "Table4Run", "table4_reference", "table4_measure", "run_case_II",
+    "HysteresisMeasure", "hysteresis_measure", "hysteresis_percent",
+]
+
+#: The two model forms: eq. 10 as printed, and the Bliman-Sorine placement.
+FORMS = ("printed", "bliman_sorine")
+
+
+class NotInvertibleError(ValueError):
+    """x + H(x) is not monotone along a stroke, so x = g_a v - H has no unique solution."""
+
+
+# --------------------------------------------------------------------------- model
+@dataclass(frozen=True)
+class DahlModel:
+    """Parameters and form of the second-order Dahl model (eq. 10-13).
+
+    Attributes
+    ----------
+    alpha1 : float
+        Damping coefficient a1 > 0 [1/x-unit].
+    alpha2 : float
+        Stiffness coefficient a2 > 0 [1/x-unit^2].
+    beta1, beta2 : float
+        Output weights of eq. 12 (b1 multiplies sgn(x') z2).
+    gamma_a : float
+        Input weight of eq. 10.
+    g_a : float
+        Piezoelectric coefficient of eq. 13, > 0 [x-unit per v-unit].
+    form : {"printed", "bliman_sorine"}
+        Where the sign of the velocity enters (see the module docstring).
+    """
+
+    alpha1: float
+    alpha2: float
+    beta1: float
+    beta2: float
+    gamma_a: float
+    g_a: float
+    form: str = "printed"
+
+    def __post_init__(self):
+        for name in ("alpha1", "alpha2", "g_a"):
+            object.__setattr__(self, name, check_positive(name, getattr(self, name)))
+        for name in ("beta1", "beta2", "gamma_a"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+                raise TypeError(f"{name} must be a real number, got {value!r}")
+            if not np.isfinite(value):
+                raise ValueError(f"{name} must be finite, got {value!r}")
+            object.__setattr__(self, name, float(value))
+        if self.form not in FORMS:
+            raise ValueError(f"form must be one of {FORMS}, got {self.form!r}")
+
+    @classmethod
+    def published(cls, form="printed", params=paper.DAHL):
+        """The paper's identified parameters (Sec. III-C) in the given form."""
+        if not isinstance(params, paper.DahlParameters):
+            raise TypeError("params must be a paper.DahlParameters instance")
+        return cls(**{f.name: getattr(params, f.name) for f in fields(params)}, form=form)
+
+    def steady_state(self, direction=1):
+        """H reached after a long stroke in ``direction`` (+1 or -1) [x-unit].
+
+        ``beta2 gamma_a / alpha2`` for both directions in the printed form,
+        ``direction * beta2 gamma_a / alpha2`` in the Bliman-Sorine form.
+        """
+        s = _direction(direction)
+        dyn = _Dynamics(self)
+        return float(dyn.C[s] @ dyn.z_ss[s])
+
+    @property
+    def damping(self):
+        """zeta = a1 / (2 sqrt(a2)) of the stroke dynamics (dimensionless)."""
+        return self.alpha1 / (2.0 * math.sqrt(self.alpha2))
+
+    @property
+    def transient_length(self):
+        """1 / (a1/2): path length over which a transient decays by e [x-unit]."""
+        return 2.0 / self.alpha1
+
+    def with_form(self, form):
+        """The same parameters in another form."""
+        return replace(self, form=form)
+
+
+def _direction(direction):
+    if direction not in (1, -1):
+        raise ValueError(f"direction must be +1 or -1, got {direction!r}")
+    return int(direction)
+
+
+class _Dynamics:
+    """Per-direction constants of the stroke dynamics dz/dsigma = N_s z + s B."""
+
+    def __init__(self, model):
+        a1, a2 = model.alpha1, model.alpha2
+        B = np.array([0.0, model.gamma_a])
+        A0 = np.array([[0.0, 1.0], [-a2, -a1]])
+        self.m = -a1 / 2.0                 # real part of the eigenvalues
+        self.disc = a1 * a1 / 4.0 - a2     # > 0 overdamped, < 0 oscillatory
+        self.N, self.P, self.z_ss, self.C = {}, {}, {}, {}
+        for s in (1, -1):
+            if model.form == "printed" and s == -1:
+                N = np.array([[0.0, -1.0], [a2, -a1]])
+            else:
+                N = A0
+            self.N[s] = N
+            self.P[s] = N - self.m * np.eye(2)
+            self.z_ss[s] = -s * np.linalg.solve(N, B)
+            self.C[s] = np.array([model.beta2, model.beta1 * s])
+
+    def parts(self, sigma):
+        """e^{m sigma} cosh-like and sinh-like parts of expm(N sigma), sigma >= 0.
+
+        expm(N sigma) = ec I + es (N - m I), evaluated without overflow or
+        cancellation for any sign of the discriminant.
+        """
+        sigma = np.asarray(sigma, dtype=float)
+        m, disc = self.m, self.disc
+        if disc < 0:
+            w = math.sqrt(-disc)
+            em = np.exp(m * sigma)
+            return em * np.cos(w * sigma), em * sigma * np.sinc(w * sigma / np.pi)
+        q = math.sqrt(disc)
+        y = q * sigma
+        ep, en = np.exp((m + q) * sigma), np.exp((m - q) * sigma)
+        ec = 0.5 * (ep + en)
+        small = y < 1e-3
+        series = np.exp(m * sigma) * sigma * (1.0 + y * y / 6.0 + y ** 4 / 120.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            direct = (ep - en) / (2.0 * q) if q > 0 else series
+        return ec, np.where(small, series, direct)
+
+    def propagate(self, s, sigma, z0):
+        """States z(sigma) (shape (n, 2)) along a stroke in direction s from z0."""
+        w = z0 - self.z_ss[s]
+        ec, es = self.parts(sigma)
+        return self.z_ss[s] + ec[:, None] * w + es[:, None] * (self.P[s] @ w)
+
+
+# --------------------------------------------------------------------------- strokes
+def strokes(u, direction0=1):
+    """Split a record into runs of constant direction of motion.
+
+    Parameters
+    ----------
+    u : ndarray
+        1-D record (displacement or input).
+    direction0 : {1, -1}
+        Direction assumed before the first change.
+
+    Returns
+    -------
+    list of (start, stop, s)
+        Sample k in ``start < k <= stop`` moves from sample k-1 in direction
+        ``s``; samples at rest keep the previous direction.  ``start`` is the
+        index of the sample the run starts from.
+    """
+    d = np.sign(np.diff(u))
+    idx = np.where(d != 0, np.arange(d.size), -1)
+    idx = np.maximum.accumulate(idx)
+    s = np.where(idx >= 0, d[np.maximum(idx, 0)], direction0).astype(int)
+    if s.size == 0:
+        return []
+    change = np.flatnonzero(np.diff(s)) + 1
+    starts = np.r_[0, change]
+    stops = np.r_[change, s.size]
+    return [(int(a), int(b), int(s[a])) for a, b in zip(starts, stops)]
+
+
+def _initial_state(z0):
+    if z0 is None:
+        return np.zeros(2)
+    return check_finite_array("z0", z0, shape=(2,))
+
+
+def _check_model(model):
+    if not isinstance(model, DahlModel):
+        raise TypeError(f"model must be a DahlModel, got {type(model).__name__}")
+    return model
+
+
+# --------------------------------------------------------------------------- driven by x
+def dahl_hysteresis(model, x, z0=None, direction0=1, return_state=False):
+    """Hysteretic term H(t) of eq. 11-12 driven by the displacement record x.
+
+    Exact for any sampling: along each run of constant direction the state is
+    propagated in closed form from the run's start.
+
+    Parameters
+    ----------
+    model : DahlModel
+    x : array_like
+        Displacement record [x-unit], 1-D, at least 2 samples.
+    z0 : array_like of shape (2,), optional
+        State at the first sample (default 0: virgin actuator).
+    direction0 : {1, -1}, optional
+        Direction of motion assumed until x first changes.
+    return_state : bool, optional
+        Also return the states z, shape (n, 2).
+
+    Returns
+    -------
+    H : ndarray
+        H at every sample [x-unit]; ``(H, z)`` with ``return_state``.
+    """
+    _check_model(model)
+    x = check_finite_array("x", x, ndim=1, min_length=2)
+    s0 = _direction(direction0)
+    dyn = _Dynamics(model)
+    z = np.empty((x.size, 2))
+    z[0] = _initial_state(z0)
+    H = np.empty(x.size)
+    H[0] = dyn.C[s0] @ z[0]
+    for start, stop, s in strokes(x, s0):
+        sigma = s * (x[start + 1:stop + 1] - x[start])
+        z[start + 1:stop + 1] = dyn.propagate(s, sigma, z[start])
+        H[start + 1:stop + 1] = z[start + 1:stop + 1] @ dyn.C[s]
+    return (H, z) if return_state else H
+
+
+def feedforward(model, x_r, z0=None, direction0=1):
+    """Inverse-free Dahl feedforward of eq. 14 on a whole record.
+
+    u_f = (x_r + H(x_r)) / g_a, with H driven by the desired displacement.
+
+    Parameters
+    ----------
+    model : DahlModel
+    x_r : array_like
+        Desired displacement [x-unit] (workbook: reference v_r [V]).
+    z0, direction0
+        Initial state and direction, as in :func:`dahl_hysteresis`.
+
+    Returns
+    -------
+    ndarray
+        Feedforward input u_f [v-unit] (workbook: amplifier input [V]).
+    """
+    _check_model(model)
+    x_r = check_finite_array("x_r", x_r, ndim=1, min_length=2)
+    return (x_r + dahl_hysteresis(model, x_r, z0=z0, direction0=direction0)) / model.g_a
+
+
+class DahlFeedforward:
+    """Stateful, sample-by-sample Dahl feedforward (eq. 14) for a 10 kHz loop.
+
+    Each :meth:`step` costs a few dozen floating-point operations on Python
+    floats (closed-form 2x2 matrix exponential), and the sequence of steps
+    equals :func:`feedforward` on the whole record to rounding.
+
+    Parameters
+    ----------
+    model : DahlModel
+    z0 : array_like of shape (2,), optional
+        Initial state (default 0).
+    direction0 : {1, -1}, optional
+        Direction assumed until the reference first moves.
+
+    Examples
+    --------
+    >>> ff = DahlFeedforward(DahlModel(2.0, 1.0, 0.0, 0.1, 1.0, 0.9))
+    >>> u = [ff.step(r) for r in (0.0, 0.1, 0.2)]
+    """
+
+    def __init__(self, model, z0=None, direction0=1):
+        self.model = _check_model(model)
+        self._z_init = tuple(float(v) for v in _initial_state(z0))
+        self._s_init = _direction(direction0)
+        dyn = _Dynamics(model)
+        self._m = dyn.m
+        self._disc = dyn.disc
+        self._root = math.sqrt(abs(dyn.disc))
+        # per direction: P = N - mI (4 floats), z_ss (2), C (2)
+        self._P = {s: tuple(float(v) for v in dyn.P[s].ravel()) for s in (1, -1)}
+        self._zss = {s: tuple(float(v) for v in dyn.z_ss[s]) for s in (1, -1)}
+        self._C = {s: tuple(float(v) for v in dyn.C[s]) for s in (1, -1)}
+        self._inv_g = 1.0 / model.g_a
+        self.reset()
+
+    def reset(self):
+        """Return to the initial state (before the first sample)."""
+        self._z1, self._z2 = self._z_init
+        self._s = self._s_init
+        self._x = None
+
+    @property
+    def state(self):
+        """Current (z1, z2)."""
+        return (self._z1, self._z2)
+
+    @property
+    def H(self):
+        """Current hysteretic term H [x-unit]."""
+        c1, c2 = self._C[self._s]
+        return c1 * self._z1 + c2 * self._z2
+
+    def step(self, x_r):
+        """Advance to the desired displacement ``x_r`` and return u_f [v-unit]."""
+        x_r = float(x_r)
+        if not math.isfinite(x_r):
+            raise ValueError(f"x_r must be finite, got {x_r!r}")
+        if self._x is not None and x_r != self._x:
+            dx = x_r - self._x
+            s = 1 if dx > 0 else -1
+            sigma = abs(dx)
+            ec, es = self._parts(sigma)
+            zs1, zs2 = self._zss[s]
+            p11, p12, p21, p22 = self._P[s]
+            w1, w2 = self._z1 - zs1, self._z2 - zs2
+            self._z1 = zs1 + ec * w1 + es * (p11 * w1 + p12 * w2)
+            self._z2 = zs2 + ec * w2 + es * (p21 * w1 + p22 * w2)
+            self._s = s
+        self._x = x_r
+        c1, c2 = self._C[self._s]
+        return (x_r + c1 * self._z1 + c2 * self._z2) * self._inv_g
+
+    def _parts(self, sigma):
+        """Scalar version of :meth:`_Dynamics.parts`."""
+        m, q = self._m, self._root
+        if self._disc < 0:
+            em = math.exp(m * sigma)
+            y = q * sigma
+            return em * math.cos(y), em * (math.sin(y) / q if y > 1e-8 else sigma)
+        y = q * sigma
+        ep, en = math.exp((m + q) * sigma), math.exp((m - q) * sigma)
+        if y < 1e-3:
+            return 0.5 * (ep + en), math.exp(m * sigma) * sigma * (1 + y * y / 6 + y ** 4 / 120)
+        return 0.5 * (ep + en), (ep - en) / (2 * q)
+
+    def run(self, x_r):
+        """Feed a whole record sample by sample (continuing from the current state)."""
+        x_r = check_finite_array("x_r", x_r, ndim=1)
+        return np.array([self.step(v) for v in x_r])
+
+
+# --------------------------------------------------------------------------- driven by v
+@dataclass(frozen=True)
+class DahlResponse:
+    """Response of the voltage-driven model: x = g_a v - H(x) (eq. 13).
+
+    Attributes
+    ----------
+    v : ndarray
+        Input [v-unit].
+    x : ndarray
+        Displacement [x-unit].
+    H : ndarray
+        Hysteretic term [x-unit].
+    z : ndarray
+        States, shape (n, 2).
+    """
+
+    v: np.ndarray
+    x: np.ndarray
+    H: np.ndarray
+    z: np.ndarray
+
+
+def simulate_dahl(model, v, z0=None, direction0=1):
+    """Displacement of the Dahl model driven by the input voltage v (eq. 10-13).
+
+    The implicit relation x = g_a v - H(x) is solved exactly: along a run of
+    constant input direction s the displacement moves the same way, and
+    x_k = x_start + s sigma_k where sigma_k >= 0 is the root of
+
+        psi(sigma) = sigma + s [C z(sigma) + x_start - g_a v_k],
+
+    with z(sigma) in closed form.  All samples of a run are solved together
+    by a safeguarded (bracketed) Newton iteration to machine precision.
+
+    Parameters
+    ----------
+    model : DahlModel
+        With ``beta1 == 0`` (see the module docstring).
+    v : array_like
+        Input record [v-unit], 1-D.
+    z0 : array_like of shape (2,), optional
+        Initial state (default 0).
+    direction0 : {1, -1}, optional
+        Direction assumed until v first changes.
+
+    Returns
+    -------
+    DahlResponse
+
+    Raises
+    ------
+    NotInvertibleError
+        When x + H(x) decreases somewhere along a stroke (a strongly
+        underdamped model), so that x(v) is not unique.
+    """
+    _check_model(model)
+    v = check_finite_array("v", v, ndim=1, min_length=2)
+    if model.beta1 != 0:
+        raise ValueError(
+            "simulate_dahl needs beta1 = 0: with beta1 != 0 H (eq. 12) jumps by "
+            "2*beta1*z2 at every reversal, so x = g_a v - H would jump with the input "
+            f"at rest (got beta1={model.beta1}); the published value is 0")
+    x, H, z = _simulate_records(model, [v], _initial_state(z0), _direction(direction0))[0]
+    return DahlResponse(v=v, x=x, H=H, z=z)
+
+
+def _simulate_records(model, records, z0=np.zeros(2), s0=1):
+    """(x, H, z) of the voltage-driven model for several input records.
+
+    The k-th strokes of all records are solved together (they are
+    independent), so fitting several loops costs little more than one.
+    """
+    if model.beta1 != 0:
+        raise ValueError(
+            "simulate_dahl needs beta1 = 0: with beta1 != 0 H (eq. 12) jumps by "
+            "2*beta1*z2 at every reversal, so x = g_a v - H would jump with the input "
+            f"at rest (got beta1={model.beta1}); the published value is 0")
+    dyn = _Dynamics(model)
+    g = model.g_a
+    out, runs = [], []
+    for v in records:
+        z = np.empty((v.size, 2))
+        z[0] = z0
+        H = np.empty(v.size)
+        H[0] = dyn.C[s0] @ z0
+        x = np.empty(v.size)
+        x[0] = g * v[0] - H[0]
+        out.append((x, H, z))
+        runs.append(strokes(v, s0))
+    for rank in range(max(len(r) for r in runs)):
+        batch = [(i, runs[i][rank]) for i in range(len(records)) if rank < len(runs[i])]
+        s = np.array([run[2] for i, run in batch])
+        starts = [(out[i][2][run[0]], out[i][0][run[0]]) for i, run in batch]
+        sigmas = _solve_strokes(dyn, s, np.array([zs for zs, xs in starts]),
+                                np.array([xs for zs, xs in starts]),
+                                [g * records[i][run[0] + 1:run[1] + 1] for i, run in batch])
+        for (i, (start, stop, sk)), sigma in zip(batch, sigmas):
+            x, H, z = out[i]
+            zk = dyn.propagate(sk, sigma, z[start])
+            z[start + 1:stop + 1] = zk
+            H[start + 1:stop + 1] = zk @ dyn.C[sk]
+            x[start + 1:stop + 1] = x[start] + sk * sigma
+    return out
+
+
+def _stroke_constants(dyn, s, W):
+    """Per stroke: C expm(N sigma) w = ec*cw + es*cpw, its derivative ec*cnw + es*cnpw."""
+    C = np.array([dyn.C[k] for k in s])
+    N = np.array([dyn.N[k] for k in s])
+    P = np.array([dyn.P[k] for k in s])
+    PW = np.einsum("kij,kj->ki", P, W)
+    return (np.einsum("ki,ki->k", C, W), np.einsum("ki,ki->k", C, PW),
+            np.einsum("ki,kij,kj->k", C, N, W), np.einsum("ki,kij,kj->k", C, N, PW), C)
+
+
+def _min_slopes(dyn, a, b, sigma_max):
+    """Minimum over 0 <= sigma <= sigma_max of 1 + ec(sigma) a + es(sigma) b, per stroke.
+
+    This is d(x + H)/dsigma along a stroke (a = s C N w, b = s C N P w).  The
+    function is a damped sinusoid or a sum of two exponentials in sigma, so it
+    is evaluated at both ends and at its stationary points, found in closed
+    form: the check is exact.
+    """
+    m, disc = dyn.m, dyn.disc
+    cand = [np.zeros_like(sigma_max), sigma_max]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        if disc < 0:
+            om = math.sqrt(-disc)
+            theta = np.arctan2(-(m * a + b), m * b / om - om * a) % math.pi
+            cand += [theta / om, (theta + math.pi) / om]
+        else:
+            q = math.sqrt(disc)
+            K = (b + a * m) / ((b + a * q) * (m + q))
+            if q == 0:
+                cand.append(-K)
+            else:
+                cand.append(np.log1p(np.where(-2 * q * K > -1, -2 * q * K, 0.0)) / (2 * q))
+    sig = np.column_stack(cand)
+    sig = np.where(np.isfinite(sig) & (sig >= 0) & (sig <= sigma_max[:, None]), sig, 0.0)
+    ec, es = dyn.parts(sig)
+    return np.min(1.0 + ec * a[:, None] + es * b[:, None], axis=1)
+
+
+def _min_slope(dyn, s, w, sigma_max):
+    """:func:`_min_slopes` for one stroke in direction s from z = z_ss + w."""
+    cw, cpw, cnw, cnpw, C = _stroke_constants(dyn, np.array([s]), np.array([w]))
+    return float(_min_slopes(dyn, s * cnw, s * cnpw, np.array([float(sigma_max)]))[0])
+
+
+def _solve_strokes(dyn, s, Z, x_start, targets, n_grid=48):
+    """Path lengths sigma >= 0 of several strokes: x_start + s sigma + C z(sigma) = target.
+
+    With Phi(sigma) = sigma + s C z(sigma) (x + H along the stroke, signed),
+    every sample solves Phi(sigma) = s (target - x_start).  Phi is tabulated
+    once per stroke to bracket and start each root, a bracketed Newton
+    iteration finishes all samples of all strokes together, and the exact
+    monotonicity check (:func:`_min_slopes`) proves the roots unique.
+
+    Parameters
+    ----------
+    s : ndarray of int, shape (K,)
+        Stroke directions.
+    Z, x_start : ndarray, shapes (K, 2) and (K,)
+        State and displacement at the start of each stroke.
+    targets : list of K ndarray
+        g_a v at the samples of each stroke.
+
+    Returns
+    -------
+    list of K ndarray
+    """
+    K = s.size
+    z_ss = np.array([dyn.z_ss[k] for k in s])
+    cw, cpw, cnw, cnpw, C = _stroke_constants(dyn, s, Z - z_ss)
+    counts = np.array([tg.size for tg in targets])
+    seg = np.repeat(np.arange(K), counts)
+    offsets = np.r_[0, np.cumsum(counts)[:-1]]
+    base = x_start + np.einsum("ki,ki->k", C, z_ss)
+    y = s[seg] * (np.concatenate(targets) - base[seg])
+    scale = np.max(np.abs(np.column_stack([np.ones(K), x_start, base, cw, cpw])), axis=1)
+    scale = np.maximum(scale, np.maximum.reduceat(np.abs(np.concatenate(targets)), offsets))
+    tol = 16 * np.finfo(float).eps * scale
+    sc, sp, sn, snp = s * cw, s * cpw, s * cnw, s * cnpw     # signed stroke constants
+
+    def phi(sig, k):
+        ec, es = dyn.parts(sig)
+        return sig + ec * sc[k] + es * sp[k], 1.0 + ec * sn[k] + es * snp[k]
+
+    y_max = np.maximum.reduceat(y, offsets)
+    top = np.maximum(y_max - sc, tol)
+    every = np.arange(K)
+    for _ in range(200):                     # Phi grows like sigma: double until Phi >= y
+        low = phi(top, every)[0] < y_max
+        if not low.any():
+            break
+        top = np.where(low, 2.0 * top, top)
+    else:
+        raise NotInvertibleError("no root of x + H(x) = g_a v along a stroke")
+    grid = top[:, None] * np.linspace(0.0, 1.0, n_grid)
+    envelope = np.maximum.accumulate(phi(grid, every[:, None])[0], axis=1)
+    k = np.clip(np.argmax(envelope[seg] >= y[:, None], axis=1), 1, n_grid - 1)
+    lo, hi = grid[seg, k - 1], grid[seg, k]          # the first crossing lies in [lo, hi]
+    e_lo, e_hi = envelope[seg, k - 1], envelope[seg, k]
+    frac = np.clip((y - e_lo) / np.maximum(e_hi - e_lo, np.finfo(float).tiny), 0.0, 1.0)
+    done = y <= sc[seg] + tol[seg]           # the input did not move (or rounding)
+    sigma = np.where(done, 0.0, lo + (hi - lo) * frac)
+    tol_e = tol[seg]
+    for _ in range(100):                     # Newton, bisection when a step leaves the bracket
+        f, df = phi(sigma, seg)
+        f -= y
+        done |= np.abs(f) <= tol_e
+        lo = np.where(f < 0, sigma, lo)
+        hi = np.where(f > 0, sigma, hi)
+        done |= hi - lo <= 4 * np.finfo(float).eps * hi
+        if done.all():
+            break
+        with np.errstate(divide="ignore", invalid="ignore"):
+            newton = sigma - f / df
+        inside = (df > 0) & (newton >= lo) & (newton <= hi)
+        sigma = np.where(done, sigma, np.where(inside, newton, 0.5 * (lo + hi)))
+    else:
+        raise NotInvertibleError("the implicit relation x = g_a v - H did not converge")
+    if np.any(_min_slopes(dyn, sn, snp, np.maximum.reduceat(sigma, offsets)) <= 0):
+        raise NotInvertibleError(
+            "x + H(x) is not increasing along a stroke (dH/dx <= -1: the Dahl transient "
+            "overshoots), so x = g_a v - H has no unique solution; use a better damped "
+            "model or drive the model by displacement (dahl_hysteresis)")
+    return np.split(sigma, offsets[1:])
+
+
+# --------------------------------------------------------------------------- fit
+@dataclass(frozen=True)
+class DahlFit:
+    """Result of :func:`fit_dahl`.
+
+    Attributes
+    ----------
+    model : DahlModel
+        Fitted model (``beta1 = 0``, ``gamma_a`` as given).
+    x_model : list of ndarray
+        Model displacement for each loop's whole input record [x-unit].
+    residuals : list of ndarray
+        ``x_model - x`` for each loop on the samples used [x-unit].
+    rms : ndarray
+        RMS residual per loop [x-unit].
+    rms_percent : ndarray
+        RMS residual per loop in % of that loop's output range.
+    max_percent : ndarray
+        Largest |residual| per loop in % of that loop's output range.
+    initial : DahlModel
+        Starting point of the best solution.
+    result : scipy.optimize.OptimizeResult
+        The output-error least-squares solution (scaled parameters).
+    """
+
+    model: DahlModel
+    x_model: list
+    residuals: list
+    rms: np.ndarray
+    rms_percent: np.ndarray
+    max_percent: np.ndarray
+    initial: DahlModel
+    result: object
+
+
+def _check_loops(loops, discard, stride):
+    """Validated loops as (v, x, used) with ``used`` the residual samples.
+
+    ``used`` holds every ``stride``-th sample from ``discard`` on plus every
+    turning point of v: the model output at these samples is exactly that of
+    the full record, because a rate-independent model only sees the path.
+    """
+    if isinstance(loops, tuple) and len(loops) == 2 and np.ndim(loops[0]) == 1 \
+            and np.size(loops[0]) > 2:
+        loops = [loops]                       # a single (v, x) pair
+    try:
+        loops = list(loops)
+    except TypeError:
+        raise TypeError("loops must be a sequence of (v, x) pairs of 1-D arrays") from None
+    if not loops:
+        raise ValueError("loops must hold at least one (v, x) pair")
+    discard = check_integer("discard", discard, minimum=0)
+    stride = check_integer("stride", stride, minimum=1)
+    out = []
+    for i, pair in enumerate(loops):
+        if not isinstance(pair, (tuple, list)) or len(pair) != 2:
+            raise TypeError(f"loops[{i}] must be a (v, x) pair of arrays, "
+                            f"got {type(pair).__name__}")
+        v = check_finite_array(f"loops[{i}] v", pair[0], ndim=1, min_length=8)
+        x = check_finite_array(f"loops[{i}] x", pair[1], ndim=1, min_length=8)
+        if v.size != x.size:
+            raise ValueError(f"loops[{i}]: v and x must have equal lengths "
+                             f"({v.size} and {x.size})")
+        runs = strokes(v)
+        late = [r for r in runs if r[1] > discard]
+        if not any(r[2] > 0 for r in late) or not any(r[2] < 0 for r in late) \
+                or np.ptp(x[discard:]) == 0:
+            raise ValueError(f"loops[{i}] has no full cycle after discarding {discard} "
+                             "samples: need an ascending and a descending stroke of v")
+        keep = np.union1d(np.arange(0, v.size, stride), [r[1] for r in runs] + [0])
+        out.append((v[keep], x[keep], np.flatnonzero(keep >= discard)))
+    return out
+
+
+def _unit_model(form, alpha1, alpha2):
+    """Model whose H is z1 for gamma_a = 1: H of a general model is beta2*gamma_a*z1."""
+    return DahlModel(alpha1, alpha2, 0.0, 1.0, 1.0, 1.0, form=form)
+
+
+def _z1_on_input_strokes(model, v, x):
+    """z1 driven by a (noisy) measured x, with directions taken from the input v."""
+    dyn = _Dynamics(model)
+    z = np.zeros(2)
+    z1 = np.zeros(x.size)
+    for start, stop, s in strokes(v):
+        zk = dyn.propagate(s, s * (x[start + 1:stop + 1] - x[start]), z)
+        z1[start + 1:stop + 1] = zk[:, 0]
+        z = zk[-1]
+    return z1
+
+
+#: Fit bounds of alpha1 * R and alpha2 * R^2 (R: output range).  Below
+#: alpha2 R^2 = 1e-4 the steady state b/alpha2 becomes so large that H is
+#: the small difference of huge terms (the Bliman-Sorine fit of the virtual
+#: stage runs towards that limit, where it degenerates into a first-order
+#: Dahl model plus a linear term).
+ALPHA1_BOUNDS = (1e-3, 1e3)
+ALPHA2_BOUNDS = (1e-4, 1e6)
+#: Fit bounds of g_a relative to the loops' mean slope: H stays a deviation
+#: from g_a v.  Without them the Bliman-Sorine fit drifts to g_a -> 0 with H
+#: carrying the whole transduction (a degenerate, ill-conditioned limit).
+G_A_BOUNDS = (0.5, 2.0)
+
+
+def _mean_slope(data):
+    """Least-squares slope of x on v over all loops (through the records' start)."""
+    num = sum(float(np.dot(v[used] - v[0], x[used] - x[0])) for v, x, used in data)
+    den = sum(float(np.dot(v[used] - v[0], v[used] - v[0])) for v, x, used in data)
+    if not num > 0 or not den > 0:
+        raise ValueError("the loops must show x increasing with v (positive mean slope)")
+    return num / den
+
+
+def _equation_error(form, data, log_a1, log_a2, g_bounds):
+    """Residual and (g_a, b) of the linear problem x = g_a v - b z1(x), z1 from measured x,
+    with g_a held inside ``g_bounds`` (clipped, b then refitted alone)."""
+    unit = _unit_model(form, math.exp(log_a1), math.exp(log_a2))
+    rows, rhs = [], []
+    for v, x, used in data:
+        z1 = _z1_on_input_strokes(unit, v, x)
+        w = 1.0 / (np.ptp(x[used]) * math.sqrt(used.size))
+        rows.append(w * np.column_stack([v[used], -z1[used]]))
+        rhs.append(w * x[used])
+    M, y = np.vstack(rows), np.concatenate(rhs)
+    (g, b), *_ = np.linalg.lstsq(M, y, rcond=None)
+    if not g_bounds[0] <= g <= g_bounds[1]:
+        g = min(max(g, g_bounds[0]), g_bounds[1])
+        col = M[:, 1]
+        b = float(col @ (y - g * M[:, 0]) / (col @ col)) if col @ col > 0 else 0.0
+    return M @ np.array([g, b]) - y, (g, b)
+
+
+def _initial_guesses(form, data, gamma_a, g_bounds, starts):
+    """Equation-error starting points, best first.
+
+    For fixed (alpha1, alpha2), x = g_a v - b z1(x) is linear in (g_a, b =
+    beta2 gamma_a) when z1 is driven by the measured x.  On a log grid over
+    (alpha1, alpha2) with cells one e-fold wide (about the size of a basin)
+    the ``starts`` best local minima are taken (distinct valleys, not one
+    valley's neighbours), and each is refined with the linear parameters
+    projected out.
+    """
+    R = max(float(np.ptp(x[used])) for v, x, used in data)
+    lo = [math.log(ALPHA1_BOUNDS[0] / R), math.log(ALPHA2_BOUNDS[0] / R ** 2)]
+    hi = [math.log(ALPHA1_BOUNDS[1] / R), math.log(ALPHA2_BOUNDS[1] / R ** 2)]
+    la1 = np.linspace(lo[0], hi[0], int(hi[0] - lo[0]) + 1)
+    la2 = np.linspace(lo[1], hi[1], int(hi[1] - lo[1]) + 1)
+    cost = np.array([[float(np.sum(_equation_error(form, data, p, q, g_bounds)[0] ** 2))
+                      for q in la2] for p in la1])
+    padded = np.pad(cost, 1, constant_values=np.inf)
+    neighbours = np.min([padded[1 + i:1 + i + cost.shape[0], 1 + j:1 + j + cost.shape[1]]
+                         for i in (-1, 0, 1) for j in (-1, 0, 1) if i or j], axis=0)
+    minima = np.argwhere(cost <= neighbours)
+    minima = minima[np.argsort(cost[tuple(minima.T)])][:starts]
+    found = []
+    for i, j in minima:
+        res = opt.least_squares(lambda p: _equation_error(form, data, *p, g_bounds)[0],
+                                [la1[i], la2[j]], bounds=(lo, hi), xtol=1e-10, ftol=1e-10)
+        g, b = _equation_error(form, data, *res.x, g_bounds)[1]
+        found.append((res.cost, DahlModel(math.exp(res.x[0]), math.exp(res.x[1]), 0.0,
+                                          b / gamma_a, gamma_a, g, form=form)))
+    return [m for c, m in sorted(found, key=lambda item: item[0])]
+
+
+def _to_theta(model):
+    """Fit parameters: g_a, log alpha1, log alpha2, b = beta2 gamma_a."""
+    return np.array([model.g_a, math.log(model.alpha1), math.log(model.alpha2),
+                     model.beta2 * model.gamma_a])
+
+
+def _from_theta(theta, form, gamma_a):
+    g, log_a1, log_a2, b = theta
+    return DahlModel(math.exp(log_a1), math.exp(log_a2), 0.0, b / gamma_a, gamma_a, g,
+                     form=form)
+
+
+def fit_dahl(loops, form="bliman_sorine", gamma_a=paper.DAHL.gamma_a, discard=0,
+             stride=1, initial=None, starts=3):
+    """Least-squares fit of the Dahl parameters to one or several loops jointly.
+
+    The fitted model is the voltage-driven model (:func:`simulate_dahl`,
+    output error on x).  The free parameters are g_a, log alpha1, log alpha2
+    and b = beta2 gamma_a (Jacobian scaling; bounds relative to the largest
+    output range R: :data:`ALPHA1_BOUNDS` / R and :data:`ALPHA2_BOUNDS` / R^2,
+    g_a within :data:`G_A_BOUNDS` times the loops' mean slope);
+    beta1 is held at 0 (the published value) and ``gamma_a`` is fixed (only
+    beta2*gamma_a is identifiable).  Candidate models whose voltage-driven
+    form is not invertible get a large constant residual.  Each loop's residual is divided by
+    its output range and by sqrt(samples used), so that every loop weighs the
+    same.  The output-error problem is solved from ``starts`` starting points:
+    the best local minima of a log grid over (alpha1, alpha2) on which g_a and
+    beta2*gamma_a solve the linear equation-error problem
+    x = g_a v - beta2 gamma_a z1(x) (z1 driven by the measured x), each
+    refined; the best output-error solution is kept.
+
+    Parameters
+    ----------
+    loops : sequence of (v, x)
+        Input [v-unit] and measured displacement [x-unit] records, each with
+        at least one ascending and one descending stroke of v.  The model
+        starts from rest (z = 0) at the first sample of each record.
+    form : {"bliman_sorine", "printed"}
+    gamma_a : float, optional
+        Fixed input weight (default: the published 30).
+    discard : int, optional
+        Samples at the start of each record left out of the residuals (the
+        model still runs through them), e.g. one period to skip the virgin
+        curve.
+    stride : int, optional
+        Use every ``stride``-th sample (and every turning point of v) in the
+        fit; the model output there is exact regardless, so this only trades
+        noise averaging for speed.  The reported residuals use all samples.
+    initial : DahlModel, optional
+        Single starting point instead of the grid search.
+    starts : int, optional
+        Number of grid starting points (ignored with ``initial``).
+
+    Returns
+    -------
+    DahlFit
+    """
+    if form not in FORMS:
+        raise ValueError(f"form must be one of {FORMS}, got {form!r}")
+    gamma_a = check_positive("gamma_a", gamma_a)
+    data = _check_loops(loops, discard, stride)
+    slope = _mean_slope(data)
+    g_bounds = (slope * G_A_BOUNDS[0], slope * G_A_BOUNDS[1])
+    if initial is None:
+        candidates = _initial_guesses(form, data, gamma_a, g_bounds,
+                                      check_integer("starts", starts, minimum=1))
+    else:
+        _check_model(initial)
+        candidates = [replace(initial, form=form, beta1=0.0,
+                              beta2=initial.beta2 * initial.gamma_a / gamma_a, gamma_a=gamma_a)]
+    R = max(float(np.ptp(x[used])) for v, x, used in data)
+    weights = [1.0 / (np.ptp(x[used]) * math.sqrt(used.size)) for v, x, used in data]
+    lower = np.array([g_bounds[0], math.log(ALPHA1_BOUNDS[0] / R),
+                      math.log(ALPHA2_BOUNDS[0] / R ** 2), -1e8 / R])
+    upper = np.array([g_bounds[1], math.log(ALPHA1_BOUNDS[1] / R),
+                      math.log(ALPHA2_BOUNDS[1] / R ** 2), 1e8 / R])
+    n_res = sum(used.size for v, x, used in data)
+
+    def residuals(theta):
+        model = _from_theta(theta, form, gamma_a)
+        try:
+            sims = _simulate_records(model, [v for v, x, used in data])
+        except NotInvertibleError:
+            return np.full(n_res, 10.0 / math.sqrt(n_res))  # far worse than any loop fit
+        return np.concatenate([w * (xm[used] - x[used])
+                               for (xm, H, z), (v, x, used), w in zip(sims, data, weights)])
+
+    result, initial = None, None
+    for candidate in candidates:
+        theta0 = np.clip(_to_theta(candidate), lower + 1e-9 * (upper - lower),
+                         upper - 1e-9 * (upper - lower))
+        trial = opt.least_squares(residuals, theta0, bounds=(lower, upper), x_scale="jac",
+                                  method="trf", xtol=1e-12, ftol=1e-12, gtol=1e-12)
+        if result is None or trial.cost < result.cost:
+            result, initial = trial, candidate
+    model = _from_theta(result.x, form, gamma_a)
+    x_model, res, rms, rms_pct, max_pct = [], [], [], [], []
+    for v, x, used in _check_loops(loops, discard, 1):
+        xm = simulate_dahl(model, v).x
+        r = xm[used] - x[used]
+        span = np.ptp(x[used])
+        x_model.append(xm)
+        res.append(r)
+        rms.append(math.sqrt(float(np.mean(r ** 2))))
+        rms_pct.append(100 * rms[-1] / span)
+        max_pct.append(100 * float(np.max(np.abs(r))) / span)
+    return DahlFit(model=model, x_model=x_model, residuals=res, rms=np.array(rms),
+                   rms_percent=np.array(rms_pct), max_percent=np.array(max_pct),
+                   initial=initial, result=result)
+
+
+# --------------------------------------------------------------------------- Table 4
+class Table4Run(NamedTuple):
+    """One Table 4 run: the reference and what the stage recorded."""
+
+    reference_V: np.ndarray
+    record: object
+
+
+def table4_reference(amplitude_V, periods=3, frequency_hz=None, fs=paper.SAMPLING_FREQUENCY_HZ):
+    """Reference of the Table 4 experiments for one actuator amplitude.
+
+    A triangle from 0 to ``amplitude_V / AMPLIFIER_GAIN`` [V] at 10 Hz: the
+    amplifier-input voltage that Case I applies directly (actuator voltage
+    0 ... amplitude_V) and, read as x_r = v_r in sensor volts, the desired
+    displacement of Cases II and III (0 ... 0.3 um/V x amplitude_V).
+
+    Returns
+    -------
+    t : ndarray
+        Time [s].
+    v_r : ndarray
+        Reference [V].
+    """
+    amplitude_V = check_positive("amplitude_V", amplitude_V)
+    f = paper.HYSTERESIS_TEST["frequency_Hz"] if frequency_hz is None else frequency_hz
+    return signals.triangle(amplitude_V / paper.AMPLIFIER_GAIN, f, periods=periods, fs=fs)
+
+
+def table4_measure(reference_V, v_y_V, discard_periods=1, frequency_hz=None,
+                   fs=paper.SAMPLING_FREQUENCY_HZ):
+    """Hysteresis of one Table 4 loop, measured the same way in every case.
+
+    The loop is the measured displacement x = 3 um/V * v_y [um] against the
+    reference expressed as actuator voltage, AMPLIFIER_GAIN * reference [V]
+    (Case I: the reference is the applied u_c, so the input axis is the
+    actuator voltage v_a itself; Cases II-III: the reference v_r that the
+    feedforward / closed loop receives).  The first ``discard_periods``
+    periods (compensator and loop start-up) are left out, and eq. 25-26 are
+    applied to the rest (:func:`hysteresis_measure`).
+
+    Parameters
+    ----------
+    reference_V : array_like
+        u_c (Case I) or v_r (Cases II, III) [V] at the DAQ rate.
+    v_y_V : array_like
+        Measured sensor output [V], same length.
+    discard_periods : int, optional
+    frequency_hz, fs : float, optional
+        Triangle frequency (default 10 Hz) and sampling rate [Hz].
+
+    Returns
+    -------
+    HysteresisMeasure
+        In actuator volts and micrometres.
+    """
+    reference_V = check_finite_array("reference_V", reference_V, ndim=1, min_length=8)
+    v_y_V = check_finite_array("v_y_V", v_y_V, ndim=1, min_length=8)
+    if reference_V.size != v_y_V.size:
+        raise ValueError(f"reference_V and v_y_V must have equal lengths "
+                         f"({reference_V.size} and {v_y_V.size})")
+    discard_periods = check_integer("discard_periods", discard_periods, minimum=0)
+    f = paper.HYSTERESIS_TEST["frequency_Hz"] if frequency_hz is None else frequency_hz
+    start = int(round(discard_periods * check_positive("fs", fs) / check_positive("frequency_hz", f)))
+    if start >= reference_V.size - 8:
+        raise ValueError(f"discarding {discard_periods} period(s) leaves no record "
+                         f"({reference_V.size} samples)")
+    return hysteresis_measure(paper.AMPLIFIER_GAIN * reference_V[start:],
+                              paper.UM_PER_VOLT * v_y_V[start:])
+
+
+def run_case_II(stage, model, amplitudes_V=None, periods=3):
+    """Table 4 Case II: the Dahl feedforward alone drives the stage (open loop).
+
+    For each amplitude the reference v_r of :func:`table4_reference` is read
+    as the desired displacement x_r = v_r [sensor V] and the stage receives
+    u_c = u_f = (x_r + H(x_r)) / g_a (eq. 14).  Measure the loops with
+    :func:`table4_measure`.
+
+    Parameters
+    ----------
+    stage : object
+        Anything with ``run(u_c) -> record`` (a ``VirtualStage``).
+    model : DahlModel
+        Fitted in the workbook convention (v = u_c [V], x = v_y [V]).
+    amplitudes_V : sequence of float, optional
+        Actuator amplitudes (default 10, 20, 30, 40 V).
+    periods : int, optional
+
+    Returns
+    -------
+    dict
+        {amplitude [V]: Table4Run}.
+    """
+    _check_model(model)
+    if amplitudes_V is None:
+        amplitudes_V = paper.HYSTERESIS_TEST["actuator_amplitudes_V"]
+    runs = {}
+    for A in amplitudes_V:
+        t, v_r = table4_reference(A, periods=periods)
+        runs[float(A)] = Table4Run(v_r, stage.run(feedforward(model, v_r)))
+    return runs
