@@ -2,6 +2,11 @@
 
 :func:`hysteresis_percent` implements eq. 25-26: the width of a hysteresis
 loop at the midpoint of the input range, relative to the output range.
+
+:func:`tracking_error_percent` is the tracking error % of Table 5 (the
+largest |x_r - x| relative to the commanded range; its docstring says why
+this reading) and :func:`improvement_percent` the improvement rows of
+Tables 4-5.
 """
 
 from dataclasses import dataclass

@@ -1,0 +1,75 @@
+"""Speed of the 10 kHz loop of Fig. 1 (piezolib.loop) and of notebook 06 (prints numbers; no asserts).
+
+Goals: a 1 s closed-loop run at 10 kHz (10 001 samples) well under a second
+with any of the three controllers; open-loop runs (Cases I, II) in a few
+milliseconds; both experiments of Sec. V (Tables 4-5) for one controller
+well under a second; notebook 06 in about 10 s.
+
+    python benchmarks/bench_loop.py [--skip-notebook]
+"""
+
+import argparse
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from piezolib import hysteresis as hy
+from piezolib import loop, paper
+from piezolib import stage as vstage
+from piezolib.design import design_controller
+from piezolib.discretize import discretize
+
+from bench_stage import best_of      # scripts run from benchmarks/ see each other
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--skip-notebook", action="store_true")
+    args = parser.parse_args()
+
+    stage = vstage.VirtualStage(seed=0)
+    loops = vstage.load_hysteresis_loops()
+    dahl = hy.fit_dahl([(r.u_c_V, r.v_y_V) for r in loops.values()], form="bliman_sorine",
+                       discard=1000, stride=10).model
+    design = design_controller()
+    controllers = {"ours, 6th order": design.K_discrete,
+                   f"ours, full order ({design.K_full.nstates})": discretize(design.K_full).K,
+                   "published K (eq. 24)": discretize(paper.controller()).K}
+    t, v_r = loop.tracking_reference(10.0, 10)               # 1 s of a 10 Hz, 12 um triangle
+    n = v_r.size
+
+    t_open = best_of(lambda: loop.run_case("I", stage, v_r, dahl))
+    t_ff = best_of(lambda: loop.run_case("II", stage, v_r, dahl))
+    print(f"1 s run ({n} samples), Case I (open loop, vectorised):   {t_open * 1e3:7.1f} ms")
+    print(f"1 s run ({n} samples), Case II (Dahl feedforward):       {t_ff * 1e3:7.1f} ms")
+
+    def stage_alone():
+        sim = stage.start()
+        for u in (v_r / dahl.g_a).tolist():
+            sim.step(u)
+
+    t_stage = best_of(stage_alone)
+    print(f"stage stepping alone, 1 s:                               {t_stage * 1e3:7.1f} ms "
+          f"({t_stage / n * 1e6:.1f} us/sample)")
+    for name, K in controllers.items():
+        t_c = best_of(lambda: loop.run_case("III", stage, v_r, dahl, K))
+        print(f"1 s run, Case III with {name:28s}     {t_c * 1e3:7.1f} ms "
+              f"({t_c / n * 1e6:.1f} us/sample, goal < 1000 ms)")
+    K = controllers["ours, 6th order"]
+    t_exp = best_of(lambda: (loop.hysteresis_test(stage, dahl, K),
+                             loop.tracking_test(stage, dahl, K)), repeat=1)
+    print(f"Tables 4 and 5 (all cases), one controller:              {t_exp * 1e3:7.1f} ms")
+
+    if not args.skip_notebook:
+        root = Path(__file__).resolve().parents[1]
+        start = time.perf_counter()
+        subprocess.run([sys.executable, "-m", "pytest", "-q",
+                        str(root / "notebooks" / "06_tracking_experiments.ipynb")],
+                       cwd=root, check=True, capture_output=True)
+        print(f"notebook 06 under pytest/nbval (kernel start included):  "
+              f"{time.perf_counter() - start:7.1f} s")
+
+
+if __name__ == "__main__":
+    main()

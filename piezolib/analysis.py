@@ -1,0 +1,185 @@
+"""Table 3 for any controller: nominal/robust stability and performance.
+
+========================  ==========================================================
+condition (Table 3)       computed here
+========================  ==========================================================
+nominal stability (NS)    all poles of S, T, KS, GS (eq. 19-20) in Re s < 0
+nominal performance (NP)  ||H_e S||_inf and ||H_y T||_inf (M22 of eq. 18), each < 1
+robust stability (RS)     peak over omega of mu(M11) = |H_m T| (1 x 1 complex block)
+robust performance (RP)   peak over omega of mu(M) for the structure of eq. 21
+========================  ==========================================================
+
+M is F_l(P, K) with the exact published P (no regularisation).  Norms use
+:func:`piezolib.robust.hinf_norm` (grid + local refinement); mu uses
+:func:`piezolib.mu.mussv` on a grid (default 1e-2 ... 1e8 rad/s, 1500 points)
+refined by a dense local grid around each peak.
+"""
+
+from dataclasses import dataclass, field
+
+import control as ct
+import numpy as np
+import pandas as pd
+
+from ._checks import check_finite_array, check_siso
+from .genplant import BLOCK_STRUCTURE, _defaults, generalized_plant, lft_response
+from .mu import mussv
+from .robust import hinf_norm, is_stable, loop_functions, realize
+
+__all__ = ["RobustnessAnalysis", "analyze", "table3", "robust_performance_peak", "ANALYSIS_GRID"]
+
+#: Default analysis grid [rad/s].
+ANALYSIS_GRID = np.logspace(-2, 8, 1500)
+
+
+@dataclass(frozen=True)
+class RobustnessAnalysis:
+    """The four conditions of Table 3 for one controller.
+
+    Scalars are peaks over frequency; ``omega_*`` give where they occur
+    [rad/s].  The arrays (on ``omega``) are the bounds plotted in Fig. 12.
+    """
+
+    name: str
+    nominal_stability: bool
+    closed_loop_poles: np.ndarray
+    norm_He_S: float
+    omega_He_S: float
+    norm_Hy_T: float
+    omega_Hy_T: float
+    mu_RS: float
+    omega_RS: float
+    mu_RP: float
+    mu_RP_lower: float
+    omega_RP: float
+    omega: np.ndarray = field(repr=False)
+    mu_RS_curve: np.ndarray = field(repr=False)
+    mu_RP_upper: np.ndarray = field(repr=False)
+    mu_RP_lower_curve: np.ndarray = field(repr=False)
+
+    def frame(self):
+        """Table 3 rows as a DataFrame (value, peak frequency, condition met)."""
+        rows = [
+            ("NS", "S, T, KS, GS stable", float(self.nominal_stability), np.nan,
+             self.nominal_stability),
+            ("NP", "||H_e S||_inf", self.norm_He_S, self.omega_He_S, self.norm_He_S < 1),
+            ("NP", "||H_y T||_inf", self.norm_Hy_T, self.omega_Hy_T, self.norm_Hy_T < 1),
+            ("RS", "peak mu(M11) = peak |H_m T|", self.mu_RS, self.omega_RS, self.mu_RS < 1),
+            ("RP", "peak mu(M) (upper bound)", self.mu_RP, self.omega_RP, self.mu_RP < 1),
+            ("RP", "peak mu(M) (lower bound)", self.mu_RP_lower, self.omega_RP,
+             self.mu_RP_lower < 1),
+        ]
+        return pd.DataFrame(rows, columns=["condition", "quantity", "value",
+                                           "omega_peak [rad/s]", "met"])
+
+
+def _refined_peak(P, K, omega, res):
+    """Peak of mu refined on 201 points spanning the grid cells next to the grid peak.
+
+    Returns (upper peak, its frequency, largest lower bound seen).
+    """
+    k = int(np.argmax(res.upper))
+    local = np.geomspace(omega[max(k - 1, 0)], omega[min(k + 1, len(omega) - 1)], 201)
+    fine = mussv(lft_response(P, K, local), BLOCK_STRUCTURE)
+    j = int(np.argmax(fine.upper))
+    lower = float(max(res.lower.max(), fine.lower.max()))
+    if fine.upper[j] > res.upper[k]:
+        return float(fine.upper[j]), float(local[j]), lower
+    return float(res.upper[k]), float(omega[k]), lower
+
+
+def robust_performance_peak(K, G=None, H_m=None, H_e=None, H_y=None, *, omega=None):
+    """Peak of the mu_RP upper bound and its frequency [rad/s] (nan if K destabilises).
+
+    A light version of :func:`analyze` for sweeps (no lower bound, no norms).
+    """
+    check_siso("K", K)
+    G, H_m, H_e, H_y = _defaults(G, H_m, H_e, H_y)
+    omega = ANALYSIS_GRID if omega is None else check_finite_array("omega", omega, ndim=1,
+                                                                     min_length=16)
+    if not is_stable(G, K):
+        return float("nan"), float("nan")
+    P = generalized_plant(G, H_m, H_e, H_y)
+    res = mussv(lft_response(P, K, omega), BLOCK_STRUCTURE, lower=False)
+    k = int(np.argmax(res.upper))
+    local = np.geomspace(omega[max(k - 1, 0)], omega[min(k + 1, len(omega) - 1)], 101)
+    fine = mussv(lft_response(P, K, local), BLOCK_STRUCTURE, lower=False)
+    j = int(np.argmax(fine.upper))
+    if fine.upper[j] > res.upper[k]:
+        return float(fine.upper[j]), float(local[j])
+    return float(res.upper[k]), float(omega[k])
+
+
+def analyze(K, G=None, H_m=None, H_e=None, H_y=None, *, omega=None, name=None):
+    """Evaluate Table 3's conditions for the controller K.
+
+    Parameters
+    ----------
+    K : control.LTI
+        SISO controller from v_e [V] to u_b [V].
+    G, H_m, H_e, H_y : control.LTI, optional
+        Plant and weights; default: the published models.
+    omega : array_like, optional
+        Analysis grid [rad/s]; default :data:`ANALYSIS_GRID`.
+    name : str, optional
+        Label used by :func:`table3` (default ``K.name``).
+
+    Returns
+    -------
+    RobustnessAnalysis
+    """
+    check_siso("K", K)
+    G, H_m, H_e, H_y = _defaults(G, H_m, H_e, H_y)
+    omega = ANALYSIS_GRID if omega is None else check_finite_array("omega", omega, ndim=1,
+                                                                     min_length=16)
+    loop = loop_functions(G, K)
+    poles = np.concatenate([ct.poles(f) for f in loop])
+    stable = bool(np.all(poles.real < 0))
+    nan = float("nan")
+    if not stable:
+        empty = np.full(omega.shape, nan)
+        return RobustnessAnalysis(name or K.name, False, poles, nan, nan, nan, nan, nan, nan,
+                                  nan, nan, nan, omega, empty, empty, empty)
+    he_s = hinf_norm(realize(H_e) * loop.S)
+    hy_t = hinf_norm(realize(H_y) * loop.T)
+    hm_t = hinf_norm(realize(H_m) * loop.T)
+    P = generalized_plant(G, H_m, H_e, H_y)
+    M = lft_response(P, K, omega)
+    rp = mussv(M, BLOCK_STRUCTURE)
+    mu_rp, w_rp, mu_rp_lower = _refined_peak(P, K, omega, rp)
+    # a 1 x 1 complex block: mu(M11) = |M11| exactly
+    rs_curve = np.abs(M[:, 0, 0])
+    return RobustnessAnalysis(
+        name=name or K.name, nominal_stability=True, closed_loop_poles=poles,
+        norm_He_S=he_s[0], omega_He_S=he_s[1], norm_Hy_T=hy_t[0], omega_Hy_T=hy_t[1],
+        mu_RS=hm_t[0], omega_RS=hm_t[1], mu_RP=mu_rp, mu_RP_lower=min(mu_rp_lower, mu_rp),
+        omega_RP=w_rp, omega=omega, mu_RS_curve=rs_curve, mu_RP_upper=rp.upper,
+        mu_RP_lower_curve=rp.lower)
+
+
+def table3(*analyses, paper_values=None):
+    """Side-by-side Table 3 for several :class:`RobustnessAnalysis` results.
+
+    Parameters
+    ----------
+    *analyses : RobustnessAnalysis
+    paper_values : dict, optional
+        Published values keyed ``norm_He_S``, ``norm_Hy_T``, ``mu_RS``,
+        ``mu_RP`` (e.g. ``piezolib.paper.FIGURES_OF_MERIT``), shown as a column.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Rows NS, NP (two), RS, RP; one column per controller.
+    """
+    index = pd.Index(["NS: S, T, KS, GS stable", "NP: ||H_e S||_inf", "NP: ||H_y T||_inf",
+                      "RS: peak mu(M11)", "RP: peak mu(M)"], name="Table 3")
+    data = {}
+    if paper_values is not None:
+        data["paper"] = [True, paper_values["norm_He_S"], paper_values["norm_Hy_T"],
+                         paper_values["mu_RS"], paper_values["mu_RP"]]
+    for a in analyses:
+        if not isinstance(a, RobustnessAnalysis):
+            raise TypeError(f"table3 takes RobustnessAnalysis results, got {type(a).__name__}")
+        data[a.name] = [a.nominal_stability, a.norm_He_S, a.norm_Hy_T, a.mu_RS, a.mu_RP]
+    return pd.DataFrame(data, index=index)

@@ -1,0 +1,273 @@
+"""mu-synthesis by DK-iteration (eq. 22-23).
+
+Each iteration alternates
+
+* K-step: an H-infinity controller for the D-scaled plant
+  D_l P D_r^-1 (:func:`piezolib.hinf.hinfsyn`: bounded and verified), and
+* D-step: mu upper bound of M = F_l(P, K) on a frequency grid
+  (:func:`piezolib.mu.mussv`), whose optimal scalings d_i(omega) are fitted by
+  stable minimum-phase transfer functions (:func:`piezolib.dfit.fit_magnitude`).
+
+Only complex full blocks are supported (the paper's structure, eq. 21);
+real scalar blocks would need G-scalings.  The whole iteration runs in scaled
+time (s -> s/omega_s) so that the fits and Riccati equations see O(1)
+numbers; the returned controller is in ordinary time.
+
+Stopping rules: the peak of the mu upper bound has not improved by more than
+``rtol`` (relative) for ``patience`` iterations, ``max_iter`` iterations, or
+the ``time_budget`` is spent.  The controller with the lowest mu peak is
+returned, with the history of every iteration.
+"""
+
+import time
+from dataclasses import dataclass, field
+
+import control as ct
+import numpy as np
+import pandas as pd
+
+from ._checks import check_finite_array, check_integer, check_lti, check_positive
+from .dfit import fit_magnitude
+from .genplant import lft_response
+from .hinf import HinfSynthesisError, auto_time_scale, hinfsyn
+from .mu import mussv, parse_blk
+from .robust import balance, scale_time
+
+__all__ = ["MusynResult", "musyn", "scaled_plant"]
+
+
+@dataclass(frozen=True)
+class MusynResult:
+    """Outcome of :func:`musyn`.
+
+    Attributes
+    ----------
+    K : control.StateSpace
+        Best controller found (lowest peak of the mu upper bound), ordinary time.
+    mu_peak, mu_lower_peak : float
+        Peak over the grid of the mu upper and lower bounds for ``K``.
+    omega_peak : float
+        Frequency of the upper-bound peak [rad/s].
+    gamma : float
+        H-infinity level of the K-step that produced ``K``.
+    history : pandas.DataFrame
+        One row per iteration: ``iteration``, ``d_order``, ``gamma``,
+        ``mu_upper``, ``mu_lower``, ``omega_peak``, ``K_order``, ``seconds``.
+    best_iteration : int
+        Row of ``history`` holding ``K``.
+    stop_reason : str
+        Which stopping rule ended the iteration.
+    d_scalings : list of control.TransferFunction
+        Fitted d_i(s) (ordinary time) of every full block but the last, used
+        in the K-step that produced ``K`` (empty for the first iteration).
+    omega : ndarray
+        The frequency grid [rad/s].
+    mu_upper, mu_lower : ndarray
+        Bounds of mu on ``omega`` for ``K``.
+    elapsed : float
+        Wall time [s].
+    time_scale : float
+        Internal time scale omega_s [rad/s].
+    regularization : str
+        Regularisation reported by the K-steps ('' if none was needed).
+    """
+
+    K: ct.StateSpace
+    mu_peak: float
+    mu_lower_peak: float
+    omega_peak: float
+    gamma: float
+    history: pd.DataFrame
+    best_iteration: int
+    stop_reason: str
+    d_scalings: list
+    omega: np.ndarray
+    mu_upper: np.ndarray
+    mu_lower: np.ndarray
+    elapsed: float
+    time_scale: float
+    regularization: str = ""
+    fits: list = field(default_factory=list, repr=False)
+
+
+def scaled_plant(P, blocks, d_tfs, nmeas, ncon):
+    """D_l P D_r^-1 for full blocks with scalings ``d_tfs`` (last block: 1).
+
+    Block i (Delta_i is r_i x c_i) scales the c_i performance outputs it
+    receives by d_i(s) and the r_i performance inputs it drives by 1/d_i(s);
+    measurements and controls are not scaled.
+    """
+    one = ct.ss([], [], [], [[1.0]])
+    left, right = [], []
+    for b, d in zip(blocks, list(d_tfs) + [None] * (len(blocks) - len(d_tfs))):
+        d_ss = one if d is None else ct.ss(d)
+        d_inv = one if d is None else ct.ss(1 / ct.tf(d))
+        left += [d_ss] * b.outputs_count
+        right += [d_inv] * b.inputs_count
+    left += [one] * nmeas
+    right += [one] * ncon
+    DL = ct.append(*left)
+    DR = ct.append(*right)
+    return balance(ct.ss(DL * ct.ss(P) * DR))
+
+
+@dataclass
+class _Block:
+    inputs_count: int    # r: performance inputs driven by Delta_i
+    outputs_count: int   # c: performance outputs feeding Delta_i
+
+
+def _full_blocks(blk, p, q):
+    """The (r, c) sizes of a structure of complex full blocks (MATLAB convention)."""
+    for b in parse_blk(blk, p, q):
+        if b.kind != "full":
+            raise ValueError(f"musyn supports complex full blocks only; got a {b.kind!r} block")
+    return [_Block(int(r), int(c)) for r, c in np.asarray(blk, int).reshape(-1, 2)]
+
+
+def _fit_scalings(omega_s, mu_res, blocks, order, prev_fits):
+    """Fit d_i for every block but the last; pick the order when 'auto'."""
+    upper = mu_res.upper
+    weight = (upper / upper.max()) ** 4 + 1e-3
+    fits = []
+    for i in range(len(blocks) - 1):
+        d = np.clip(mu_res.d[:, i], 1e-12, 1e12)
+        prev = prev_fits[i] if prev_fits and len(prev_fits) > i else None
+        if order == "auto":
+            candidates = []
+            for n in range(0, 7):
+                init = prev if prev is not None and prev.order == n else None
+                candidates.append(fit_magnitude(omega_s, d, n, weight, initial=init))
+            best_err = min(c.rms_log_error for c in candidates)
+            fit = next(c for c in candidates if c.rms_log_error <= best_err + 0.02)
+        else:
+            init = prev if prev is not None and prev.order == order else None
+            fit = fit_magnitude(omega_s, d, order, weight, initial=init)
+        fits.append(fit)
+    return fits
+
+
+def musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=4, max_iter=8, rtol=5e-3,
+          patience=2, time_budget=120.0, verbose=True, hinf_options=None, time_scale=None):
+    """mu-synthesis of a controller for P by DK-iteration.
+
+    Parameters
+    ----------
+    P : control.StateSpace
+        Generalized plant, ordinary time.  Inputs: performance/uncertainty
+        inputs then ``ncon`` controls; outputs: performance/uncertainty
+        outputs then ``nmeas`` measurements.
+    blk : sequence of (int, int)
+        Complex full blocks (r, c) in MATLAB ``mussv`` convention, the
+        performance block last (its scaling is fixed to 1).
+    nmeas, ncon : int
+        Number of measurements and controls.
+    omega : array_like, optional
+        Frequency grid [rad/s] of the D-steps; default 300 points,
+        1e0 ... 1e6 rad/s.
+    d_order : int or 'auto'
+        Order of the fitted D-scalings; 'auto' takes, among orders 0 ... 6,
+        the lowest whose weighted log-error is within 0.02 of the best.
+    max_iter : int
+        Maximum number of DK iterations (K-steps).
+    rtol, patience : float, int
+        Stop when the mu peak has not improved by more than ``rtol``
+        (relative) for ``patience`` consecutive iterations.
+    time_budget : float
+        Wall-time budget [s] of the whole iteration.
+    verbose : bool
+        Print one line per iteration.
+    hinf_options : dict, optional
+        Extra keyword arguments of :func:`piezolib.hinf.hinfsyn`.
+    time_scale : float, optional
+        Internal time scale [rad/s]; default :func:`piezolib.hinf.auto_time_scale`.
+
+    Returns
+    -------
+    MusynResult
+    """
+    t0 = time.perf_counter()
+    check_lti("P", P)
+    P = ct.ss(P)
+    nmeas = check_integer("nmeas", nmeas, minimum=1)
+    ncon = check_integer("ncon", ncon, minimum=1)
+    p, q = P.noutputs - nmeas, P.ninputs - ncon
+    blocks = _full_blocks(blk, p, q)
+    if omega is None:
+        omega = np.logspace(0, 6, 300)
+    omega = check_finite_array("omega", omega, ndim=1, min_length=16)
+    if np.any(omega <= 0) or np.any(np.diff(omega) <= 0):
+        raise ValueError("omega must be positive and increasing")
+    if not (d_order == "auto" or isinstance(d_order, (int, np.integer))):
+        raise TypeError(f"d_order must be an integer or 'auto', got {d_order!r}")
+    if d_order != "auto":
+        check_integer("d_order", int(d_order), minimum=0)
+    max_iter = check_integer("max_iter", max_iter, minimum=1)
+    patience = check_integer("patience", patience, minimum=1)
+    rtol = check_positive("rtol", rtol)
+    time_budget = check_positive("time_budget", time_budget)
+    options = {"time_budget": max(time_budget / 4, 5.0)}
+    options.update(hinf_options or {})
+
+    ws = auto_time_scale(P) if time_scale is None else check_positive("time_scale", time_scale)
+    Ps = balance(scale_time(P, ws))
+    omega_s = omega / ws
+    rows, best, fits, stall, reason = [], None, [], 0, "max_iter reached"
+    regularization = set()
+    for it in range(max_iter):
+        t_it = time.perf_counter()
+        d_tfs = [f.tf for f in fits]
+        plant = scaled_plant(Ps, blocks, d_tfs, nmeas, ncon) if fits else Ps
+        try:
+            hinf = hinfsyn(plant, nmeas, ncon, **options)
+        except HinfSynthesisError as exc:
+            if best is None:
+                raise
+            reason = f"K-step failed: {exc}"
+            break
+        if hinf.regularization:
+            regularization.add(hinf.regularization)
+        K = hinf.K
+        resp = lft_response(Ps, K, omega_s, omega_s=1.0)
+        mu_res = mussv(resp, blk)
+        k = int(np.argmax(mu_res.upper))
+        row = {"iteration": it, "d_order": sum(f.order for f in fits),
+               "gamma": hinf.gamma, "mu_upper": float(mu_res.upper[k]),
+               "mu_lower": float(mu_res.lower.max()), "omega_peak": float(omega[k]),
+               "K_order": K.nstates, "seconds": time.perf_counter() - t_it}
+        rows.append(row)
+        if verbose:
+            print(f"DK {it:2d}: gamma {hinf.gamma:7.4f}  mu {row['mu_upper']:.4f} "
+                  f"(lower {row['mu_lower']:.4f}) at {row['omega_peak']:9.4g} rad/s  "
+                  f"K order {K.nstates:3d}  D order {row['d_order']}  "
+                  f"{row['seconds']:.2f} s", flush=True)
+        if best is None or row["mu_upper"] < best["row"]["mu_upper"] * (1 - rtol):
+            stall = 0
+        else:
+            stall += 1
+        if best is None or row["mu_upper"] < best["row"]["mu_upper"]:
+            best = {"row": row, "K": K, "mu": mu_res, "fits": fits, "iteration": it,
+                    "hinf": hinf}
+        if stall >= patience:
+            reason = f"no improvement > {rtol:g} in {patience} iterations"
+            break
+        if time.perf_counter() - t0 > time_budget:
+            reason = "time budget spent"
+            break
+        if it == max_iter - 1:
+            break
+        fits = _fit_scalings(omega_s, mu_res, blocks, d_order, fits)
+
+    K = best["K"]
+    K = balance(scale_time(K, 1.0 / ws))
+    K = ct.ss(K.A, K.B, K.C, K.D, inputs=list(P.output_labels[-nmeas:]),
+              outputs=list(P.input_labels[-ncon:]), name="K")
+    d_scalings = [scale_time(ct.tf(f.tf), 1.0 / ws) for f in best["fits"]]
+    mu_res = best["mu"]
+    return MusynResult(
+        K=K, mu_peak=best["row"]["mu_upper"], mu_lower_peak=best["row"]["mu_lower"],
+        omega_peak=best["row"]["omega_peak"], gamma=best["row"]["gamma"],
+        history=pd.DataFrame(rows), best_iteration=best["iteration"], stop_reason=reason,
+        d_scalings=d_scalings, omega=omega, mu_upper=mu_res.upper, mu_lower=mu_res.lower,
+        elapsed=time.perf_counter() - t0, time_scale=ws,
+        regularization="; ".join(sorted(regularization)), fits=best["fits"])
