@@ -102,8 +102,12 @@ def run(selection=None, timeout=600, keep_going=False, data=True, stream=sys.std
             status = "ok"
         except NotebookFailure as exc:
             failures += 1
-            status = f"FAILED at cell {exc.cell_index}: {exc.error}"
+            lines = exc.error.strip().splitlines() or [""]
+            status = f"FAILED at cell {exc.cell_index}: {lines[0][:160]}"
         _line(stream, k, total, path.name, time.perf_counter() - start, status)
+        if status != "ok" and len(lines) > 1:   # the rest of a long error, indented
+            detail = lines[1:21] + ([f"... ({len(lines) - 21} more lines)"] if len(lines) > 21 else [])
+            print("\n".join("      " + line for line in detail), file=stream, flush=True)
         if failures and not keep_going:
             break
     print(f"{'all done' if not failures else f'{failures} step(s) failed'} in "

@@ -753,7 +753,9 @@ class _Converter:
         return np.clip(np.rint(v / self.lsb), self.code_lo, self.code_hi) * self.lsb
 
     def convert_scalar(self, v):
-        # round() is round-half-even like np.rint, so both paths agree exactly
+        # round() is round-half-even like np.rint, so both paths agree exactly;
+        # limiting first keeps round() away from overflow for huge inputs
+        v = min(max(v, self.lo - self.lsb), self.hi + self.lsb)
         return min(max(round(v / self.lsb), self.code_lo), self.code_hi) * self.lsb
 
 
