@@ -4,7 +4,7 @@
 
 Goals: one feedforward step well under the 100 us sample period of the 10 kHz
 loop; a voltage-driven simulation of a 3000-sample loop in a few ms; the joint
-fit of the four Table 4 loops in about a second.
+fit of the four Table 4 loops (with or without the offset x0) under a second.
 """
 
 import time
@@ -51,14 +51,25 @@ def main():
     loops = []
     for amplitude in (10.0, 20.0, 30.0, 40.0):
         t, u = hy.table4_reference(amplitude)
-        x = hy.simulate_dahl(MODEL, u).x
+        x = hy.simulate_dahl(MODEL.with_offset(-0.15), u).x
         loops.append((u, x + np.random.default_rng(0).normal(0, 5e-4, x.size)))
     for form in hy.FORMS:
+        for offset in (False, True):
+            start = time.perf_counter()
+            fit = hy.fit_dahl(loops, form=form, offset=offset, discard=1000, stride=10)
+            print(f"fit_dahl {form}, offset={offset}, 4 synthetic loops, stride 10: "
+                  f"{time.perf_counter() - start:.2f} s ({fit.result.nfev} evaluations, "
+                  f"worst RMS {fit.rms_percent.max():.3f} %)")
+    # the virtual stage's Case I loops: every candidate of notebook 03 (uncached: one fit each)
+    total = time.perf_counter()
+    for key in hy.CASE_I_CANDIDATES:
         start = time.perf_counter()
-        fit = hy.fit_dahl(loops, form=form, discard=1000, stride=10)
-        print(f"fit_dahl {form}, 4 loops, stride 10: {time.perf_counter() - start:.2f} s "
-              f"({fit.result.nfev} evaluations, worst RMS {fit.rms_percent.max():.3f} %)")
-
+        fit = hy.fit_case_I_loops(*key)
+        print(f"fit_case_I_loops{key}: {time.perf_counter() - start:.2f} s "
+              f"(pooled RMS {fit.pooled_rms_percent:.2f} %)")
+    print(f"all {len(hy.CASE_I_CANDIDATES)} candidates: {time.perf_counter() - total:.2f} s; "
+          f"workbook_dahl_fit() afterwards (cached): "
+          f"{best_of(hy.workbook_dahl_fit) * 1e6:.1f} us")
 
 if __name__ == "__main__":
     main()

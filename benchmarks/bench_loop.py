@@ -29,9 +29,7 @@ def main():
     args = parser.parse_args()
 
     stage = vstage.VirtualStage(seed=0)
-    loops = vstage.load_hysteresis_loops()
-    dahl = hy.fit_dahl([(r.u_c_V, r.v_y_V) for r in loops.values()], form="bliman_sorine",
-                       discard=1000, stride=10).model
+    dahl = hy.workbook_dahl_fit().model                      # the notebooks' feedforward model
     design = design_controller()
     controllers = {"ours, 6th order": design.K_discrete,
                    f"ours, full order ({design.K_full.nstates})": discretize(design.K_full).K,
@@ -46,7 +44,7 @@ def main():
 
     def stage_alone():
         sim = stage.start()
-        for u in (v_r / dahl.g_a).tolist():
+        for u in ((v_r - dahl.x0) / dahl.g_a).tolist():
             sim.step(u)
 
     t_stage = best_of(stage_alone)

@@ -19,7 +19,19 @@ with ``a1 = alpha1``, ``a2 = alpha2``, ``b1 = beta1``, ``b2 = beta2``,
 ``g = gamma_a``.  The displacement obeys eq. 13, x = g_a v - H, where H
 depends on the history of x itself: an implicit relation, solved exactly here.
 
-Along one monotone stroke (direction s = sgn x', path length sigma = |x - x0|)
+Workbook extension: an output offset x0 (default 0 = eq. 13 exactly),
+
+    x = g_a v - H + x0,
+
+the displacement (sensor) zero of the model, which eq. 13 lacks.  Both forms
+give loops symmetric about x = g_a v (H swings between -h and +h), so a loop
+of v from 0 up to A and back bottoms out at x = +h at v = 0, whereas a stage
+that starts at rest returns to its zero there.  The offset lets one
+parameter set put the loops where the stage's are.  H depends only on
+increments of x, so x0 changes nothing else: H is the same function of the
+path, and the feedforward becomes u_f = (x_r - x0 + H(x_r)) / g_a.
+
+Along one monotone stroke (direction s = sgn x', path length sigma = |x - x_start|)
 both forms are a *linear* system in sigma,
 
     dz/dsigma = N_s z + s B_H,   so   z(sigma) = z_ss + expm(N_s sigma) (z0 - z_ss),
@@ -36,7 +48,10 @@ What the two forms predict (see notebook 03):
   settles to the same b2 g / a2 whichever way x moves: no loop.  Loops only
   exist while strokes are short compared with the transient length 1/(a1/2).
 * Bliman-Sorine: z_ss = s (g/a2, 0), H tends to +-b2 g / a2: a loop of full
-  height 2 b2 g / a2 in H.
+  height 2 b2 g / a2 in H.  For a1 >> a2 (a1^2 >> 4 a2) the fast mode of the
+  stroke dynamics dies out within 1/a1 and the model acts as a first-order
+  Dahl model, dH/dsigma = (a2/a1) (s b2 g / a2 - H) (the first-order limit,
+  reachable within the fit bounds :data:`ALPHA1_BOUNDS`).
 
 Only the products b1 g and b2 g enter H (z is proportional to g), so
 ``gamma_a`` and the betas cannot be identified separately; fits keep
@@ -61,7 +76,11 @@ Contents
   eq. 13 solved exactly);
 * :func:`feedforward` and :class:`DahlFeedforward`: eq. 14 on arrays and
   sample by sample;
-* :func:`fit_dahl`: least-squares fit to one or several loops;
+* :func:`fit_dahl`: least-squares fit to one or several loops, with or
+  without the offset x0;
+* :func:`fit_case_I_loops`, :func:`choose_fit`, :func:`workbook_dahl_fit`:
+  the candidate fits to the virtual stage's Case I loops, the selection rule
+  and the one shared feedforward model of notebooks 03 and 06 (cached);
 * :func:`table4_reference`, :func:`table4_measure`, :func:`run_case_II`: how the
   Table 4 loops are produced and measured (shared by Cases I-III);
 * :func:`hysteresis_percent` / :func:`hysteresis_measure` (eq. 25-26),
@@ -71,12 +90,15 @@ Conventions of this implementation
 ----------------------------------
 * sgn(x') at rest (x' = 0) keeps the last direction, so H does not change at
   rest; the first direction is +1 unless given.
-* The initial state is z = 0 (virgin actuator) unless given.
+* The initial state is the model's ``start`` unless given: z = 0 (virgin
+  actuator, the default) or "rest", the state after a long descending
+  stroke (the virtual stage starts at rest after being lowered).
 * The voltage-driven model (:func:`simulate_dahl`) needs beta1 = 0 (the
   published value): with beta1 != 0, H jumps by 2 beta1 z2 at every reversal,
   and so would x = g_a v - H with the input at rest.
 """
 
+import functools
 import math
 from dataclasses import dataclass, fields, replace
 from typing import NamedTuple
@@ -89,15 +111,19 @@ from ._checks import check_finite_array, check_positive, check_integer
 from .metrics import HysteresisMeasure, hysteresis_measure, hysteresis_percent
 
 __all__ = [
-    "FORMS", "DahlModel", "DahlResponse", "NotInvertibleError",
+    "FORMS", "STARTS", "DahlModel", "DahlResponse", "NotInvertibleError",
     "dahl_hysteresis", "simulate_dahl", "feedforward", "DahlFeedforward",
-    "DahlFit", "fit_dahl", "ALPHA1_BOUNDS", "ALPHA2_BOUNDS", "G_A_BOUNDS", "strokes",
+    "DahlFit", "fit_dahl", "CASE_I_CANDIDATES", "WORKBOOK_DAHL", "fit_case_I_loops",
+    "choose_fit", "workbook_dahl_fit", "ALPHA1_BOUNDS", "ALPHA2_BOUNDS", "G_A_BOUNDS", "strokes",
     "Table4Run", "table4_reference", "table4_measure", "run_case_II",
     "HysteresisMeasure", "hysteresis_measure", "hysteresis_percent",
 ]
 
 #: The two model forms: eq. 10 as printed, and the Bliman-Sorine placement.
 FORMS = ("printed", "bliman_sorine")
+#: Initial states: "virgin" z = 0 (moving up), "rest" the state after a long
+#: descending stroke (moving down), i.e. at rest after being lowered.
+STARTS = ("virgin", "rest")
 
 
 class NotInvertibleError(ValueError):
@@ -123,6 +149,15 @@ class DahlModel:
         Piezoelectric coefficient of eq. 13, > 0 [x-unit per v-unit].
     form : {"printed", "bliman_sorine"}
         Where the sign of the velocity enters (see the module docstring).
+    x0 : float, optional
+        Output offset [x-unit], x = g_a v - H + x0: the model's displacement
+        (sensor) zero, a workbook extension that eq. 13 lacks.  Default 0:
+        the paper's model exactly.
+    start : {"virgin", "rest"}, optional
+        State every simulation and feedforward starts from unless told
+        otherwise (:meth:`initial_state`): "virgin" (default) z = 0, "rest"
+        the state reached after a long descending stroke, i.e. at rest after
+        the actuator was lowered.
     """
 
     alpha1: float
@@ -132,11 +167,13 @@ class DahlModel:
     gamma_a: float
     g_a: float
     form: str = "printed"
+    x0: float = 0.0
+    start: str = "virgin"
 
     def __post_init__(self):
         for name in ("alpha1", "alpha2", "g_a"):
             object.__setattr__(self, name, check_positive(name, getattr(self, name)))
-        for name in ("beta1", "beta2", "gamma_a"):
+        for name in ("beta1", "beta2", "gamma_a", "x0"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
                 raise TypeError(f"{name} must be a real number, got {value!r}")
@@ -145,6 +182,8 @@ class DahlModel:
             object.__setattr__(self, name, float(value))
         if self.form not in FORMS:
             raise ValueError(f"form must be one of {FORMS}, got {self.form!r}")
+        if self.start not in STARTS:
+            raise ValueError(f"start must be one of {STARTS}, got {self.start!r}")
 
     @classmethod
     def published(cls, form="printed", params=paper.DAHL):
@@ -176,6 +215,21 @@ class DahlModel:
     def with_form(self, form):
         """The same parameters in another form."""
         return replace(self, form=form)
+
+    def initial_state(self):
+        """(z0, direction0) of the model's ``start``.
+
+        "virgin": z = 0, direction +1.  "rest": z = z_ss of a descending
+        stroke, direction -1; in the Bliman-Sorine form H = -b2 gamma_a / a2
+        there, in the printed form the common steady state (no loop).
+        """
+        if self.start == "virgin":
+            return np.zeros(2), 1
+        return _Dynamics(self).z_ss[-1].copy(), -1
+
+    def with_offset(self, x0):
+        """The same model with output offset ``x0`` [x-unit] (0: the paper's eq. 13)."""
+        return replace(self, x0=x0)
 
 
 def _direction(direction):
@@ -263,10 +317,11 @@ def strokes(u, direction0=1):
     return [(int(a), int(b), int(s[a])) for a, b in zip(starts, stops)]
 
 
-def _initial_state(z0):
-    if z0 is None:
-        return np.zeros(2)
-    return check_finite_array("z0", z0, shape=(2,))
+def _initial_state(model, z0, direction0):
+    """(z0, direction0) given, or the model's start (:meth:`DahlModel.initial_state`)."""
+    z_start, s_start = model.initial_state()
+    z = z_start if z0 is None else check_finite_array("z0", z0, shape=(2,))
+    return z, s_start if direction0 is None else _direction(direction0)
 
 
 def _check_model(model):
@@ -276,7 +331,7 @@ def _check_model(model):
 
 
 # --------------------------------------------------------------------------- driven by x
-def dahl_hysteresis(model, x, z0=None, direction0=1, return_state=False):
+def dahl_hysteresis(model, x, z0=None, direction0=None, return_state=False):
     """Hysteretic term H(t) of eq. 11-12 driven by the displacement record x.
 
     Exact for any sampling: along each run of constant direction the state is
@@ -288,9 +343,11 @@ def dahl_hysteresis(model, x, z0=None, direction0=1, return_state=False):
     x : array_like
         Displacement record [x-unit], 1-D, at least 2 samples.
     z0 : array_like of shape (2,), optional
-        State at the first sample (default 0: virgin actuator).
+        State at the first sample (default: the model's ``start``, z = 0
+        for a virgin actuator).
     direction0 : {1, -1}, optional
-        Direction of motion assumed until x first changes.
+        Direction of motion assumed until x first changes (default: the
+        model's ``start``, +1 for a virgin actuator).
     return_state : bool, optional
         Also return the states z, shape (n, 2).
 
@@ -301,10 +358,10 @@ def dahl_hysteresis(model, x, z0=None, direction0=1, return_state=False):
     """
     _check_model(model)
     x = check_finite_array("x", x, ndim=1, min_length=2)
-    s0 = _direction(direction0)
+    z_init, s0 = _initial_state(model, z0, direction0)
     dyn = _Dynamics(model)
     z = np.empty((x.size, 2))
-    z[0] = _initial_state(z0)
+    z[0] = z_init
     H = np.empty(x.size)
     H[0] = dyn.C[s0] @ z[0]
     for start, stop, s in strokes(x, s0):
@@ -314,10 +371,12 @@ def dahl_hysteresis(model, x, z0=None, direction0=1, return_state=False):
     return (H, z) if return_state else H
 
 
-def feedforward(model, x_r, z0=None, direction0=1):
+def feedforward(model, x_r, z0=None, direction0=None):
     """Inverse-free Dahl feedforward of eq. 14 on a whole record.
 
-    u_f = (x_r + H(x_r)) / g_a, with H driven by the desired displacement.
+    u_f = (x_r - x0 + H(x_r)) / g_a, with H driven by the desired
+    displacement (x0 = ``model.x0``, 0 for the paper's model: eq. 14 as
+    printed).  Fed to the voltage-driven model, it gives x = x_r exactly.
 
     Parameters
     ----------
@@ -334,7 +393,8 @@ def feedforward(model, x_r, z0=None, direction0=1):
     """
     _check_model(model)
     x_r = check_finite_array("x_r", x_r, ndim=1, min_length=2)
-    return (x_r + dahl_hysteresis(model, x_r, z0=z0, direction0=direction0)) / model.g_a
+    H = dahl_hysteresis(model, x_r, z0=z0, direction0=direction0)
+    return (x_r - model.x0 + H) / model.g_a
 
 
 class DahlFeedforward:
@@ -348,9 +408,10 @@ class DahlFeedforward:
     ----------
     model : DahlModel
     z0 : array_like of shape (2,), optional
-        Initial state (default 0).
+        Initial state (default: the model's ``start``).
     direction0 : {1, -1}, optional
-        Direction assumed until the reference first moves.
+        Direction assumed until the reference first moves (default: the
+        model's ``start``).
 
     Examples
     --------
@@ -358,10 +419,10 @@ class DahlFeedforward:
     >>> u = [ff.step(r) for r in (0.0, 0.1, 0.2)]
     """
 
-    def __init__(self, model, z0=None, direction0=1):
+    def __init__(self, model, z0=None, direction0=None):
         self.model = _check_model(model)
-        self._z_init = tuple(float(v) for v in _initial_state(z0))
-        self._s_init = _direction(direction0)
+        z_init, self._s_init = _initial_state(model, z0, direction0)
+        self._z_init = tuple(float(v) for v in z_init)
         dyn = _Dynamics(model)
         self._m = dyn.m
         self._disc = dyn.disc
@@ -371,6 +432,7 @@ class DahlFeedforward:
         self._zss = {s: tuple(float(v) for v in dyn.z_ss[s]) for s in (1, -1)}
         self._C = {s: tuple(float(v) for v in dyn.C[s]) for s in (1, -1)}
         self._inv_g = 1.0 / model.g_a
+        self._x0 = model.x0
         self.reset()
 
     def reset(self):
@@ -408,7 +470,7 @@ class DahlFeedforward:
             self._s = s
         self._x = x_r
         c1, c2 = self._C[self._s]
-        return (x_r + c1 * self._z1 + c2 * self._z2) * self._inv_g
+        return (x_r - self._x0 + c1 * self._z1 + c2 * self._z2) * self._inv_g
 
     def _parts(self, sigma):
         """Scalar version of :meth:`_Dynamics.parts`."""
@@ -432,7 +494,7 @@ class DahlFeedforward:
 # --------------------------------------------------------------------------- driven by v
 @dataclass(frozen=True)
 class DahlResponse:
-    """Response of the voltage-driven model: x = g_a v - H(x) (eq. 13).
+    """Response of the voltage-driven model: x = g_a v - H(x) + x0 (eq. 13, x0 = 0).
 
     Attributes
     ----------
@@ -452,14 +514,15 @@ class DahlResponse:
     z: np.ndarray
 
 
-def simulate_dahl(model, v, z0=None, direction0=1):
+def simulate_dahl(model, v, z0=None, direction0=None):
     """Displacement of the Dahl model driven by the input voltage v (eq. 10-13).
 
-    The implicit relation x = g_a v - H(x) is solved exactly: along a run of
-    constant input direction s the displacement moves the same way, and
-    x_k = x_start + s sigma_k where sigma_k >= 0 is the root of
+    The implicit relation x = g_a v - H(x) + x0 (eq. 13 for x0 = 0) is
+    solved exactly: along a run of constant input direction s the
+    displacement moves the same way, and x_k = x_start + s sigma_k where
+    sigma_k >= 0 is the root of
 
-        psi(sigma) = sigma + s [C z(sigma) + x_start - g_a v_k],
+        psi(sigma) = sigma + s [C z(sigma) + x_start - x0 - g_a v_k],
 
     with z(sigma) in closed form.  All samples of a run are solved together
     by a safeguarded (bracketed) Newton iteration to machine precision.
@@ -471,9 +534,10 @@ def simulate_dahl(model, v, z0=None, direction0=1):
     v : array_like
         Input record [v-unit], 1-D.
     z0 : array_like of shape (2,), optional
-        Initial state (default 0).
+        Initial state (default: the model's ``start``).
     direction0 : {1, -1}, optional
-        Direction assumed until v first changes.
+        Direction assumed until v first changes (default: the model's
+        ``start``).
 
     Returns
     -------
@@ -492,15 +556,16 @@ def simulate_dahl(model, v, z0=None, direction0=1):
             "simulate_dahl needs beta1 = 0: with beta1 != 0 H (eq. 12) jumps by "
             "2*beta1*z2 at every reversal, so x = g_a v - H would jump with the input "
             f"at rest (got beta1={model.beta1}); the published value is 0")
-    x, H, z = _simulate_records(model, [v], _initial_state(z0), _direction(direction0))[0]
+    x, H, z = _simulate_records(model, [v], *_initial_state(model, z0, direction0))[0]
     return DahlResponse(v=v, x=x, H=H, z=z)
 
 
-def _simulate_records(model, records, z0=np.zeros(2), s0=1):
+def _simulate_records(model, records, z0=None, s0=None):
     """(x, H, z) of the voltage-driven model for several input records.
 
-    The k-th strokes of all records are solved together (they are
-    independent), so fitting several loops costs little more than one.
+    Each record starts from ``z0``, ``s0`` (default: the model's start).  The
+    k-th strokes of all records are solved together (they are independent),
+    so fitting several loops costs little more than one.
     """
     if model.beta1 != 0:
         raise ValueError(
@@ -508,6 +573,9 @@ def _simulate_records(model, records, z0=np.zeros(2), s0=1):
             "2*beta1*z2 at every reversal, so x = g_a v - H would jump with the input "
             f"at rest (got beta1={model.beta1}); the published value is 0")
     dyn = _Dynamics(model)
+    z_start, s_start = model.initial_state()
+    z0 = z_start if z0 is None else z0
+    s0 = s_start if s0 is None else s0
     g = model.g_a
     out, runs = [], []
     for v in records:
@@ -516,7 +584,7 @@ def _simulate_records(model, records, z0=np.zeros(2), s0=1):
         H = np.empty(v.size)
         H[0] = dyn.C[s0] @ z0
         x = np.empty(v.size)
-        x[0] = g * v[0] - H[0]
+        x[0] = g * v[0] - H[0] + model.x0
         out.append((x, H, z))
         runs.append(strokes(v, s0))
     for rank in range(max(len(r) for r in runs)):
@@ -525,7 +593,8 @@ def _simulate_records(model, records, z0=np.zeros(2), s0=1):
         starts = [(out[i][2][run[0]], out[i][0][run[0]]) for i, run in batch]
         sigmas = _solve_strokes(dyn, s, np.array([zs for zs, xs in starts]),
                                 np.array([xs for zs, xs in starts]),
-                                [g * records[i][run[0] + 1:run[1] + 1] for i, run in batch])
+                                [g * records[i][run[0] + 1:run[1] + 1] + model.x0
+                                 for i, run in batch])
         for (i, (start, stop, sk)), sigma in zip(batch, sigmas):
             x, H, z = out[i]
             zk = dyn.propagate(sk, sigma, z[start])
@@ -595,7 +664,7 @@ def _solve_strokes(dyn, s, Z, x_start, targets, n_grid=48):
     Z, x_start : ndarray, shapes (K, 2) and (K,)
         State and displacement at the start of each stroke.
     targets : list of K ndarray
-        g_a v at the samples of each stroke.
+        g_a v + x0 at the samples of each stroke.
 
     Returns
     -------
@@ -682,7 +751,11 @@ class DahlFit:
     initial : DahlModel
         Starting point of the best solution.
     result : scipy.optimize.OptimizeResult
-        The output-error least-squares solution (scaled parameters).
+        The output-error least-squares solution (scaled parameters; x0 is
+        projected out and not part of ``result.x``).
+    offset : bool
+        Whether the output offset ``model.x0`` was fitted (False: x0 = 0,
+        the paper's eq. 13).
     """
 
     model: DahlModel
@@ -693,6 +766,21 @@ class DahlFit:
     max_percent: np.ndarray
     initial: DahlModel
     result: object
+    offset: bool = False
+
+    @property
+    def worst_rms_percent(self):
+        """Largest per-loop RMS error [% of range]."""
+        return float(np.max(self.rms_percent))
+
+    @property
+    def pooled_rms_percent(self):
+        """RMS over the loops of the per-loop RMS errors [% of range].
+
+        The fit's own criterion (every loop weighs the same), evaluated on
+        all samples: the workbook's model selection rule (:func:`choose_fit`).
+        """
+        return float(np.sqrt(np.mean(self.rms_percent ** 2)))
 
 
 def _check_loops(loops, discard, stride):
@@ -734,34 +822,37 @@ def _check_loops(loops, discard, stride):
     return out
 
 
-def _unit_model(form, alpha1, alpha2):
+def _unit_model(form, alpha1, alpha2, start):
     """Model whose H is z1 for gamma_a = 1: H of a general model is beta2*gamma_a*z1."""
-    return DahlModel(alpha1, alpha2, 0.0, 1.0, 1.0, 1.0, form=form)
+    return DahlModel(alpha1, alpha2, 0.0, 1.0, 1.0, 1.0, form=form, start=start)
 
 
 def _z1_on_input_strokes(model, v, x):
     """z1 driven by a (noisy) measured x, with directions taken from the input v."""
     dyn = _Dynamics(model)
-    z = np.zeros(2)
-    z1 = np.zeros(x.size)
-    for start, stop, s in strokes(v):
+    z, s0 = model.initial_state()
+    z1 = np.full(x.size, z[0])
+    for start, stop, s in strokes(v, s0):
         zk = dyn.propagate(s, s * (x[start + 1:stop + 1] - x[start]), z)
         z1[start + 1:stop + 1] = zk[:, 0]
         z = zk[-1]
     return z1
 
 
-#: Fit bounds of alpha1 * R and alpha2 * R^2 (R: output range).  Below
-#: alpha2 R^2 = 1e-4 the steady state b/alpha2 becomes so large that H is
-#: the small difference of huge terms (the Bliman-Sorine fit of the virtual
-#: stage runs towards that limit, where it degenerates into a first-order
-#: Dahl model plus a linear term).
-ALPHA1_BOUNDS = (1e-3, 1e3)
-ALPHA2_BOUNDS = (1e-4, 1e6)
+#: Fit bounds of alpha1 * R and alpha2 * R^2 (R: output range).  The upper
+#: bounds reach the first-order limit: for alpha1 R >> 1 the fast mode of
+#: the stroke dynamics (path length 1/alpha1) is negligible and the model
+#: acts as a first-order Dahl model, H -> +-b/alpha2 at the rate
+#: alpha2/alpha1 per x-unit; at alpha1 R = 1e5 the fast mode lasts 1e-5 of
+#: the range.  Below alpha2 R^2 = 1e-4 the steady state b/alpha2 becomes so
+#: large that H is the small difference of huge terms.
+ALPHA1_BOUNDS = (1e-3, 1e5)
+ALPHA2_BOUNDS = (1e-4, 1e8)
 #: Fit bounds of g_a relative to the loops' mean slope: H stays a deviation
 #: from g_a v.  Without them the Bliman-Sorine fit drifts to g_a -> 0 with H
 #: carrying the whole transduction (a degenerate, ill-conditioned limit).
 G_A_BOUNDS = (0.5, 2.0)
+_GRID_CELL = 1.5   # e-folds per grid cell of the starting-point search
 
 
 def _mean_slope(data):
@@ -773,42 +864,59 @@ def _mean_slope(data):
     return num / den
 
 
-def _equation_error(form, data, log_a1, log_a2, g_bounds):
-    """Residual and (g_a, b) of the linear problem x = g_a v - b z1(x), z1 from measured x,
-    with g_a held inside ``g_bounds`` (clipped, b then refitted alone)."""
-    unit = _unit_model(form, math.exp(log_a1), math.exp(log_a2))
+def _loop_weights(data):
+    """Residual weight per loop: 1 / (output range * sqrt(samples used))."""
+    return [1.0 / (np.ptp(x[used]) * math.sqrt(used.size)) for v, x, used in data]
+
+
+def _equation_error(form, data, log_a1, log_a2, g_bounds, offset, start):
+    """Residual and (g_a, b[, x0]) of the linear problem x = g_a v - b z1(x) [+ x0].
+
+    z1 is driven by the measured x, which makes the problem linear in g_a,
+    b = beta2 gamma_a and the offset x0.  g_a is held inside ``g_bounds``
+    (clipped, the other parameters then refitted).
+    """
+    unit = _unit_model(form, math.exp(log_a1), math.exp(log_a2), start)
     rows, rhs = [], []
-    for v, x, used in data:
+    for (v, x, used), w in zip(data, _loop_weights(data)):
         z1 = _z1_on_input_strokes(unit, v, x)
-        w = 1.0 / (np.ptp(x[used]) * math.sqrt(used.size))
-        rows.append(w * np.column_stack([v[used], -z1[used]]))
+        columns = [v[used], -z1[used]] + ([np.ones(used.size)] if offset else [])
+        rows.append(w * np.column_stack(columns))
         rhs.append(w * x[used])
     M, y = np.vstack(rows), np.concatenate(rhs)
-    (g, b), *_ = np.linalg.lstsq(M, y, rcond=None)
-    if not g_bounds[0] <= g <= g_bounds[1]:
-        g = min(max(g, g_bounds[0]), g_bounds[1])
-        col = M[:, 1]
-        b = float(col @ (y - g * M[:, 0]) / (col @ col)) if col @ col > 0 else 0.0
-    return M @ np.array([g, b]) - y, (g, b)
+    theta = np.linalg.lstsq(M, y, rcond=None)[0]
+    if not g_bounds[0] <= theta[0] <= g_bounds[1]:
+        theta[0] = min(max(theta[0], g_bounds[0]), g_bounds[1])
+        theta[1:] = np.linalg.lstsq(M[:, 1:], y - theta[0] * M[:, 0], rcond=None)[0]
+    return M @ theta - y, theta
 
 
-def _initial_guesses(form, data, gamma_a, g_bounds, starts):
-    """Equation-error starting points, best first.
-
-    For fixed (alpha1, alpha2), x = g_a v - b z1(x) is linear in (g_a, b =
-    beta2 gamma_a) when z1 is driven by the measured x.  On a log grid over
-    (alpha1, alpha2) with cells one e-fold wide (about the size of a basin)
-    the ``starts`` best local minima are taken (distinct valleys, not one
-    valley's neighbours), and each is refined with the linear parameters
-    projected out.
-    """
-    R = max(float(np.ptp(x[used])) for v, x, used in data)
+def _alpha_bounds(R):
+    """Lower and upper bounds of (log alpha1, log alpha2) for output range R."""
     lo = [math.log(ALPHA1_BOUNDS[0] / R), math.log(ALPHA2_BOUNDS[0] / R ** 2)]
     hi = [math.log(ALPHA1_BOUNDS[1] / R), math.log(ALPHA2_BOUNDS[1] / R ** 2)]
-    la1 = np.linspace(lo[0], hi[0], int(hi[0] - lo[0]) + 1)
-    la2 = np.linspace(lo[1], hi[1], int(hi[1] - lo[1]) + 1)
-    cost = np.array([[float(np.sum(_equation_error(form, data, p, q, g_bounds)[0] ** 2))
-                      for q in la2] for p in la1])
+    return lo, hi
+
+
+def _initial_guesses(form, data, gamma_a, g_bounds, starts, offset, start):
+    """Equation-error starting points, best first.
+
+    For fixed (alpha1, alpha2), x = g_a v - b z1(x) [+ x0] is linear in
+    (g_a, b = beta2 gamma_a[, x0]) when z1 is driven by the measured x.  On a
+    log grid over (alpha1, alpha2) with cells 1.5 e-folds wide (about the
+    size of a basin) the ``starts`` best local minima are taken (distinct
+    valleys, not one valley's neighbours), and each is refined with the
+    linear parameters projected out.
+    """
+    R = max(float(np.ptp(x[used])) for v, x, used in data)
+    lo, hi = _alpha_bounds(R)
+    la1 = np.linspace(lo[0], hi[0], int((hi[0] - lo[0]) / _GRID_CELL) + 1)
+    la2 = np.linspace(lo[1], hi[1], int((hi[1] - lo[1]) / _GRID_CELL) + 1)
+
+    def error(p):
+        return _equation_error(form, data, p[0], p[1], g_bounds, offset, start)
+
+    cost = np.array([[float(np.sum(error((p, q))[0] ** 2)) for q in la2] for p in la1])
     padded = np.pad(cost, 1, constant_values=np.inf)
     neighbours = np.min([padded[1 + i:1 + i + cost.shape[0], 1 + j:1 + j + cost.shape[1]]
                          for i in (-1, 0, 1) for j in (-1, 0, 1) if i or j], axis=0)
@@ -816,11 +924,12 @@ def _initial_guesses(form, data, gamma_a, g_bounds, starts):
     minima = minima[np.argsort(cost[tuple(minima.T)])][:starts]
     found = []
     for i, j in minima:
-        res = opt.least_squares(lambda p: _equation_error(form, data, *p, g_bounds)[0],
-                                [la1[i], la2[j]], bounds=(lo, hi), xtol=1e-10, ftol=1e-10)
-        g, b = _equation_error(form, data, *res.x, g_bounds)[1]
+        res = opt.least_squares(lambda p: error(p)[0], [la1[i], la2[j]], bounds=(lo, hi),
+                                xtol=1e-10, ftol=1e-10)
+        g, b, *x0 = error(res.x)[1]
         found.append((res.cost, DahlModel(math.exp(res.x[0]), math.exp(res.x[1]), 0.0,
-                                          b / gamma_a, gamma_a, g, form=form)))
+                                          b / gamma_a, gamma_a, g, form=form,
+                                          x0=x0[0] if offset else 0.0, start=start)))
     return [m for c, m in sorted(found, key=lambda item: item[0])]
 
 
@@ -830,38 +939,52 @@ def _to_theta(model):
                      model.beta2 * model.gamma_a])
 
 
-def _from_theta(theta, form, gamma_a):
+def _from_theta(theta, form, gamma_a, start, x0=0.0):
     g, log_a1, log_a2, b = theta
     return DahlModel(math.exp(log_a1), math.exp(log_a2), 0.0, b / gamma_a, gamma_a, g,
-                     form=form)
+                     form=form, x0=x0, start=start)
 
 
-def fit_dahl(loops, form="bliman_sorine", gamma_a=paper.DAHL.gamma_a, discard=0,
-             stride=1, initial=None, starts=3):
+def _project_offset(r, wv):
+    """x0 minimising |r + x0 wv|^2 (weighted residuals r, weights wv)."""
+    return -float(wv @ r) / float(wv @ wv)
+
+
+def fit_dahl(loops, form="bliman_sorine", offset=False, start="virgin",
+             gamma_a=paper.DAHL.gamma_a, discard=0, stride=1, initial=None, starts=3):
     """Least-squares fit of the Dahl parameters to one or several loops jointly.
 
     The fitted model is the voltage-driven model (:func:`simulate_dahl`,
     output error on x).  The free parameters are g_a, log alpha1, log alpha2
     and b = beta2 gamma_a (Jacobian scaling; bounds relative to the largest
     output range R: :data:`ALPHA1_BOUNDS` / R and :data:`ALPHA2_BOUNDS` / R^2,
-    g_a within :data:`G_A_BOUNDS` times the loops' mean slope);
-    beta1 is held at 0 (the published value) and ``gamma_a`` is fixed (only
-    beta2*gamma_a is identifiable).  Candidate models whose voltage-driven
-    form is not invertible get a large constant residual.  Each loop's residual is divided by
-    its output range and by sqrt(samples used), so that every loop weighs the
-    same.  The output-error problem is solved from ``starts`` starting points:
-    the best local minima of a log grid over (alpha1, alpha2) on which g_a and
-    beta2*gamma_a solve the linear equation-error problem
-    x = g_a v - beta2 gamma_a z1(x) (z1 driven by the measured x), each
-    refined; the best output-error solution is kept.
+    g_a within :data:`G_A_BOUNDS` times the loops' mean slope), and with
+    ``offset`` the output offset x0 (one for all loops), which enters
+    linearly and is solved exactly at every evaluation (variable projection),
+    so it costs no extra simulation.  beta1 is held at 0 (the published
+    value) and ``gamma_a`` is fixed (only beta2*gamma_a is identifiable).
+    Candidate models whose voltage-driven form is not invertible get a large
+    constant residual.  Each loop's residual is divided by its output range
+    and by sqrt(samples used), so that every loop weighs the same.  The
+    output-error problem is solved from ``starts`` starting points: the best
+    local minima of a log grid over (alpha1, alpha2) on which g_a,
+    beta2*gamma_a (and x0) solve the linear equation-error problem
+    x = g_a v - beta2 gamma_a z1(x) [+ x0] (z1 driven by the measured x).
+    Each start is solved to a loose tolerance and the best one polished.
 
     Parameters
     ----------
     loops : sequence of (v, x)
         Input [v-unit] and measured displacement [x-unit] records, each with
-        at least one ascending and one descending stroke of v.  The model
-        starts from rest (z = 0) at the first sample of each record.
+        at least one ascending and one descending stroke of v.
     form : {"bliman_sorine", "printed"}
+    offset : bool, optional
+        Fit the output offset x0 of :class:`DahlModel` (workbook extension).
+        Default False: the paper's eq. 13 exactly (x0 = 0).
+    start : {"virgin", "rest"}, optional
+        The fitted model's ``start``: the state it is in at the first sample
+        of every record (default "virgin": z = 0; "rest": after a long
+        descending stroke).
     gamma_a : float, optional
         Fixed input weight (default: the published 30).
     discard : int, optional
@@ -873,7 +996,8 @@ def fit_dahl(loops, form="bliman_sorine", gamma_a=paper.DAHL.gamma_a, discard=0,
         fit; the model output there is exact regardless, so this only trades
         noise averaging for speed.  The reported residuals use all samples.
     initial : DahlModel, optional
-        Single starting point instead of the grid search.
+        Single starting point instead of the grid search (its x0 is ignored:
+        x0 is solved exactly).
     starts : int, optional
         Number of grid starting points (ignored with ``initial``).
 
@@ -883,43 +1007,61 @@ def fit_dahl(loops, form="bliman_sorine", gamma_a=paper.DAHL.gamma_a, discard=0,
     """
     if form not in FORMS:
         raise ValueError(f"form must be one of {FORMS}, got {form!r}")
+    if not isinstance(offset, (bool, np.bool_)):
+        raise TypeError(f"offset must be True or False, got {offset!r}")
+    if start not in STARTS:
+        raise ValueError(f"start must be one of {STARTS}, got {start!r}")
     gamma_a = check_positive("gamma_a", gamma_a)
     data = _check_loops(loops, discard, stride)
     slope = _mean_slope(data)
     g_bounds = (slope * G_A_BOUNDS[0], slope * G_A_BOUNDS[1])
     if initial is None:
         candidates = _initial_guesses(form, data, gamma_a, g_bounds,
-                                      check_integer("starts", starts, minimum=1))
+                                      check_integer("starts", starts, minimum=1), offset,
+                                      start)
     else:
         _check_model(initial)
-        candidates = [replace(initial, form=form, beta1=0.0,
+        candidates = [replace(initial, form=form, beta1=0.0, start=start,
                               beta2=initial.beta2 * initial.gamma_a / gamma_a, gamma_a=gamma_a)]
     R = max(float(np.ptp(x[used])) for v, x, used in data)
-    weights = [1.0 / (np.ptp(x[used]) * math.sqrt(used.size)) for v, x, used in data]
-    lower = np.array([g_bounds[0], math.log(ALPHA1_BOUNDS[0] / R),
-                      math.log(ALPHA2_BOUNDS[0] / R ** 2), -1e8 / R])
-    upper = np.array([g_bounds[1], math.log(ALPHA1_BOUNDS[1] / R),
-                      math.log(ALPHA2_BOUNDS[1] / R ** 2), 1e8 / R])
+    weights = _loop_weights(data)
+    wv = np.concatenate([np.full(used.size, w) for (v, x, used), w in zip(data, weights)])
+    lo, hi = _alpha_bounds(R)
+    lower = np.array([g_bounds[0], *lo, -1e8 / R])
+    upper = np.array([g_bounds[1], *hi, 1e8 / R])
     n_res = sum(used.size for v, x, used in data)
 
-    def residuals(theta):
-        model = _from_theta(theta, form, gamma_a)
+    def output_error(theta):
+        """Weighted residuals with x0 = 0 (the offset is added by the caller)."""
+        model = _from_theta(theta, form, gamma_a, start)
         try:
             sims = _simulate_records(model, [v for v, x, used in data])
         except NotInvertibleError:
-            return np.full(n_res, 10.0 / math.sqrt(n_res))  # far worse than any loop fit
+            return None
         return np.concatenate([w * (xm[used] - x[used])
                                for (xm, H, z), (v, x, used), w in zip(sims, data, weights)])
 
+    def residuals(theta):
+        r = output_error(theta)
+        if r is None:
+            return np.full(n_res, 10.0 / math.sqrt(n_res))  # far worse than any loop fit
+        return r + _project_offset(r, wv) * wv if offset else r
+
     result, initial = None, None
+    def solve(theta0, tol):
+        theta0 = np.clip(theta0, lower + 1e-9 * (upper - lower), upper - 1e-9 * (upper - lower))
+        return opt.least_squares(residuals, theta0, bounds=(lower, upper), x_scale="jac",
+                                 method="trf", xtol=tol, ftol=tol, gtol=tol)
+
+    # every start to a loose tolerance, the best one polished
     for candidate in candidates:
-        theta0 = np.clip(_to_theta(candidate), lower + 1e-9 * (upper - lower),
-                         upper - 1e-9 * (upper - lower))
-        trial = opt.least_squares(residuals, theta0, bounds=(lower, upper), x_scale="jac",
-                                  method="trf", xtol=1e-12, ftol=1e-12, gtol=1e-12)
+        trial = solve(_to_theta(candidate), 1e-4 if len(candidates) > 1 else 1e-10)
         if result is None or trial.cost < result.cost:
             result, initial = trial, candidate
-    model = _from_theta(result.x, form, gamma_a)
+    if len(candidates) > 1:
+        result = solve(result.x, 1e-10)
+    x0 = _project_offset(output_error(result.x), wv) if offset else 0.0
+    model = _from_theta(result.x, form, gamma_a, start, x0)
     x_model, res, rms, rms_pct, max_pct = [], [], [], [], []
     for v, x, used in _check_loops(loops, discard, 1):
         xm = simulate_dahl(model, v).x
@@ -932,7 +1074,95 @@ def fit_dahl(loops, form="bliman_sorine", gamma_a=paper.DAHL.gamma_a, discard=0,
         max_pct.append(100 * float(np.max(np.abs(r))) / span)
     return DahlFit(model=model, x_model=x_model, residuals=res, rms=np.array(rms),
                    rms_percent=np.array(rms_pct), max_percent=np.array(max_pct),
-                   initial=initial, result=result)
+                   initial=initial, result=result, offset=bool(offset))
+
+
+# --------------------------------------------------------------------------- workbook model
+#: Candidate (form, offset, start) fits to the Case I loops.  From rest the
+#: printed form's H is constant (both directions share one steady state), so
+#: that form is fitted from the virgin state only.
+CASE_I_CANDIDATES = tuple((form, offset, start) for form in FORMS for offset in (False, True)
+                          for start in STARTS if not (form == "printed" and start == "rest"))
+#: The candidate that :func:`choose_fit` selects on the virtual stage's Case I
+#: loops (checked in notebook 03); the model behind :func:`workbook_dahl_fit`.
+WORKBOOK_DAHL = ("bliman_sorine", True, "rest")
+
+
+def fit_case_I_loops(form, offset, start, directory=None, stride=10):
+    """Joint fit of one candidate to the Table 4 Case I loops (cached in-process).
+
+    The four 10 Hz loops of :func:`piezolib.stage.load_hysteresis_loops`
+    (v = u_c [V], x = v_y [V]), the first period left out of the residuals
+    (the model still runs through it), every ``stride``-th sample used in the
+    fit.  The result is cached per argument set: treat it as read-only.
+
+    Parameters
+    ----------
+    form : {"printed", "bliman_sorine"}
+    offset : bool
+        Fit the output offset x0.
+    start : {"virgin", "rest"}
+        The model's initial state.
+    directory : str or Path, optional
+        Where the experiment files are (default: the workbook's ``data/``).
+    stride : int, optional
+
+    Returns
+    -------
+    DahlFit
+    """
+    if form not in FORMS:
+        raise ValueError(f"form must be one of {FORMS}, got {form!r}")
+    if start not in STARTS:
+        raise ValueError(f"start must be one of {STARTS}, got {start!r}")
+    if not isinstance(offset, (bool, np.bool_)):
+        raise TypeError(f"offset must be True or False, got {offset!r}")
+    directory = None if directory is None else str(directory)
+    return _fit_case_I_loops(form, bool(offset), start, directory,
+                             check_integer("stride", stride, minimum=1))
+
+
+@functools.lru_cache(maxsize=None)
+def _fit_case_I_loops(form, offset, start, directory, stride):
+    """:func:`fit_case_I_loops` with normalised arguments (one cache entry per fit)."""
+    from . import stage as _stage     # lazy: the stage module is heavier than this one
+    loops = _stage.load_hysteresis_loops(directory)
+    period = int(round(paper.SAMPLING_FREQUENCY_HZ / paper.HYSTERESIS_TEST["frequency_Hz"]))
+    return fit_dahl([(rec.u_c_V, rec.v_y_V) for rec in loops.values()], form=form,
+                    offset=offset, start=start, discard=period, stride=stride)
+
+
+def choose_fit(fits):
+    """The workbook's selection rule: the fit with the smallest pooled RMS error.
+
+    Parameters
+    ----------
+    fits : dict
+        {key: DahlFit}, all fitted to the same loops.
+
+    Returns
+    -------
+    key
+        The key of the fit with the smallest :attr:`DahlFit.pooled_rms_percent`
+        (the criterion every fit minimises; first key on a tie).
+    """
+    if not fits:
+        raise ValueError("fits must hold at least one DahlFit")
+    return min(fits, key=lambda key: fits[key].pooled_rms_percent)
+
+
+def workbook_dahl_fit(directory=None):
+    """The workbook's feedforward model: :data:`WORKBOOK_DAHL` fitted to the Case I loops.
+
+    One shared, cached fit for notebooks 03 and 06 and :mod:`piezolib.loop`,
+    so that they cannot diverge.  Notebook 03 checks that :func:`choose_fit`
+    picks :data:`WORKBOOK_DAHL` among :data:`CASE_I_CANDIDATES`.
+
+    Returns
+    -------
+    DahlFit
+    """
+    return fit_case_I_loops(*WORKBOOK_DAHL, directory=directory)
 
 
 # --------------------------------------------------------------------------- Table 4
@@ -1010,7 +1240,8 @@ def run_case_II(stage, model, amplitudes_V=None, periods=3):
 
     For each amplitude the reference v_r of :func:`table4_reference` is read
     as the desired displacement x_r = v_r [sensor V] and the stage receives
-    u_c = u_f = (x_r + H(x_r)) / g_a (eq. 14).  Measure the loops with
+    u_c = u_f = (x_r - x0 + H(x_r)) / g_a (eq. 14; x0 = 0 in the paper's
+    model).  Measure the loops with
     :func:`table4_measure`.
 
     Parameters

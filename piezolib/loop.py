@@ -30,19 +30,21 @@ The three cases of Sec. V
 ====  =========================================  ===================================
 case  paper                                      here (``run_case``)
 ====  =========================================  ===================================
-I     open loop without compensator              u_c = v_r / g, no feedback
-II    open loop with Dahl feedforward            u_c = u_f = (x_r + H(x_r)) / g_a
+I     open loop without compensator              u_c = (v_r - x0) / g, no feedback
+II    open loop with Dahl feedforward            u_c = u_f = (x_r - x0 + H(x_r)) / g_a
 III   Dahl feedforward + mu feedback controller  u_c = u_f + K_d v_e
 ====  =========================================  ===================================
 
+x0 is the Dahl model's output offset (its displacement zero, a workbook
+extension of eq. 13; 0 for the paper's model, see :mod:`piezolib.hysteresis`).
 What Case I applies is not stated for the tracking test.  The workbook reads
 "without compensator" as eq. 14 with the hysteresis term removed: the
-reference mapped to the amplifier input through the inverse of the same
-piezoelectric coefficient, g = g_a of the Dahl model used in Case II.  Then
-Case I and Case II differ by exactly the Dahl term, which is what the
-paper's "Case II w.r.t. Case I" rows credit to the compensator; and Sec. IV-A
-says that besides the hysteresis model only "the inverse of the piezoelectric
-coefficient" is needed.  (The paper's g_a = 0.925 V/V is within 3 % of
+reference mapped to the amplifier input through the static part of the same
+model, (v_r - x0) / g_a, with g_a and x0 of the Dahl model used in Case II.
+Then Case I and Case II differ by exactly the Dahl term H(x_r) / g_a, which
+is what the paper's "Case II w.r.t. Case I" rows credit to the compensator;
+and Sec. IV-A says that besides the hysteresis model only "the inverse of the
+piezoelectric coefficient" is needed.  (The paper's g_a = 0.925 V/V is within 3 % of
 G(0) = 0.8976, so on its hardware 1/g_a and 1/G(0) are nearly the same map.)
 In the hysteresis test (Table 4) the paper applies the actuator voltage
 itself ("input voltages of 10 V ... 40 V to the piezoelectric actuator"), so
@@ -65,7 +67,8 @@ import pandas as pd
 from . import paper, signals
 from ._checks import check_finite_array, check_integer, check_positive, check_proper, check_siso
 from .discretize import DiscreteController, discretize
-from .hysteresis import DahlModel, feedforward as dahl_feedforward, table4_measure, table4_reference
+from .hysteresis import (DahlModel, feedforward as dahl_feedforward, table4_measure,
+                         table4_reference, workbook_dahl_fit)
 from .metrics import improvement_percent, tracking_error_percent
 
 __all__ = [
@@ -250,8 +253,16 @@ def _feedforward_signal(feedforward, v_r):
     if isinstance(feedforward, Real) and not isinstance(feedforward, bool):
         g = check_positive("feedforward", feedforward)
         return v_r / g, f"static v_r / {g:.4g}"
-    raise TypeError("feedforward must be None, a positive gain g (u_f = v_r / g) or a "
-                    f"hysteresis.DahlModel (eq. 14), got {type(feedforward).__name__}")
+    if isinstance(feedforward, tuple) and len(feedforward) == 2 \
+            and all(isinstance(p, Real) and not isinstance(p, bool) for p in feedforward):
+        g = check_positive("feedforward gain", feedforward[0])
+        x0 = float(feedforward[1])
+        if not math.isfinite(x0):
+            raise ValueError(f"feedforward offset must be finite, got {x0!r}")
+        return (v_r - x0) / g, f"static (v_r - {x0:.4g}) / {g:.4g}"
+    raise TypeError("feedforward must be None, a positive gain g (u_f = v_r / g), a pair "
+                    "(g, x0) (u_f = (v_r - x0) / g) or a hysteresis.DahlModel (eq. 14), "
+                    f"got {type(feedforward).__name__}")
 
 
 def run_loop(stage, v_r, *, feedforward=None, controller=None):
@@ -263,12 +274,14 @@ def run_loop(stage, v_r, *, feedforward=None, controller=None):
         Each run starts from the stage's rest state with its noise seed.
     v_r : array_like
         Reference voltage [V] at the stage's rate, 1-D (x_r = 3 um/V * v_r).
-    feedforward : None, float or DahlModel
+    feedforward : None, float, (float, float) or DahlModel
         ``None``: u_f = 0.  A positive number g: u_f = v_r / g (static map,
-        no hysteresis compensation; g = 1 applies v_r itself).  A
+        no hysteresis compensation; g = 1 applies v_r itself).  A pair
+        (g, x0): u_f = (v_r - x0) / g.  A
         :class:`~piezolib.hysteresis.DahlModel` in the workbook convention
-        (v = u_c, x = v_y, both in V): u_f = (x_r + H(x_r)) / g_a (eq. 14)
-        with x_r = v_r in sensor volts, from rest (z = 0).
+        (v = u_c, x = v_y, both in V): u_f = (x_r - x0 + H(x_r)) / g_a
+        (eq. 14, x0 = the model's offset) with x_r = v_r in sensor volts,
+        H from the model's start state.
     controller : None, float, control.LTI or DiscreteController
         Feedback K on v_e = v_r - v_y (see :func:`discrete_controller`);
         ``None`` runs open loop.
@@ -328,13 +341,16 @@ def run_case(case, stage, v_r, dahl, controller=None, case_I_gain=None):
     stage : VirtualStage
     v_r : array_like
         Reference [V].
-    dahl : DahlModel
-        The feedforward model (Cases II, III) whose g_a also maps the
-        reference in Case I.
+    dahl : DahlModel or None
+        The feedforward model (Cases II, III) whose g_a and x0 also map the
+        reference in Case I.  None: the workbook's shared model,
+        :func:`piezolib.hysteresis.workbook_dahl_fit`.
     controller : see :func:`discrete_controller`
         Required for Case III, ignored otherwise.
     case_I_gain : float, optional
-        g of Case I (u_c = v_r / g); default ``dahl.g_a`` (module docstring).
+        g of Case I, applied without offset (u_c = v_r / g); default: the
+        static part of the Dahl model, u_c = (v_r - x0) / g_a (module
+        docstring).
 
     Returns
     -------
@@ -342,11 +358,14 @@ def run_case(case, stage, v_r, dahl, controller=None, case_I_gain=None):
     """
     if case not in CASES:
         raise ValueError(f"case must be one of {sorted(CASES)}, got {case!r}")
+    if dahl is None:
+        dahl = workbook_dahl_fit().model
     if not isinstance(dahl, DahlModel):
         raise TypeError(f"dahl must be a hysteresis.DahlModel, got {type(dahl).__name__}")
     if case == "I":
-        g = dahl.g_a if case_I_gain is None else check_positive("case_I_gain", case_I_gain)
-        return run_loop(stage, v_r, feedforward=g)
+        static = ((dahl.g_a, dahl.x0) if case_I_gain is None
+                  else check_positive("case_I_gain", case_I_gain))
+        return run_loop(stage, v_r, feedforward=static)
     if case == "II":
         return run_loop(stage, v_r, feedforward=dahl)
     if controller is None:
@@ -432,7 +451,8 @@ def hysteresis_test(stage, dahl, controller, amplitudes_V=None, periods=4,
     Parameters
     ----------
     stage : VirtualStage
-    dahl : DahlModel
+    dahl : DahlModel or None
+        None: the workbook's shared model (:func:`run_case`).
     controller : see :func:`discrete_controller`
         Case III's feedback (not None).
     amplitudes_V : sequence of float, optional
@@ -497,7 +517,8 @@ def tracking_test(stage, dahl, controller, frequencies_Hz=None, amplitude_um=Non
     Parameters
     ----------
     stage : VirtualStage
-    dahl : DahlModel
+    dahl : DahlModel or None
+        None: the workbook's shared model (:func:`run_case`).
     controller : see :func:`discrete_controller`
         Case III's feedback (not None).
     frequencies_Hz : sequence of float, optional

@@ -159,6 +159,47 @@ def test_stateful_feedforward_equals_array_version(form, alpha1):
     assert ff.step(x_r[0]) == pytest.approx(x_r[0] / m.g_a)
 
 
+# --- output offset x0 and initial state (workbook extensions) --------------------
+@pytest.mark.parametrize("form", hy.FORMS)
+def test_offset_only_shifts_the_output(form):
+    m = model(form)
+    v = minor_loop_reference() / m.g_a
+    plain, shifted = hy.simulate_dahl(m, v), hy.simulate_dahl(m.with_offset(-0.15), v)
+    np.testing.assert_allclose(shifted.x, plain.x - 0.15, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(shifted.H, plain.H, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(shifted.x + shifted.H, m.g_a * v - 0.15, rtol=0, atol=1e-12)
+    assert model(form).x0 == 0.0 and hy.DahlModel.published(form).x0 == 0.0   # eq. 13
+
+
+@pytest.mark.parametrize("form", hy.FORMS)
+@pytest.mark.parametrize("start", hy.STARTS)
+@pytest.mark.parametrize("alpha1", [3.0, 10.0, 400.0])   # oscillatory, overdamped, first-order-like
+def test_feedforward_inverts_the_model_with_offset(form, start, alpha1):
+    m = model(form, alpha1=alpha1, x0=-0.153, start=start)
+    x_r = minor_loop_reference()
+    u_f = hy.feedforward(m, x_r)
+    np.testing.assert_allclose(hy.simulate_dahl(m, u_f).x, x_r, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(hy.DahlFeedforward(m).run(x_r), u_f, rtol=0, atol=1e-11)
+    # u_f = (x_r - x0 + H(x_r)) / g_a, H from the model's start state
+    H = hy.dahl_hysteresis(m, x_r)
+    np.testing.assert_allclose(u_f, (x_r - m.x0 + H) / m.g_a, rtol=0, atol=1e-15)
+
+
+def test_rest_start_is_the_state_after_a_long_descending_stroke():
+    m = model("bliman_sorine", start="rest")
+    z0, s0 = m.initial_state()
+    assert s0 == -1
+    assert hy.dahl_hysteresis(m, [0.0, 0.0])[0] == pytest.approx(m.steady_state(-1), rel=1e-12)
+    # a record from rest equals the virgin model's response after lowering it by 50 x-units
+    # (>> the transient length 2/alpha1) onto the record's first sample
+    x = minor_loop_reference()
+    virgin = model("bliman_sorine")                      # default start: virgin, z = 0
+    lowered = np.r_[np.linspace(x[0] + 50.0, x[0], 2001), x[1:]]
+    H_virgin = hy.dahl_hysteresis(virgin, lowered, direction0=-1)
+    np.testing.assert_allclose(hy.dahl_hysteresis(m, x), H_virgin[2000:], rtol=0, atol=1e-12)
+    assert virgin.initial_state()[1] == 1 and np.all(virgin.initial_state()[0] == 0)
+
+
 def test_feedforward_of_published_model_is_offset_only():
     """Printed form, published numbers: after the first transient u_f = (x_r + 26.97)/g_a."""
     m = hy.DahlModel.published("printed")
@@ -181,6 +222,65 @@ def test_fit_recovers_known_parameters(form):
     assert fit.model.gamma_a == paper.DAHL.gamma_a and fit.model.beta1 == 0.0
     assert np.all(fit.rms_percent < 1e-6)
     assert len(fit.x_model) == 4 and fit.residuals[0].shape == loops[0][0].shape
+
+
+@pytest.mark.parametrize("form, start", [("bliman_sorine", "virgin"), ("bliman_sorine", "rest"),
+                                         ("printed", "virgin")])
+def test_fit_recovers_known_parameters_including_offset(form, start):
+    true = model(form, alpha1=2.0, alpha2=2.5, beta2=0.3 * 2.5 / 30.0, g_a=0.9, x0=-0.15,
+                 start=start)
+    loops = []
+    for amplitude in (1.0, 2.0, 3.0, 4.0):
+        t, v = signals.triangle(amplitude, 10.0, periods=2)
+        loops.append((v, hy.simulate_dahl(true, v).x))
+    fit = hy.fit_dahl(loops, form=form, offset=True, start=start, stride=5)
+    for name in ("alpha1", "alpha2", "beta2", "g_a", "x0"):
+        assert getattr(fit.model, name) == pytest.approx(getattr(true, name), rel=1e-6), name
+    assert fit.offset and fit.model.start == start
+    assert fit.pooled_rms_percent < 1e-6
+    # the paper's form (no offset) cannot represent the shifted loops
+    paper_form = hy.fit_dahl(loops, form=form, start=start, stride=5)
+    assert paper_form.model.x0 == 0.0 and paper_form.worst_rms_percent > 0.1
+
+
+def test_fit_reaches_the_first_order_limit():
+    """A first-order-like model (alpha1 >> 2 sqrt(alpha2)) is recovered inside the bounds."""
+    true = model("bliman_sorine", alpha1=300.0, alpha2=420.0, beta2=0.25 * 420.0 / 30.0,
+                 g_a=1.25, x0=-0.15, start="rest")
+    loops = [(v, hy.simulate_dahl(true, v).x) for v in
+             (signals.triangle(A, 10.0, periods=2)[1] for A in (1.0, 2.0, 3.0, 4.0))]
+    fit = hy.fit_dahl(loops, offset=True, start="rest", discard=1000, stride=5)
+    assert not np.any(fit.result.active_mask)                 # no parameter on a bound
+    assert fit.pooled_rms_percent < 1e-4
+    for name in ("g_a", "x0"):
+        assert getattr(fit.model, name) == pytest.approx(getattr(true, name), rel=1e-4), name
+    # the first-order quantities: rate alpha2/alpha1 and steady state b2 gamma_a / alpha2
+    assert fit.model.alpha2 / fit.model.alpha1 == pytest.approx(1.4, rel=1e-3)
+    assert fit.model.steady_state(1) == pytest.approx(0.25, rel=1e-4)
+
+
+def test_choose_fit_takes_the_smallest_pooled_rms():
+    fake = {key: type("Fit", (), {"pooled_rms_percent": value})()
+            for key, value in (("a", 2.0), ("b", 0.5), ("c", 0.5), ("d", 3.0))}
+    assert hy.choose_fit(fake) == "b"
+    with pytest.raises(ValueError, match="at least one"):
+        hy.choose_fit({})
+
+
+def test_workbook_fit_is_shared_and_deterministic():
+    first = hy.workbook_dahl_fit()
+    assert hy.workbook_dahl_fit() is first                    # cached: one model everywhere
+    assert hy.fit_case_I_loops(*hy.WORKBOOK_DAHL) is first
+    form, offset, start = hy.WORKBOOK_DAHL
+    assert (first.model.form, first.offset, first.model.start) == (form, offset, start)
+    hy._fit_case_I_loops.cache_clear()
+    again = hy.workbook_dahl_fit()
+    assert again is not first and again.model == first.model  # refitted: bit-identical
+    np.testing.assert_array_equal(again.rms_percent, first.rms_percent)
+    with pytest.raises(TypeError, match="offset must be True or False"):
+        hy.fit_case_I_loops("bliman_sorine", 1, "rest")
+    with pytest.raises(ValueError, match="start must be one of"):
+        hy.fit_case_I_loops("bliman_sorine", True, "lowered")
 
 
 def test_fit_single_loop_and_discard():
@@ -210,6 +310,12 @@ def test_bad_form_and_direction_raise():
         model("first_order")
     with pytest.raises(ValueError, match="direction must be"):
         model().steady_state(0)
+    with pytest.raises(ValueError, match="start must be one of"):
+        model(start="lowered")
+    with pytest.raises(ValueError, match="x0 must be finite"):
+        model(x0=float("nan"))
+    with pytest.raises(TypeError, match="x0 must be a real number"):
+        model(x0="0")
 
 
 def test_bad_records_raise():
@@ -243,6 +349,10 @@ def test_fit_rejects_records_without_a_full_cycle():
         hy.fit_dahl({10.0: (v, v)})
     with pytest.raises(ValueError, match="starts must be >= 1"):
         hy.fit_dahl([(v, 0.9 * v)], starts=0)
+    with pytest.raises(TypeError, match="offset must be True or False"):
+        hy.fit_dahl([(v, 0.9 * v)], offset="yes")
+    with pytest.raises(ValueError, match="start must be one of"):
+        hy.fit_dahl([(v, 0.9 * v)], start="lowered")
 
 
 def test_monotonicity_check_is_exact():

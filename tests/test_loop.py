@@ -58,6 +58,15 @@ def test_open_loop_path_equals_zero_controller_path(stage):
         assert np.array_equal(a.v_y_V, b.v_y_V)
 
 
+def test_default_feedforward_is_the_workbook_model(stage):
+    v = reference()
+    shared = hysteresis.workbook_dahl_fit().model
+    assert np.array_equal(loop.run_case("II", stage, v, None).u_f_V,
+                          hysteresis.feedforward(shared, v))
+    with pytest.raises(TypeError, match="feedforward must be"):
+        loop.run_loop(stage, v, feedforward=(1.0, 2.0, 3.0))
+
+
 def test_feedforward_paths(stage):
     v = reference()
     assert np.all(loop.run_loop(stage, v).u_f_V == 0)                       # none
@@ -71,6 +80,14 @@ def test_cases_apply_what_the_module_says(stage):
     v = reference()
     I = loop.run_case("I", stage, v, DAHL)
     assert np.array_equal(I.u_f_V, v / DAHL.g_a) and np.all(I.u_b_V == 0)
+    # with an offset model, Case I is its static part and Case II adds exactly H / g_a
+    shifted = DAHL.with_offset(-0.15)
+    I, II = (loop.run_case(c, stage, v, shifted) for c in ("I", "II"))
+    np.testing.assert_allclose(I.u_f_V, (v + 0.15) / DAHL.g_a, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(II.u_f_V - I.u_f_V,
+                               hysteresis.dahl_hysteresis(shifted, v) / DAHL.g_a,
+                               rtol=0, atol=1e-14)
+    assert np.array_equal(loop.run_case("I", stage, v, shifted, case_I_gain=1.0).u_f_V, v)
     assert np.array_equal(loop.run_case("I", stage, v, DAHL, case_I_gain=1.0).u_f_V, v)
     II = loop.run_case("II", stage, v, DAHL)
     assert np.array_equal(II.u_f_V, hysteresis.feedforward(DAHL, v))
