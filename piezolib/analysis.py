@@ -24,7 +24,7 @@ import pandas as pd
 from ._checks import check_finite_array, check_siso
 from .genplant import BLOCK_STRUCTURE, _defaults, generalized_plant, lft_response
 from .mu import mussv
-from .robust import hinf_norm, is_stable, loop_functions, realize
+from .robust import closed_loop_poles, hinf_norm, is_stable, loop_functions, realize
 
 __all__ = ["RobustnessAnalysis", "analyze", "table3", "robust_performance_peak", "ANALYSIS_GRID"]
 
@@ -89,7 +89,7 @@ def _refined_peak(P, K, omega, res):
 
 
 def robust_performance_peak(K, G=None, H_m=None, H_e=None, H_y=None, *, omega=None):
-    """Peak of the mu_RP upper bound and its frequency [rad/s] (nan if K destabilises).
+    """Peak of the mu_RP upper bound and its frequency [rad/s] (inf, nan if K destabilises).
 
     A light version of :func:`analyze` for sweeps (no lower bound, no norms).
     """
@@ -98,7 +98,7 @@ def robust_performance_peak(K, G=None, H_m=None, H_e=None, H_y=None, *, omega=No
     omega = ANALYSIS_GRID if omega is None else check_finite_array("omega", omega, ndim=1,
                                                                      min_length=16)
     if not is_stable(G, K):
-        return float("nan"), float("nan")
+        return float("inf"), float("nan")
     P = generalized_plant(G, H_m, H_e, H_y)
     res = mussv(lft_response(P, K, omega), BLOCK_STRUCTURE, lower=False)
     k = int(np.argmax(res.upper))
@@ -127,19 +127,22 @@ def analyze(K, G=None, H_m=None, H_e=None, H_y=None, *, omega=None, name=None):
     Returns
     -------
     RobustnessAnalysis
+        For a K that does not stabilise G the norms and mu peaks are inf (no
+        condition of Table 3 holds), their frequencies and the curves NaN.
     """
     check_siso("K", K)
     G, H_m, H_e, H_y = _defaults(G, H_m, H_e, H_y)
     omega = ANALYSIS_GRID if omega is None else check_finite_array("omega", omega, ndim=1,
                                                                      min_length=16)
     loop = loop_functions(G, K)
-    poles = np.concatenate([ct.poles(f) for f in loop])
-    stable = bool(np.all(poles.real < 0))
-    nan = float("nan")
+    poles = closed_loop_poles(G, K)
+    # NS asks all four closed-loop functions to be stable (hidden modes included)
+    stable = all(np.all(ct.poles(f).real < 0) for f in loop) and bool(np.all(poles.real < 0))
     if not stable:
+        inf, nan = float("inf"), float("nan")
         empty = np.full(omega.shape, nan)
-        return RobustnessAnalysis(name or K.name, False, poles, nan, nan, nan, nan, nan, nan,
-                                  nan, nan, nan, omega, empty, empty, empty)
+        return RobustnessAnalysis(name or K.name, False, poles, inf, nan, inf, nan, inf, nan,
+                                  inf, inf, nan, omega, empty, empty, empty)
     he_s = hinf_norm(realize(H_e) * loop.S)
     hy_t = hinf_norm(realize(H_y) * loop.T)
     hm_t = hinf_norm(realize(H_m) * loop.T)

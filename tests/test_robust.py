@@ -109,7 +109,7 @@ def test_analysis_of_published_controller(models):
 def test_analysis_of_destabilising_controller(models):
     a = analysis.analyze(-models["K"], name="minus K")
     assert not a.nominal_stability
-    assert np.isnan(a.mu_RP) and np.isnan(a.norm_He_S)
+    assert a.mu_RP == np.inf and a.norm_He_S == np.inf and np.isnan(a.omega_RP)
     table = analysis.table3(a, paper_values=paper.FIGURES_OF_MERIT)
     assert list(table.columns) == ["paper", "minus K"]
     assert not table.loc["NS: S, T, KS, GS stable", "minus K"]
