@@ -13,17 +13,10 @@ import numpy as np
 
 from piezolib import hysteresis as hy
 
+from bench_stage import best_of      # scripts run from benchmarks/ see each other
+
 MODEL = hy.DahlModel(alpha1=3.0, alpha2=4.0, beta1=0.0, beta2=0.2 * 4 / 30, gamma_a=30.0,
                      g_a=0.95, form="bliman_sorine")
-
-
-def best_of(fn, repeat=5):
-    times = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return min(times)
 
 
 def main():
@@ -70,6 +63,7 @@ def main():
     print(f"all {len(hy.CASE_I_CANDIDATES)} candidates: {time.perf_counter() - total:.2f} s; "
           f"workbook_dahl_fit() afterwards (cached): "
           f"{best_of(hy.workbook_dahl_fit) * 1e6:.1f} us")
+
 
 if __name__ == "__main__":
     main()

@@ -81,8 +81,9 @@ Contents
 * :func:`fit_case_I_loops`, :func:`choose_fit`, :func:`workbook_dahl_fit`:
   the candidate fits to the virtual stage's Case I loops, the selection rule
   and the one shared feedforward model of notebooks 03 and 06 (cached);
-* :func:`table4_reference`, :func:`table4_measure`, :func:`run_case_II`: how the
-  Table 4 loops are produced and measured (shared by Cases I-III);
+* :func:`table4_reference`, :func:`table4_measure`: how the Table 4 loops are
+  produced and measured (shared by Cases I-III; the cases themselves are run
+  by :func:`piezolib.loop.run_case`);
 * :func:`hysteresis_percent` / :func:`hysteresis_measure` (eq. 25-26),
   re-exported from :mod:`piezolib.metrics`.
 
@@ -101,7 +102,6 @@ Conventions of this implementation
 import functools
 import math
 from dataclasses import dataclass, fields, replace
-from typing import NamedTuple
 
 import numpy as np
 import scipy.optimize as opt
@@ -115,7 +115,7 @@ __all__ = [
     "dahl_hysteresis", "simulate_dahl", "feedforward", "DahlFeedforward",
     "DahlFit", "fit_dahl", "CASE_I_CANDIDATES", "WORKBOOK_DAHL", "fit_case_I_loops",
     "choose_fit", "workbook_dahl_fit", "ALPHA1_BOUNDS", "ALPHA2_BOUNDS", "G_A_BOUNDS", "strokes",
-    "Table4Run", "table4_reference", "table4_measure", "run_case_II",
+    "table4_reference", "table4_measure",
     "HysteresisMeasure", "hysteresis_measure", "hysteresis_percent",
 ]
 
@@ -565,13 +565,9 @@ def _simulate_records(model, records, z0=None, s0=None):
 
     Each record starts from ``z0``, ``s0`` (default: the model's start).  The
     k-th strokes of all records are solved together (they are independent),
-    so fitting several loops costs little more than one.
+    so fitting several loops costs little more than one.  ``model.beta1`` must
+    be 0 (checked by :func:`simulate_dahl`; :func:`fit_dahl` fits with beta1 = 0).
     """
-    if model.beta1 != 0:
-        raise ValueError(
-            "simulate_dahl needs beta1 = 0: with beta1 != 0 H (eq. 12) jumps by "
-            "2*beta1*z2 at every reversal, so x = g_a v - H would jump with the input "
-            f"at rest (got beta1={model.beta1}); the published value is 0")
     dyn = _Dynamics(model)
     z_start, s_start = model.initial_state()
     z0 = z_start if z0 is None else z0
@@ -950,6 +946,17 @@ def _project_offset(r, wv):
     return -float(wv @ r) / float(wv @ wv)
 
 
+def _check_fit_options(form, offset, start):
+    """Validated (form, offset, start) of a fit, offset as a plain bool."""
+    if form not in FORMS:
+        raise ValueError(f"form must be one of {FORMS}, got {form!r}")
+    if not isinstance(offset, (bool, np.bool_)):
+        raise TypeError(f"offset must be True or False, got {offset!r}")
+    if start not in STARTS:
+        raise ValueError(f"start must be one of {STARTS}, got {start!r}")
+    return form, bool(offset), start
+
+
 def fit_dahl(loops, form="bliman_sorine", offset=False, start="virgin",
              gamma_a=paper.DAHL.gamma_a, discard=0, stride=1, initial=None, starts=3):
     """Least-squares fit of the Dahl parameters to one or several loops jointly.
@@ -1005,12 +1012,7 @@ def fit_dahl(loops, form="bliman_sorine", offset=False, start="virgin",
     -------
     DahlFit
     """
-    if form not in FORMS:
-        raise ValueError(f"form must be one of {FORMS}, got {form!r}")
-    if not isinstance(offset, (bool, np.bool_)):
-        raise TypeError(f"offset must be True or False, got {offset!r}")
-    if start not in STARTS:
-        raise ValueError(f"start must be one of {STARTS}, got {start!r}")
+    form, offset, start = _check_fit_options(form, offset, start)
     gamma_a = check_positive("gamma_a", gamma_a)
     data = _check_loops(loops, discard, stride)
     slope = _mean_slope(data)
@@ -1074,7 +1076,7 @@ def fit_dahl(loops, form="bliman_sorine", offset=False, start="virgin",
         max_pct.append(100 * float(np.max(np.abs(r))) / span)
     return DahlFit(model=model, x_model=x_model, residuals=res, rms=np.array(rms),
                    rms_percent=np.array(rms_pct), max_percent=np.array(max_pct),
-                   initial=initial, result=result, offset=bool(offset))
+                   initial=initial, result=result, offset=offset)
 
 
 # --------------------------------------------------------------------------- workbook model
@@ -1111,14 +1113,9 @@ def fit_case_I_loops(form, offset, start, directory=None, stride=10):
     -------
     DahlFit
     """
-    if form not in FORMS:
-        raise ValueError(f"form must be one of {FORMS}, got {form!r}")
-    if start not in STARTS:
-        raise ValueError(f"start must be one of {STARTS}, got {start!r}")
-    if not isinstance(offset, (bool, np.bool_)):
-        raise TypeError(f"offset must be True or False, got {offset!r}")
+    form, offset, start = _check_fit_options(form, offset, start)
     directory = None if directory is None else str(directory)
-    return _fit_case_I_loops(form, bool(offset), start, directory,
+    return _fit_case_I_loops(form, offset, start, directory,
                              check_integer("stride", stride, minimum=1))
 
 
@@ -1166,13 +1163,6 @@ def workbook_dahl_fit(directory=None):
 
 
 # --------------------------------------------------------------------------- Table 4
-class Table4Run(NamedTuple):
-    """One Table 4 run: the reference and what the stage recorded."""
-
-    reference_V: np.ndarray
-    record: object
-
-
 def table4_reference(amplitude_V, periods=3, frequency_hz=None, fs=paper.SAMPLING_FREQUENCY_HZ):
     """Reference of the Table 4 experiments for one actuator amplitude.
 
@@ -1233,37 +1223,3 @@ def table4_measure(reference_V, v_y_V, discard_periods=1, frequency_hz=None,
                          f"({reference_V.size} samples)")
     return hysteresis_measure(paper.AMPLIFIER_GAIN * reference_V[start:],
                               paper.UM_PER_VOLT * v_y_V[start:])
-
-
-def run_case_II(stage, model, amplitudes_V=None, periods=3):
-    """Table 4 Case II: the Dahl feedforward alone drives the stage (open loop).
-
-    For each amplitude the reference v_r of :func:`table4_reference` is read
-    as the desired displacement x_r = v_r [sensor V] and the stage receives
-    u_c = u_f = (x_r - x0 + H(x_r)) / g_a (eq. 14; x0 = 0 in the paper's
-    model).  Measure the loops with
-    :func:`table4_measure`.
-
-    Parameters
-    ----------
-    stage : object
-        Anything with ``run(u_c) -> record`` (a ``VirtualStage``).
-    model : DahlModel
-        Fitted in the workbook convention (v = u_c [V], x = v_y [V]).
-    amplitudes_V : sequence of float, optional
-        Actuator amplitudes (default 10, 20, 30, 40 V).
-    periods : int, optional
-
-    Returns
-    -------
-    dict
-        {amplitude [V]: Table4Run}.
-    """
-    _check_model(model)
-    if amplitudes_V is None:
-        amplitudes_V = paper.HYSTERESIS_TEST["actuator_amplitudes_V"]
-    runs = {}
-    for A in amplitudes_V:
-        t, v_r = table4_reference(A, periods=periods)
-        runs[float(A)] = Table4Run(v_r, stage.run(feedforward(model, v_r)))
-    return runs

@@ -96,10 +96,6 @@ DISCARD_PERIODS = 2
 #: A controller output beyond this [V] means an unstable loop (the DAC range is -2 ... 12 V).
 _DIVERGED_V = 1e9
 
-_ROWS = ["case_I", "case_II", "case_III",
-         "improvement_II_vs_I", "improvement_III_vs_I", "improvement_III_vs_II"]
-
-
 # --------------------------------------------------------------------------- controller
 def discrete_controller(K, fs=paper.SAMPLING_FREQUENCY_HZ):
     """The controller as a discrete state-space model at ``fs``, or None.
@@ -386,12 +382,12 @@ def case_table(case_values, columns):
     Returns
     -------
     pandas.DataFrame
-        Rows as in :func:`piezolib.paper.table4`.
+        Rows as in :func:`piezolib.paper.table4` (its row index).
     """
     I, II, III = (np.asarray(case_values[c], dtype=float) for c in ("I", "II", "III"))
     data = [I, II, III, improvement_percent(I, II), improvement_percent(I, III),
             improvement_percent(II, III)]
-    return pd.DataFrame(data, index=pd.Index(_ROWS, name="row"), columns=columns)
+    return pd.DataFrame(data, index=paper.case_rows_index(), columns=columns)
 
 
 @dataclass(frozen=True, eq=False)

@@ -15,7 +15,8 @@ import numpy as np
 
 from ._checks import check_finite_array, check_same_length, check_positive
 
-__all__ = ["HysteresisMeasure", "hysteresis_measure", "hysteresis_percent"]
+__all__ = ["HysteresisMeasure", "hysteresis_measure", "hysteresis_percent", "tracking_error",
+           "tracking_error_percent", "peak_to_peak_error_percent", "improvement_percent"]
 
 
 @dataclass(frozen=True)
@@ -160,10 +161,6 @@ def _line_value_at(vs, xs, v0):
 
 
 # --- tracking error (Table 5) and improvement rows (Tables 4-5) ----------------
-__all__ += ["tracking_error", "tracking_error_percent", "peak_to_peak_error_percent",
-            "max_abs_error_percent", "improvement_percent"]
-
-
 def tracking_error(x_r, x):
     """Tracking error e = x_r - x, same unit as the inputs (e.g. um).
 
@@ -217,16 +214,6 @@ def peak_to_peak_error_percent(x_r, x, range_=None):
     return float(np.ptp(e)) / _range_of(x_r, range_) * 100
 
 
-def max_abs_error_percent(x_r, x, range_=None):
-    """Largest absolute tracking error in % of the range: max |e| / R * 100.
-
-    Same arguments as :func:`peak_to_peak_error_percent`.  This is the
-    workbook's tracking error % (:func:`tracking_error_percent`).
-    """
-    e = tracking_error(x_r, x)
-    return float(np.max(np.abs(e))) / _range_of(x_r, range_) * 100
-
-
 def tracking_error_percent(x_r, x, range_=None):
     """Tracking error % of Table 5: the largest error relative to the range.
 
@@ -267,7 +254,8 @@ def tracking_error_percent(x_r, x, range_=None):
     -------
     float
     """
-    return max_abs_error_percent(x_r, x, range_)
+    e = tracking_error(x_r, x)
+    return float(np.max(np.abs(e))) / _range_of(x_r, range_) * 100
 
 
 def improvement_percent(before, after):

@@ -70,7 +70,7 @@ __all__ = [
     "CONTROLLER", "ControllerCoefficients", "CONTROLLER_NOTE", "controller",
     "FIGURES_OF_MERIT", "DESIGN_GOALS", "HYSTERESIS_TEST", "TRACKING_TEST",
     "CONCLUSION_AVERAGES", "TEXT_VARIANTS",
-    "table1", "table2", "table4", "table5",
+    "CASE_ROWS", "case_rows_index", "table1", "table2", "table4", "table5",
 ]
 
 # --- Sec. II and V: hardware and experimental settings ----------------------
@@ -388,7 +388,8 @@ TEXT_VARIANTS = {
     ("table5", "improvement_II_vs_I", 20.0): 52.31,
 }
 
-_CASE_ROWS = ["case_I", "case_II", "case_III",
+#: Row labels of Tables 4 and 5: the three cases, then the three improvement rows.
+CASE_ROWS = ["case_I", "case_II", "case_III",
               "improvement_II_vs_I", "improvement_III_vs_I", "improvement_III_vs_II"]
 
 
@@ -416,6 +417,11 @@ def table2():
                                    for f in fields(UNCERTAINTY_WEIGHT)]})
 
 
+def case_rows_index():
+    """The row index shared by Tables 4 and 5 (and the workbook's reproductions)."""
+    return pd.Index(CASE_ROWS, name="row")
+
+
 def table4():
     """Table 4: hysteresis % at 10 Hz versus actuator amplitude [V].
 
@@ -430,7 +436,7 @@ def table4():
             [94.99, 95.93, 96.33, 96.46],
             [31.11, 54.32, 66.67, 79.25]]
     columns = pd.Index(HYSTERESIS_TEST["actuator_amplitudes_V"], name="amplitude_V")
-    return pd.DataFrame(data, index=pd.Index(_CASE_ROWS, name="row"), columns=columns)
+    return pd.DataFrame(data, index=case_rows_index(), columns=columns)
 
 
 def table5():
@@ -445,7 +451,7 @@ def table5():
             [93.04, 90.07, 86.17, 79.61, 69.41, 64.71],
             [85.59, 78.09, 70.39, 54.73, 35.14, 26.01]]
     columns = pd.Index(TRACKING_TEST["frequencies_Hz"], name="frequency_Hz")
-    return pd.DataFrame(data, index=pd.Index(_CASE_ROWS, name="row"), columns=columns)
+    return pd.DataFrame(data, index=case_rows_index(), columns=columns)
 
 
 def _with_overrides(params, cls, overrides):
