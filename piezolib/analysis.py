@@ -73,19 +73,19 @@ class RobustnessAnalysis:
                                            "omega_peak [rad/s]", "met"])
 
 
-def _refined_peak(P, K, omega, res):
-    """Peak of mu refined on 201 points spanning the grid cells next to the grid peak.
+def _refined_peak(P, K, omega, res, points=201, lower=True):
+    """Peak of mu refined on ``points`` frequencies spanning the grid cells next to the grid peak.
 
     Returns (upper peak, its frequency, largest lower bound seen).
     """
     k = int(np.argmax(res.upper))
-    local = np.geomspace(omega[max(k - 1, 0)], omega[min(k + 1, len(omega) - 1)], 201)
-    fine = mussv(lft_response(P, K, local), BLOCK_STRUCTURE)
+    local = np.geomspace(omega[max(k - 1, 0)], omega[min(k + 1, len(omega) - 1)], points)
+    fine = mussv(lft_response(P, K, local), BLOCK_STRUCTURE, lower=lower)
     j = int(np.argmax(fine.upper))
-    lower = float(max(res.lower.max(), fine.lower.max()))
+    lower_peak = float(max(res.lower.max(), fine.lower.max()))
     if fine.upper[j] > res.upper[k]:
-        return float(fine.upper[j]), float(local[j]), lower
-    return float(res.upper[k]), float(omega[k]), lower
+        return float(fine.upper[j]), float(local[j]), lower_peak
+    return float(res.upper[k]), float(omega[k]), lower_peak
 
 
 def robust_performance_peak(K, G=None, H_m=None, H_e=None, H_y=None, *, omega=None):
@@ -101,13 +101,7 @@ def robust_performance_peak(K, G=None, H_m=None, H_e=None, H_y=None, *, omega=No
         return float("inf"), float("nan")
     P = generalized_plant(G, H_m, H_e, H_y)
     res = mussv(lft_response(P, K, omega), BLOCK_STRUCTURE, lower=False)
-    k = int(np.argmax(res.upper))
-    local = np.geomspace(omega[max(k - 1, 0)], omega[min(k + 1, len(omega) - 1)], 101)
-    fine = mussv(lft_response(P, K, local), BLOCK_STRUCTURE, lower=False)
-    j = int(np.argmax(fine.upper))
-    if fine.upper[j] > res.upper[k]:
-        return float(fine.upper[j]), float(local[j])
-    return float(res.upper[k]), float(omega[k])
+    return _refined_peak(P, K, omega, res, points=101, lower=False)[:2]
 
 
 def analyze(K, G=None, H_m=None, H_e=None, H_y=None, *, omega=None, name=None):

@@ -30,7 +30,7 @@ from ._checks import check_finite_array, check_integer, check_lti, check_positiv
 from .dfit import fit_magnitude
 from .genplant import lft_response
 from .hinf import HinfSynthesisError, auto_time_scale, hinfsyn
-from .mu import mussv, parse_blk
+from .mu import MuResult, mussv, parse_blk
 from .robust import balance, scale_time
 
 __all__ = ["MusynResult", "musyn", "scaled_plant"]
@@ -62,8 +62,9 @@ class MusynResult:
         in the K-step that produced ``K`` (empty for the first iteration).
     omega : ndarray
         The frequency grid [rad/s].
-    mu_upper, mu_lower : ndarray
-        Bounds of mu on ``omega`` for ``K``.
+    mu : piezolib.mu.MuResult
+        mu bounds and optimal scalings on ``omega`` for ``K``; ``mu_upper``
+        and ``mu_lower`` are its bounds.
     elapsed : float
         Wall time [s].
     time_scale : float
@@ -82,17 +83,26 @@ class MusynResult:
     stop_reason: str
     d_scalings: list
     omega: np.ndarray
-    mu_upper: np.ndarray
-    mu_lower: np.ndarray
+    mu: MuResult = field(repr=False)
     elapsed: float
     time_scale: float
     regularization: str = ""
-    fits: list = field(default_factory=list, repr=False)
+
+    @property
+    def mu_upper(self):
+        """Upper bound of mu on ``omega`` for ``K``."""
+        return self.mu.upper
+
+    @property
+    def mu_lower(self):
+        """Lower bound of mu on ``omega`` for ``K``."""
+        return self.mu.lower
 
 
 def scaled_plant(P, blocks, d_tfs, nmeas, ncon):
     """D_l P D_r^-1 for full blocks with scalings ``d_tfs`` (last block: 1).
 
+    ``blocks`` are complex full blocks as given by :func:`piezolib.mu.parse_blk`.
     Block i (Delta_i is r_i x c_i) scales the c_i performance outputs it
     receives by d_i(s) and the r_i performance inputs it drives by 1/d_i(s);
     measurements and controls are not scaled.
@@ -102,8 +112,8 @@ def scaled_plant(P, blocks, d_tfs, nmeas, ncon):
     for b, d in zip(blocks, list(d_tfs) + [None] * (len(blocks) - len(d_tfs))):
         d_ss = one if d is None else ct.ss(d)
         d_inv = one if d is None else ct.ss(1 / ct.tf(d))
-        left += [d_ss] * b.outputs_count
-        right += [d_inv] * b.inputs_count
+        left += [d_ss] * b.n_out
+        right += [d_inv] * b.n_in
     left += [one] * nmeas
     right += [one] * ncon
     DL = ct.append(*left)
@@ -111,18 +121,13 @@ def scaled_plant(P, blocks, d_tfs, nmeas, ncon):
     return balance(ct.ss(DL * ct.ss(P) * DR))
 
 
-@dataclass
-class _Block:
-    inputs_count: int    # r: performance inputs driven by Delta_i
-    outputs_count: int   # c: performance outputs feeding Delta_i
-
-
 def _full_blocks(blk, p, q):
-    """The (r, c) sizes of a structure of complex full blocks (MATLAB convention)."""
-    for b in parse_blk(blk, p, q):
+    """The blocks of a structure of complex full blocks (MATLAB convention)."""
+    blocks = parse_blk(blk, p, q)
+    for b in blocks:
         if b.kind != "full":
             raise ValueError(f"musyn supports complex full blocks only; got a {b.kind!r} block")
-    return [_Block(int(r), int(c)) for r, c in np.asarray(blk, int).reshape(-1, 2)]
+    return blocks
 
 
 def _fit_scalings(omega_s, mu_res, blocks, order, prev_fits):
@@ -229,7 +234,7 @@ def musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=4, max_iter=8, rtol=5e
             regularization.add(hinf.regularization)
         K = hinf.K
         resp = lft_response(Ps, K, omega_s, omega_s=1.0)
-        mu_res = mussv(resp, blk)
+        mu_res = mussv(resp, blk, omega)
         k = int(np.argmax(mu_res.upper))
         row = {"iteration": it, "d_order": sum(f.order for f in fits),
                "gamma": hinf.gamma, "mu_upper": float(mu_res.upper[k]),
@@ -246,8 +251,7 @@ def musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=4, max_iter=8, rtol=5e
         else:
             stall += 1
         if best is None or row["mu_upper"] < best["row"]["mu_upper"]:
-            best = {"row": row, "K": K, "mu": mu_res, "fits": fits, "iteration": it,
-                    "hinf": hinf}
+            best = {"row": row, "K": K, "mu": mu_res, "fits": fits, "iteration": it}
         if stall >= patience:
             reason = f"no improvement > {rtol:g} in {patience} iterations"
             break
@@ -263,11 +267,10 @@ def musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=4, max_iter=8, rtol=5e
     K = ct.ss(K.A, K.B, K.C, K.D, inputs=list(P.output_labels[-nmeas:]),
               outputs=list(P.input_labels[-ncon:]), name="K")
     d_scalings = [scale_time(ct.tf(f.tf), 1.0 / ws) for f in best["fits"]]
-    mu_res = best["mu"]
     return MusynResult(
         K=K, mu_peak=best["row"]["mu_upper"], mu_lower_peak=best["row"]["mu_lower"],
         omega_peak=best["row"]["omega_peak"], gamma=best["row"]["gamma"],
         history=pd.DataFrame(rows), best_iteration=best["iteration"], stop_reason=reason,
-        d_scalings=d_scalings, omega=omega, mu_upper=mu_res.upper, mu_lower=mu_res.lower,
+        d_scalings=d_scalings, omega=omega, mu=best["mu"],
         elapsed=time.perf_counter() - t0, time_scale=ws,
-        regularization="; ".join(sorted(regularization)), fits=best["fits"])
+        regularization="; ".join(sorted(regularization)))

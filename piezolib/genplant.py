@@ -56,7 +56,7 @@ import numpy as np
 
 from . import paper
 from ._checks import check_finite_array, check_lti, check_nonnegative, check_positive, check_siso
-from .robust import DEFAULT_TIME_SCALE, balance, scale_time
+from .robust import DEFAULT_TIME_SCALE, balance, scale_time, scaled_coefficients
 
 __all__ = [
     "PLANT_INPUTS", "PLANT_OUTPUTS", "M_INPUTS", "M_OUTPUTS", "BLOCK_STRUCTURE",
@@ -138,8 +138,7 @@ def weight_truncation_error(sys, limit, omega):
 
 def _companion(den, nums):
     """Controllable canonical form of a SIMO system num_i/den (proper, den monic)."""
-    lead = float(den[0])
-    den = np.asarray(den, float) / lead
+    den = np.asarray(den, float)
     n = len(den) - 1
     A = np.zeros((n, n))
     A[0, :] = -den[1:]
@@ -149,7 +148,7 @@ def _companion(den, nums):
     C = np.zeros((len(nums), n))
     D = np.zeros((len(nums), 1))
     for i, num in enumerate(nums):
-        num = np.asarray(num, float) / lead
+        num = np.asarray(num, float)
         if len(num) > n + 1:
             raise ValueError("improper product: the weight's excess zeros exceed "
                              "the plant's relative degree")
@@ -157,14 +156,6 @@ def _companion(den, nums):
         D[i, 0] = num[0]
         C[i, :] = num[1:] - num[0] * den[1:]
     return A, B, C, D
-
-
-def _scaled_coefficients(num, den, omega_s):
-    """Coefficients of W(omega_s p) in p, normalised so that den is monic."""
-    k = max(len(num), len(den)) - 1
-    num = num * omega_s ** (np.arange(len(num))[::-1] - k)
-    den = den * omega_s ** (np.arange(len(den))[::-1] - k)
-    return num / den[0], den / den[0]
 
 
 def _plant_with_output_weight(G, H_y, limit, omega_s):
@@ -195,10 +186,8 @@ def _plant_with_output_weight(G, H_y, limit, omega_s):
     gain = y_den[0] * np.real(np.prod(-split))
     den = np.polymul(g_den, rest_den)
     nums = [np.polymul(g_num, rest_den), np.polymul(g_num, y_num) / gain]
-    k = len(den) - 1
-    den_s = den * omega_s ** (np.arange(len(den))[::-1] - k)
-    nums_s = [n * omega_s ** (np.arange(len(n))[::-1] - k) for n in nums]
-    joint = balance(ct.ss(*_companion(den_s, nums_s)))
+    scaled = [scaled_coefficients(num, den, omega_s) for num in nums]
+    joint = balance(ct.ss(*_companion(scaled[0][1], [num for num, _ in scaled])))
     joint = ct.ss(joint, inputs="u_c", outputs=["v_y", "y2_raw"])
     if filt.size == 0:
         return ct.ss(joint.A, joint.B, joint.C, joint.D, inputs="u_c", outputs=["v_y", "y2"])
@@ -248,7 +237,7 @@ def generalized_plant(G=None, H_m=None, H_e=None, H_y=None, *, effort_weight=0.0
               _scaled_block(H_e, omega_s, "v_e", "y1"),
               ct.summing_junction(["u_Delta", "u_b"], "u_c"),
               ct.summing_junction(["v_r", "-v_y"], "v_e")]
-    outputs = ["y_Delta", "y1", "y2", "v_e"]
+    outputs = list(PLANT_OUTPUTS)
     if effort_weight > 0:
         blocks.append(ct.ss([], [], [], [[effort_weight]], inputs="u_b", outputs="y_u"))
         outputs.insert(3, "y_u")

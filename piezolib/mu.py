@@ -564,11 +564,7 @@ def _structured_q(blocks, a, w, q_dim, p_dim):
         if b.kind == "full":
             Q[:, b.inputs, b.outputs] = np.einsum("ni,nj->nij", _unit(wb), _unit(ab).conj())
         else:
-            s = np.einsum("ni,ni->n", ab.conj(), wb)
-            if b.kind == "complex":
-                qs = np.where(np.abs(s) > 0, s / np.where(np.abs(s) > 0, np.abs(s), 1), 1)
-            else:
-                qs = np.where(s.real >= 0, 1.0, -1.0)
+            qs = _scalar_phase(np.einsum("ni,ni->n", ab.conj(), wb), b.kind)
             idx = np.arange(b.k)
             Q[:, b.inputs.start + idx, b.outputs.start + idx] = qs[:, None]
     return Q

@@ -22,7 +22,8 @@ import scipy.optimize as opt
 from ._checks import check_finite_array, check_positive, check_siso, check_lti
 
 __all__ = [
-    "DEFAULT_TIME_SCALE", "frequency_grid", "scale_time", "balance", "realize",
+    "DEFAULT_TIME_SCALE", "frequency_grid", "scaled_coefficients", "scale_time", "balance",
+    "realize", "max_singular_value",
     "LoopFunctions", "loop_functions", "closed_loop_poles", "is_stable",
     "hinf_norm", "bandwidth",
 ]
@@ -43,6 +44,33 @@ def frequency_grid(omega_min=1.0, omega_max=1e6, n=2000):
     return np.logspace(np.log10(omega_min), np.log10(omega_max), int(n))
 
 
+def scaled_coefficients(num, den, omega_s):
+    """Coefficients of num(omega_s p) / den(omega_s p) in p, highest power first.
+
+    The transfer-function form of :func:`scale_time`: c_k s^k = c_k omega_s^k
+    p^k, both polynomials divided by omega_s^order (order = the larger degree)
+    to keep their sizes O(1), then normalised so that the denominator is monic.
+
+    Returns
+    -------
+    num, den : ndarray
+        Scaled numerator and monic denominator.
+    """
+    omega_s = check_positive("omega_s", omega_s)
+    num = np.atleast_1d(num).astype(float)
+    den = np.atleast_1d(den).astype(float)
+    order = max(len(num), len(den)) - 1
+    num = num * omega_s ** (np.arange(len(num))[::-1] - order)
+    den = den * omega_s ** (np.arange(len(den))[::-1] - order)
+    return num / den[0], den / den[0]
+
+
+def max_singular_value(sys, omega):
+    """Largest singular value of sys(j omega) at each frequency of ``omega`` [rad/s]."""
+    resp = np.moveaxis(sys(1j * np.atleast_1d(omega), squeeze=False), -1, 0)
+    return np.linalg.svd(resp, compute_uv=False)[:, 0]
+
+
 def scale_time(sys, omega_s):
     """Return ``sys`` in scaled frequency p = s/omega_s (same frequency response).
 
@@ -59,14 +87,9 @@ def scale_time(sys, omega_s):
         for i in range(sys.noutputs):
             num.append([]), den.append([])
             for j in range(sys.ninputs):
-                n_ij = np.atleast_1d(sys.num[i][j]).astype(float)
-                d_ij = np.atleast_1d(sys.den[i][j]).astype(float)
-                order = max(len(n_ij), len(d_ij)) - 1
-                # c_k s^k = c_k omega_s^k p^k; divide by omega_s^order to keep sizes O(1)
-                n_ij = n_ij * omega_s ** (np.arange(len(n_ij))[::-1] - order)
-                d_ij = d_ij * omega_s ** (np.arange(len(d_ij))[::-1] - order)
-                num[i].append(n_ij / d_ij[0])
-                den[i].append(d_ij / d_ij[0])
+                n_ij, d_ij = scaled_coefficients(sys.num[i][j], sys.den[i][j], omega_s)
+                num[i].append(n_ij)
+                den[i].append(d_ij)
         return ct.tf(num, den, inputs=sys.input_labels, outputs=sys.output_labels)
     sys = ct.ss(sys)
     root = np.sqrt(omega_s)
@@ -193,16 +216,11 @@ def hinf_norm(sys, omega=None, rtol=1e-9):
         omega = np.logspace(-2, 9, 4000)
     omega = check_finite_array("omega", omega, ndim=1, min_length=2)
 
-    def gain(w):
-        resp = np.atleast_3d(sys(1j * np.atleast_1d(w)))
-        resp = np.moveaxis(resp.reshape(sys.noutputs, sys.ninputs, -1), -1, 0)
-        return np.linalg.svd(resp, compute_uv=False)[:, 0]
-
-    g = gain(omega)
-    dc = float(gain(np.array([0.0]))[0])
+    g = max_singular_value(sys, omega)
+    dc = float(max_singular_value(sys, 0.0)[0])
     k = int(np.argmax(g))
     lo, hi = omega[max(k - 1, 0)], omega[min(k + 1, len(omega) - 1)]
-    res = opt.minimize_scalar(lambda lw: -gain(np.exp(lw))[0],
+    res = opt.minimize_scalar(lambda lw: -max_singular_value(sys, np.exp(lw))[0],
                               bounds=(np.log(lo), np.log(hi)), method="bounded",
                               options={"xatol": rtol})
     peak, w_peak = max((g[k], omega[k]), (-res.fun, float(np.exp(res.x))))

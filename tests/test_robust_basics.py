@@ -63,3 +63,13 @@ def test_bandwidth_of_first_order():
 def test_loop_functions_reject_mimo():
     with pytest.raises(ValueError, match="G must be SISO"):
         robust.loop_functions(ct.rss(2, 2, 1), paper.controller())
+
+
+def test_scaled_coefficients_and_max_singular_value():
+    # H(s) = 1e8 / (s^2 + 1e3 s + 1e8), so H(1e4 p) = 1 / (p^2 + 0.1 p + 1)
+    num, den = robust.scaled_coefficients([1e8], [1, 1e3, 1e8], 1e4)
+    np.testing.assert_allclose(num, [1.0], rtol=1e-15)
+    np.testing.assert_allclose(den, [1.0, 0.1, 1.0], rtol=1e-15)
+    # a static 1 x 2 gain [3, 4] has singular value 5 at every frequency
+    static = ct.ss([], [], [], [[3.0, 4.0]])
+    np.testing.assert_allclose(robust.max_singular_value(static, [0.0, 1.0, 1e3]), 5.0)
