@@ -10,7 +10,6 @@ second; notebook 01 in about 10 s.
 import time
 import warnings
 
-
 from piezolib import identification as ident
 from piezolib import paper
 from piezolib import stage as vstage
@@ -48,9 +47,7 @@ def main():
     print(f"calibrate_hysteresis():                    {t:7.2f} s")
 
     ex = vstage.load_chirp("identification")
-    u_op, y_op = ex.operating_point
-    rec = ex.record.segment(ex.hold_start)
-    du, dy = rec.u_c_V - u_op, rec.v_y_V - y_op
+    du, dy, _ = ex.deviations()
     t = best_of(lambda: ident.identify(du, dy, paper.SAMPLING_FREQUENCY_HZ), 1)
     print(f"identify(), {len(du)} samples:              {t:7.2f} s")
     phi, target, _ = ident.arx_regressors(du, dy, 6, 6, 1)

@@ -42,7 +42,7 @@ import scipy.stats as stats
 
 from ._checks import (check_finite_array, check_integer, check_lti, check_positive,
                       check_same_length, check_siso)
-from .robust import DEFAULT_TIME_SCALE, realize, scale_time
+from .robust import DEFAULT_TIME_SCALE, balance, realize, scale_time
 
 __all__ = [
     "RLSResult", "rls", "arx_regressors", "ArxModel", "fit_arx", "DEFAULT_INITIAL_GAIN",
@@ -219,12 +219,16 @@ def fit_arx(u, y, fs, na=6, nb=6, nk=1, initial_gain=DEFAULT_INITIAL_GAIN):
     result = rls(phi, target, initial_gain=initial_gain)
     a = np.concatenate(([1.0], result.parameters[:na]))
     b = np.concatenate((np.zeros(nk), result.parameters[na:]))
+    return ArxModel(a, b, 1.0 / fs, result, _discrete_tf(b, a, 1.0 / fs, "G_arx"))
+
+
+def _discrete_tf(b, a, dt, name):
+    """B(q)/A(q) from coefficients of z^0, z^-1, ... as a transfer function in z
+    (both padded to one length first, so that every power of z is right)."""
     length = max(len(a), len(b))
     num = np.concatenate((b, np.zeros(length - len(b))))
     den = np.concatenate((a, np.zeros(length - len(a))))
-    system = ct.tf(np.trim_zeros(num, "f"), den, 1.0 / fs, inputs="u_c", outputs="v_y",
-                   name="G_arx")
-    return ArxModel(a, b, 1.0 / fs, result, system)
+    return ct.tf(np.trim_zeros(num, "f"), den, dt, inputs="u_c", outputs="v_y", name=name)
 
 
 def _checked_regressors(u, y, na, nb, nk):
@@ -316,8 +320,8 @@ def d2c(sysd, method="zoh"):
         raise ValueError("sysd has pole(s) at z = 0 or on the negative real axis "
                          f"({np.round(bad, 6)}): no real ZOH-equivalent continuous model")
     # balance A (diagonal similarity) before the logarithm
-    _, (s, _) = la.matrix_balance(A, permute=False, separate=True)
-    A, B, C = A * s[None, :] / s[:, None], B / s[:, None], C * s[None, :]
+    bal = balance(ss)
+    A, B, C = bal.A, bal.B, bal.C
     M = np.zeros((n + m, n + m))
     M[:n, :n], M[:n, n:], M[n:, n:] = A, B, np.eye(m)
     L = la.logm(M)
@@ -514,10 +518,8 @@ def fit_output_error(u, y, fs, na=6, nb=6, nk=1, iterations=50, tol=1e-8,
         previous = params
     final = fit_arx(sg.lfilter([1.0], den, u), sg.lfilter([1.0], den, y), fs,
                     na, nb, nk, initial_gain)
-    system = ct.tf(np.trim_zeros(final.b, "f"), final.a, 1.0 / fs,
-                   inputs="u_c", outputs="v_y", name="G_oe")
     return OutputErrorModel(final.a, final.b, final.dt, final, tuple(prefilters),
-                            converged, system)
+                            converged, _discrete_tf(final.b, final.a, final.dt, "G_oe"))
 
 
 @dataclass(frozen=True)
@@ -574,21 +576,12 @@ def identify(u, y, fs, n_poles=6, n_zeros=3, initial_gain=DEFAULT_INITIAL_GAIN):
     if np.any(poles.real >= 0):
         raise ValueError(f"the identified model is unstable (poles {poles[poles.real >= 0]})")
     model = refit_numerator(poles, u, y, fs, n_zeros=n_zeros)
-    num = _scaled_numerator(full, n_poles)            # s^(n-1) ... s^0
+    num = monic_coefficients(full, n_poles, n_poles - 1)[1][::-1]   # s^(n-1) ... s^0
     s_grid = 1j * np.linspace(0.0, np.pi * fs, 512)[1:]
     high = np.polyval(np.concatenate((num[:n_poles - 1 - n_zeros], np.zeros(n_zeros + 1))),
                       s_grid)
     low = np.polyval(num[n_poles - 1 - n_zeros:], s_grid)
     return IdentifiedModel(discrete, full, model, float(np.max(np.abs(high / low))))
-
-
-def _scaled_numerator(sys, n, time_scale=DEFAULT_TIME_SCALE):
-    """Numerator of ``sys`` (monic denominator of degree n) in seconds,
-    highest power first, padded to n coefficients (s^(n-1) ... s^0)."""
-    tf = ct.tf(scale_time(ct.ss(sys), time_scale))
-    num = np.atleast_1d(tf.num[0][0]) / tf.den[0][0][0]
-    num = np.concatenate((np.zeros(n - len(num)), num))
-    return num * time_scale ** (n - np.arange(n - 1, -1, -1))
 
 
 # --- Step IV: validation -------------------------------------------------------------------

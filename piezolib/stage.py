@@ -100,7 +100,7 @@ import scipy.signal as sg
 
 from . import paper, signals
 from ._checks import (check_finite_array, check_integer, check_nonnegative,
-                      check_positive, check_siso, check_stable)
+                      check_positive, check_same_length, check_siso, check_stable)
 from ._paths import data_dir
 from .identification import zoh_coefficients
 from .metrics import hysteresis_percent
@@ -143,9 +143,7 @@ class PlayHysteresis:
     def __post_init__(self):
         r = check_finite_array("thresholds_V", self.thresholds_V, ndim=1, min_length=1)
         w = check_finite_array("weights", self.weights, ndim=1)
-        if len(w) != len(r):
-            raise ValueError(f"weights must have one value per threshold: "
-                             f"{len(w)} weights, {len(r)} thresholds")
+        check_same_length(thresholds_V=r, weights=w)
         if r[0] <= 0 or np.any(np.diff(r) <= 0):
             raise ValueError("thresholds_V must be positive and strictly increasing")
         if np.any(w < 0):
@@ -951,9 +949,25 @@ class ChirpExperiment:
         r = self.record
         return float(r.u_c_V[self.start - 1]), float(np.mean(r.v_y_V[self.hold_start:self.start]))
 
+    def deviations(self):
+        """Input and output as deviations from the operating point, from the
+        start of the hold (the stage is at rest there): the data of
+        :func:`piezolib.identification.identify`.
+
+        Returns
+        -------
+        u, y : ndarray
+            u_c - u_op and v_y - v_y,op [V] from ``hold_start`` on.
+        sweep_start : int
+            Index of the first sweep sample in ``u`` and ``y``.
+        """
+        u_op, y_op = self.operating_point
+        rec = self.record.segment(self.hold_start)
+        return rec.u_c_V - u_op, rec.v_y_V - y_op, self.start - self.hold_start
+
 
 # --- experiment files ---------------------------------------------------------------
-_COLUMNS = ("t_s", "u_c_V", "v_a_V", "x_um", "v_y_V")
+_COLUMNS = StageRecord._ARRAYS
 _FORMATS = ("%.4f", "%.7f", "%.6f", "%.6f", "%.7f")
 _UNITS = ("time [s]", "control input u_c as produced by the DAC [V]",
           "actuator voltage v_a = amplifier output [V]",
@@ -1014,7 +1028,7 @@ def _write(path, record, stage, meta):
         lines.append(f"# saturation {sat.where}: count = {sat.count}")
     lines += [f"# column {c}: {u}" for c, u in zip(_COLUMNS, _UNITS)]
     body = io.StringIO()
-    np.savetxt(body, np.column_stack([getattr(record, c) for c in _COLUMNS]),
+    np.savetxt(body, np.column_stack(list(record.columns().values())),
                fmt=list(_FORMATS), delimiter=",")
     path.parent.mkdir(parents=True, exist_ok=True)
     with open(path, "w", newline="\n") as fh:
@@ -1026,7 +1040,8 @@ def load_record(path):
     """Read an experiment CSV; return (StageRecord, metadata dict)."""
     meta, sat_counts, rows = {}, {}, []
     try:
-        text = open(path).read().splitlines()
+        with open(path) as fh:
+            text = fh.read().splitlines()
     except FileNotFoundError:
         raise FileNotFoundError(f"{path} is missing: regenerate the experiment files with "
                                 "`python -m piezolib.stage`") from None

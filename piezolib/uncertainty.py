@@ -39,7 +39,8 @@ from ._checks import (check_finite_array, check_integer, check_positive,
 from . import paper, robust
 
 __all__ = [
-    "ModelSet", "model_set", "level_offsets", "set_response", "relative_errors",
+    "ModelSet", "model_set", "level_offsets", "perturbed_plant", "set_response",
+    "relative_errors",
     "member_poles", "member_closed_loop_poles", "unstable_members", "relative_error_envelope",
     "envelope_peak", "relative_error_bound", "Coverage", "coverage",
     "SpreadBracket", "largest_covered_spread", "fit_covering_weight",
@@ -92,9 +93,7 @@ class ModelSet:
         k = check_integer("k", k, minimum=0)
         if k >= self.size:
             raise ValueError(f"k must be < {self.size}, got {k}")
-        _, b = _plant_polynomials(self.plant)
-        return ct.tf(b[::-1], self.denominators[k], inputs=self.plant.input_labels,
-                     outputs=self.plant.output_labels, name=f"G_{k}")
+        return perturbed_plant(self.plant, self.spread, self.offsets[k], name=f"G_{k}")
 
 
 def level_offsets(levels, n):
@@ -107,6 +106,37 @@ def level_offsets(levels, n):
     n = check_integer("n", n, minimum=1)
     values = np.linspace(-1.0, 1.0, levels)
     return np.array(list(itertools.product(values, repeat=n)), dtype=float)
+
+
+def perturbed_plant(G, spread, offsets, name=None):
+    """The member of G's box with normalised offsets q: denominator
+    a_i (1 + spread q_i), i < n, same numerator and signals (e.g. the
+    critical member of :func:`parametric_stability_margin`).
+
+    Parameters
+    ----------
+    G : control.LTI or None
+        Nominal SISO proper plant; ``None`` for the published plant.
+    spread : float
+        Relative spread, 0 < spread < 1.
+    offsets : array_like, shape (n,)
+        q_i in [-1, 1], lowest power first.
+    name : str, optional
+        Name of the returned model.
+
+    Returns
+    -------
+    control.TransferFunction
+    """
+    G = _nominal(G)
+    spread = _check_spread(spread)
+    a, b = _plant_polynomials(G)
+    q = check_finite_array("offsets", offsets, shape=(len(a) - 1,))
+    if np.any(np.abs(q) > 1):
+        raise ValueError("offsets must lie in [-1, 1]")
+    den = np.r_[a[:-1] * (1 + spread * q), 1.0]
+    return ct.tf(b[::-1], den[::-1], inputs=G.input_labels, outputs=G.output_labels,
+                 name=name)
 
 
 def model_set(G=None, spread=paper.UNCERTAINTY_SPREAD,

@@ -59,6 +59,15 @@ def test_output_error_removes_the_arx_bias_of_white_output_noise():
     assert err_oe < 0.01 < err_arx
 
 
+def test_discrete_systems_keep_the_estimated_delay():
+    # na + 1 > nk + nb: the numerator must be padded, not shifted by a sample
+    u, y = arx_data(500)
+    t = np.arange(len(u)) / FS
+    for model in (I.fit_arx(u, y, FS, na=3, nb=2), I.fit_output_error(u, y, FS, na=3, nb=2)):
+        _, y_sys = ct.forced_response(model.system, t, u)
+        assert np.allclose(y_sys, y, atol=1e-7)
+
+
 def test_prediction_error_structure_is_exact_for_the_zoh_model():
     """Noise-free ZOH data of G: OE -> d2c -> refit gives back eq. 4."""
     u = np.random.default_rng(3).standard_normal(6000) * 0.1

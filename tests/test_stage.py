@@ -208,6 +208,15 @@ def test_loaders_round_trip(stage):
         S.load_chirp("other")
 
 
+def test_chirp_deviations_start_at_rest_on_the_operating_point():
+    chirp = S.load_chirp("identification")
+    u, y, k = chirp.deviations()
+    assert len(u) == len(y) == len(chirp.record) - chirp.hold_start
+    assert k == chirp.start - chirp.hold_start
+    assert np.all(u[:k] == 0.0) and abs(np.mean(y[:k])) < 1e-12   # the hold: at rest
+    assert np.array_equal(u[k:], chirp.sweep.u_c_V - chirp.operating_point[0])
+
+
 def test_one_step_is_fast_enough_for_closed_loops(stage):
     # not a timing test: only checks the state stays plain Python floats
     sim = stage.start()

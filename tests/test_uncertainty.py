@@ -183,6 +183,17 @@ def test_open_loop_margin_third_order_hurwitz():
     np.testing.assert_allclose(res.offsets, [1, -1, -1])
 
 
+def test_critical_member_has_its_poles_on_the_axis():
+    res = unc.parametric_stability_margin(_third_order())
+    critical = unc.perturbed_plant(_third_order(), res.spread, res.offsets)
+    poles = ct.poles(critical)
+    assert np.min(np.abs(poles - 1j * res.omega)) < 1e-8 * res.omega
+    np.testing.assert_allclose(critical.den[0][0],
+                               [1, 2 * (1 - res.spread), 2 * (1 - res.spread), 1 + res.spread])
+    with pytest.raises(ValueError, match="offsets must lie in"):
+        unc.perturbed_plant(_third_order(), 0.1, [0.0, 2.0, 0.0])
+
+
 def test_closed_loop_margin_with_gain_hurwitz():
     # with K = 1 the characteristic polynomial is s^3 + 2 s^2 + 2 s + 2:
     # 4 (1 - d)^2 = 1 + d + 1  ->  d = 1/4
