@@ -107,7 +107,7 @@ import numpy as np
 import scipy.optimize as opt
 
 from . import paper, signals
-from ._checks import check_finite_array, check_positive, check_integer
+from ._checks import check_finite_array, check_integer, check_positive, check_same_length
 from .metrics import HysteresisMeasure, hysteresis_measure, hysteresis_percent
 
 __all__ = [
@@ -1212,9 +1212,7 @@ def table4_measure(reference_V, v_y_V, discard_periods=1, frequency_hz=None,
     """
     reference_V = check_finite_array("reference_V", reference_V, ndim=1, min_length=8)
     v_y_V = check_finite_array("v_y_V", v_y_V, ndim=1, min_length=8)
-    if reference_V.size != v_y_V.size:
-        raise ValueError(f"reference_V and v_y_V must have equal lengths "
-                         f"({reference_V.size} and {v_y_V.size})")
+    check_same_length(reference_V=reference_V, v_y_V=v_y_V)
     discard_periods = check_integer("discard_periods", discard_periods, minimum=0)
     f = paper.HYSTERESIS_TEST["frequency_Hz"] if frequency_hz is None else frequency_hz
     start = int(round(discard_periods * check_positive("fs", fs) / check_positive("frequency_hz", f)))
