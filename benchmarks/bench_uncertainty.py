@@ -9,17 +9,13 @@ around a second at most on the 2-core machine.
 """
 
 import time
-import timeit
 
 import numpy as np
 
 from piezolib import paper, robust
 from piezolib import uncertainty as unc
 
-
-def best_of(func, repeat=3):
-    """Shortest of ``repeat`` single runs [s]."""
-    return min(timeit.repeat(func, number=1, repeat=repeat))
+from bench_stage import best_of      # scripts run from benchmarks/ see each other
 
 
 def main():
