@@ -1,4 +1,4 @@
-"""Speed of the 10 kHz loop of Fig. 1 (piezolib.loop) and of notebook 06 (prints numbers; no asserts).
+"""Speed of the 10 kHz loop of Fig. 1 (piezolib.workbook.loop) and of notebook 06 (prints numbers; no asserts).
 
 Goals: a 1 s closed-loop run at 10 kHz (10 001 samples) well under a second
 with any of the three controllers; open-loop runs (Cases I, II) in a few
@@ -15,10 +15,11 @@ import time
 from pathlib import Path
 
 from piezolib import hysteresis as hy
-from piezolib import loop, paper
-from piezolib import stage as vstage
-from piezolib.design import design_controller
-from piezolib.discretize import discretize
+from piezolib.workbook import loop
+from piezolib import paper
+from piezolib.problem import stage as vstage
+from piezolib.problem.design import design_controller
+from piezolib.robust.discrete import discretize
 
 from bench_stage import best_of      # scripts run from benchmarks/ see each other
 

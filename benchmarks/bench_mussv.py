@@ -1,4 +1,4 @@
-"""Benchmark: piezolib.mu.mussv against dkpy's LMI upper bound on this problem's M.
+"""Benchmark: piezolib.robust.mu.mussv against dkpy's LMI upper bound on this problem's M.
 
 M is eq. 18 for the published G, K and weights (inputs u_Delta, v_r; outputs
 y_Delta, y1, y2), the structure eq. 21 (``blk = [(1, 1), (1, 2)]``), on a
@@ -27,8 +27,9 @@ import warnings
 
 import numpy as np
 
-from piezolib import genplant, paper
-from piezolib.mu import mussv
+from piezolib.problem import genplant
+from piezolib import paper, robust
+from piezolib.robust.mu import mussv
 
 BLK = [(1, 1), (1, 2)]
 
@@ -37,7 +38,7 @@ def problem_response(n):
     """Frequency grid [rad/s] and M(j omega), shape (n, 3, 2)."""
     omega = np.logspace(0, 6, n)
     P = genplant.generalized_plant()
-    return omega, genplant.lft_response(P, paper.controller(), omega)
+    return omega, robust.lft_response(P, paper.controller(), omega)
 
 
 def best_time(fn, repeats):
@@ -64,7 +65,7 @@ def main():
     t_ours, res = best_time(lambda: mussv(M, BLK, omega), args.repeats)
     t_upper, _ = best_time(lambda: mussv(M, BLK, omega, lower=False), args.repeats)
     rs = mussv(M[:, :1, :1], [(1, 1)], omega)
-    print("\npiezolib.mu.mussv")
+    print("\npiezolib.robust.mu.mussv")
     print(f"  time, upper + lower bound + Delta : {t_ours:8.3f} s  (best of {args.repeats})")
     print(f"  time, upper bound only            : {t_upper:8.3f} s")
     print(f"  max relative gap (upper-lower)/upper over all frequencies: {res.gap.max():.2e}")

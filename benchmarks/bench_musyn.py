@@ -13,7 +13,7 @@ step (python-control's hinfsyn = SLICOT SB10AD) did not return within minutes
 * dkpy ``DkIterFixedOrder`` (``HinfSynSlicot``, ``SsvLmiBisection``,
   ``DScaleFitSlicot``): wall time, controller order, its own mu and ours;
 * both controllers measured with one yardstick: mu upper bound
-  (``piezolib.mu.mussv``) of the exact M of eq. 18 on the grid, evaluated in
+  (``piezolib.robust.mu.mussv``) of the exact M of eq. 18 on the grid, evaluated in
   scaled time, and closed-loop stability;
 * the wall time of notebook 05 executed headless (goal: under 30 s).
 
@@ -36,9 +36,10 @@ import warnings
 
 import numpy as np
 
-from piezolib import genplant, paper, robust
-from piezolib.dk import musyn
-from piezolib.mu import mussv
+from piezolib.problem import genplant
+from piezolib import paper, robust
+from piezolib.robust.dk import musyn
+from piezolib.robust.mu import mussv
 
 OMEGA_S = 1e4                      # time scale handed to dkpy [rad/s]
 DESIGN_BLK = genplant.DESIGN_BLOCK_STRUCTURE
@@ -51,7 +52,7 @@ def exact_mu(K_scaled, omega):
     poles = np.linalg.eigvals(P.lft(K_scaled).A)
     if np.any(poles.real >= 0):
         return float("nan"), False
-    M = genplant.lft_response(P, K_scaled, omega / OMEGA_S, omega_s=1.0)
+    M = robust.lft_response(P, K_scaled, omega / OMEGA_S, omega_s=1.0)
     return float(mussv(M, genplant.BLOCK_STRUCTURE, lower=False).upper.max()), True
 
 
@@ -109,7 +110,7 @@ def main():
         times.append(time.perf_counter() - t0)
     K_ours = robust.balance(robust.scale_time(res.K, OMEGA_S))
     mu_ours, stable_ours = exact_mu(K_ours, omega)
-    print("\npiezolib.dk.musyn")
+    print("\npiezolib.robust.dk.musyn")
     print(f"  time                    : {min(times):8.2f} s (best of {args.repeats})")
     print(f"  iterations (K-steps)    : {len(res.history)}; stop: {res.stop_reason}")
     print(f"  controller order        : {res.K.nstates}")

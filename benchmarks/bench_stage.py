@@ -12,7 +12,7 @@ import warnings
 
 from piezolib import identification as ident
 from piezolib import paper
-from piezolib import stage as vstage
+from piezolib.problem import stage as vstage
 
 
 def best_of(func, repeat=3):

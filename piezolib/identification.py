@@ -40,9 +40,9 @@ import scipy.linalg as la
 import scipy.signal as sg
 import scipy.stats as stats
 
-from ._checks import (check_finite_array, check_integer, check_lti, check_positive,
+from piezolib._checks import (check_finite_array, check_integer, check_lti, check_positive,
                       check_same_length, check_siso)
-from .robust import DEFAULT_TIME_SCALE, balance, realize, scale_time
+from piezolib.robust.lti import DEFAULT_TIME_SCALE, balance, realize, scale_time
 
 __all__ = [
     "RLSResult", "rls", "arx_regressors", "ArxModel", "fit_arx", "DEFAULT_INITIAL_GAIN",
@@ -744,7 +744,7 @@ def bode_overlay(systems, omega, measured=None, axes=None):
     -------
     fig, (ax_mag, ax_phase)
     """
-    from .plotting import db, new_figure
+    from piezolib.workbook.plotting import db, new_figure
     omega = check_finite_array("omega", omega, ndim=1, min_length=2)
     if axes is None:
         fig, axes = new_figure(2, 1, sharex=True, figsize=(7.0, 5.0))

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._checks import check_finite_array, check_same_length, check_positive
+from piezolib._checks import check_finite_array, check_same_length, check_positive
 
 __all__ = ["HysteresisMeasure", "hysteresis_measure", "hysteresis_percent", "tracking_error",
            "tracking_error_percent", "peak_to_peak_error_percent", "improvement_percent"]
@@ -223,7 +223,7 @@ def tracking_error_percent(x_r, x, range_=None):
         tracking error % = max_k |e[k]| / R * 100,   e = x_r - x
 
     over the samples given, which should be whole periods of the reference
-    after the start-up (the experiments of :mod:`piezolib.loop` discard the
+    after the start-up (the experiments of :mod:`piezolib.workbook.loop` discard the
     first period); R is the commanded range (12 um in Table 5), and x is
     what the sensor measures (3 um/V * v_y) at the same sample as x_r, i.e.
     the error the loop itself sees.

@@ -53,7 +53,7 @@ import control as ct
 import numpy as np
 import pandas as pd
 
-from ._checks import check_positive, check_nonnegative
+from piezolib._checks import check_positive, check_nonnegative
 
 __all__ = [
     "SAMPLING_FREQUENCY_HZ", "SAMPLE_TIME_S", "UM_PER_VOLT", "AMPLIFIER_GAIN",

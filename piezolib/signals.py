@@ -7,8 +7,8 @@ sampled at ``fs`` [Hz] (default: the paper's 10 kHz).
 import numpy as np
 import scipy.signal as sg
 
-from . import paper
-from ._checks import check_positive, check_integer
+from piezolib import paper
+from piezolib._checks import check_positive, check_integer
 
 __all__ = ["time_vector", "triangle", "chirp"]
 

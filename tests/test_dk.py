@@ -4,12 +4,13 @@ import control as ct
 import numpy as np
 import pytest
 
-from piezolib import genplant, paper, robust
-from piezolib.design import design_controller
-from piezolib.dfit import fit_magnitude
-from piezolib.dk import _full_blocks, musyn, scaled_plant
-from piezolib.genplant import lft_response
-from piezolib.mu import mussv
+from piezolib.problem import genplant
+from piezolib import paper, robust
+from piezolib.problem.design import design_controller
+from piezolib.robust.dfit import fit_magnitude
+from piezolib.robust.dk import _full_blocks, musyn, scaled_plant
+from piezolib.robust import lft_response
+from piezolib.robust.mu import mussv
 
 W = np.logspace(-2, 3, 300)
 

@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 import scipy.optimize as opt
 
-from piezolib import genplant, paper, robust
-from piezolib.hinf import HinfSynthesisError, auto_time_scale, hinfsyn
+from piezolib.problem import genplant
+from piezolib import paper, robust
+from piezolib.robust.hinf import HinfSynthesisError, auto_time_scale, hinfsyn
 
 
 def scalar_plant(a):

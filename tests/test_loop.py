@@ -1,4 +1,4 @@
-"""The 10 kHz loop of Fig. 1 (piezolib.loop): exact open-loop equivalence, linear
+"""The 10 kHz loop of Fig. 1 (piezolib.workbook.loop): exact open-loop equivalence, linear
 closed-loop theory, the discretised controller's response, saturation and bad input."""
 
 import warnings
@@ -7,8 +7,9 @@ import control as ct
 import numpy as np
 import pytest
 
-from piezolib import hysteresis, loop, paper, signals
-from piezolib.stage import StageSaturationWarning, VirtualStage
+from piezolib import hysteresis, paper, signals
+from piezolib.workbook import loop
+from piezolib.problem.stage import StageSaturationWarning, VirtualStage
 
 FS = paper.SAMPLING_FREQUENCY_HZ
 #: A Dahl model in the workbook convention (u_c -> v_y, volts), well damped.
@@ -139,7 +140,7 @@ def test_controller_forms():
     assert loop.discrete_controller(None) is None
     Kd = ct.tf([1.0, 0.5], [1.0, -0.5], Ts)
     assert np.allclose(ct.ss(loop.discrete_controller(Kd))(1.0), Kd(1.0))
-    from piezolib.discretize import discretize
+    from piezolib.robust.discrete import discretize
     dc = discretize(paper.controller())
     z = np.exp(1j * 2 * np.pi * 50.0 / FS)
     assert np.allclose(loop.discrete_controller(dc)(z), dc.K(z))

@@ -7,7 +7,7 @@ import pytest
 from piezolib import paper, robust
 from scipy.optimize import minimize_scalar
 
-from piezolib.mu import MuResult, _pad_square, mussv, parse_blk
+from piezolib.robust.mu import MuResult, _pad_square, mussv, parse_blk
 
 RP_BLK = [(1, 1), (1, 2)]          # eq. 21: Delta_r 1x1, Delta_f 1x2
 

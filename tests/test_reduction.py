@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 
 from piezolib import paper, robust
-from piezolib.analysis import analyze
-from piezolib.design import design_controller
-from piezolib.discretize import discretize, least_damped_frequency
-from piezolib.reduction import hankel_singular_values, reduce_controller
+from piezolib.problem.analysis import analyze
+from piezolib.problem.design import design_controller
+from piezolib.robust.discrete import discretize, least_damped_frequency
+from piezolib.robust.reduction import hankel_singular_values, reduce_controller
 
 
 def known_system():

@@ -3,7 +3,7 @@
 import matplotlib.pyplot as plt
 import pytest
 
-from piezolib import plotting, report
+from piezolib.workbook import plotting, report
 
 
 def test_verdict_relative_and_absolute():

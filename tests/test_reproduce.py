@@ -6,7 +6,7 @@ import sys
 import nbformat
 import pytest
 
-from piezolib import reproduce
+from piezolib.workbook import reproduce
 
 
 def write_notebook(path, *sources):

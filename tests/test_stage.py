@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from piezolib import identification, paper, signals
-from piezolib import stage as S
+from piezolib.problem import stage as S
 
 
 @pytest.fixture(scope="module")
@@ -188,7 +188,7 @@ def test_experiment_files_are_reproducible_and_current(tmp_path):
     committed = S.experiment_paths()
     for p in first:
         stored = [c for c in committed.values() if c.name == p.name][0]
-        assert stored.exists(), f"{stored} missing: run python -m piezolib.stage"
+        assert stored.exists(), f"{stored} missing: run python -m piezolib data"
         assert stored.read_bytes() == p.read_bytes(), f"{stored} is out of date"
 
 

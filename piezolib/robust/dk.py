@@ -3,10 +3,10 @@
 Each iteration alternates
 
 * K-step: an H-infinity controller for the D-scaled plant
-  D_l P D_r^-1 (:func:`piezolib.hinf.hinfsyn`: bounded and verified), and
+  D_l P D_r^-1 (:func:`piezolib.robust.hinf.hinfsyn`: bounded and verified), and
 * D-step: mu upper bound of M = F_l(P, K) on a frequency grid
-  (:func:`piezolib.mu.mussv`), whose optimal scalings d_i(omega) are fitted by
-  stable minimum-phase transfer functions (:func:`piezolib.dfit.fit_magnitude`).
+  (:func:`piezolib.robust.mu.mussv`), whose optimal scalings d_i(omega) are fitted by
+  stable minimum-phase transfer functions (:func:`piezolib.robust.dfit.fit_magnitude`).
 
 Only complex full blocks are supported (the paper's structure, eq. 21);
 real scalar blocks would need G-scalings.  The whole iteration runs in scaled
@@ -26,12 +26,12 @@ import control as ct
 import numpy as np
 import pandas as pd
 
-from ._checks import check_finite_array, check_integer, check_lti, check_positive
-from .dfit import fit_magnitude
-from .genplant import lft_response
-from .hinf import HinfSynthesisError, auto_time_scale, hinfsyn
-from .mu import MuResult, mussv, parse_blk
-from .robust import balance, scale_time
+from piezolib._checks import check_finite_array, check_integer, check_lti, check_positive
+from piezolib.robust.dfit import fit_magnitude
+from piezolib.robust.lft import lft_response
+from piezolib.robust.hinf import HinfSynthesisError, auto_time_scale, hinfsyn
+from piezolib.robust.mu import MuResult, mussv, parse_blk
+from piezolib.robust.lti import balance, scale_time
 
 __all__ = ["MusynResult", "musyn", "scaled_plant"]
 
@@ -62,7 +62,7 @@ class MusynResult:
         in the K-step that produced ``K`` (empty for the first iteration).
     omega : ndarray
         The frequency grid [rad/s].
-    mu : piezolib.mu.MuResult
+    mu : piezolib.robust.mu.MuResult
         mu bounds and optimal scalings on ``omega`` for ``K``; ``mu_upper``
         and ``mu_lower`` are its bounds.
     elapsed : float
@@ -102,7 +102,7 @@ class MusynResult:
 def scaled_plant(P, blocks, d_tfs, nmeas, ncon):
     """D_l P D_r^-1 for full blocks with scalings ``d_tfs`` (last block: 1).
 
-    ``blocks`` are complex full blocks as given by :func:`piezolib.mu.parse_blk`.
+    ``blocks`` are complex full blocks as given by :func:`piezolib.robust.mu.parse_blk`.
     Block i (Delta_i is r_i x c_i) scales the c_i performance outputs it
     receives by d_i(s) and the r_i performance inputs it drives by 1/d_i(s);
     measurements and controls are not scaled.
@@ -183,9 +183,9 @@ def musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=4, max_iter=8, rtol=5e
     verbose : bool
         Print one line per iteration.
     hinf_options : dict, optional
-        Extra keyword arguments of :func:`piezolib.hinf.hinfsyn`.
+        Extra keyword arguments of :func:`piezolib.robust.hinf.hinfsyn`.
     time_scale : float, optional
-        Internal time scale [rad/s]; default :func:`piezolib.hinf.auto_time_scale`.
+        Internal time scale [rad/s]; default :func:`piezolib.robust.hinf.auto_time_scale`.
 
     Returns
     -------

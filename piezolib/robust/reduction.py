@@ -27,8 +27,8 @@ import numpy as np
 import scipy.linalg as la
 import slycot
 
-from ._checks import check_integer, check_lti, check_positive
-from .robust import DEFAULT_TIME_SCALE, balance, hinf_norm, max_singular_value, scale_time
+from piezolib._checks import check_integer, check_lti, check_positive
+from piezolib.robust.lti import DEFAULT_TIME_SCALE, balance, hinf_norm, max_singular_value, scale_time
 
 __all__ = ["ReducedController", "reduce_controller", "hankel_singular_values"]
 

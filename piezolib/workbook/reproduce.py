@@ -14,13 +14,13 @@ import subprocess
 import sys
 import time
 
-from ._paths import notebooks_dir, project_root
+from piezolib.workbook.paths import notebooks_dir, project_root
 
 __all__ = ["DATA_STEPS", "list_notebooks", "run_notebook", "run", "NotebookFailure"]
 
 #: Data-generating steps run before the notebooks, as "module:function" names
 #: of functions that take no arguments and return the list of files written.
-DATA_STEPS = ["piezolib.stage:write_experiment_files"]
+DATA_STEPS = ["piezolib.problem.stage:write_experiment_files"]
 
 
 class NotebookFailure(RuntimeError):

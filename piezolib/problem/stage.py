@@ -80,7 +80,7 @@ output and the ADC.
 
 Experiment files
 ----------------
-:func:`write_experiment_files` (also ``python -m piezolib.stage``) runs the
+:func:`write_experiment_files` (also ``python -m piezolib data``) runs the
 experiments the notebooks read and writes them to ``data/`` as CSV:
 two chirps (identification and an independent validation chirp, paper
 Sec. III-A) and the Table 4 Case I triangles of 10/20/30/40 V actuator
@@ -98,13 +98,13 @@ import numpy as np
 import scipy.optimize as opt
 import scipy.signal as sg
 
-from . import paper, signals
-from ._checks import (check_finite_array, check_integer, check_nonnegative,
+from piezolib import paper, signals
+from piezolib._checks import (check_finite_array, check_integer, check_nonnegative,
                       check_positive, check_same_length, check_siso, check_stable)
-from ._paths import data_dir
-from .identification import zoh_coefficients
-from .metrics import hysteresis_percent
-from .robust import realize
+from piezolib.workbook.paths import data_dir
+from piezolib.identification import zoh_coefficients
+from piezolib.metrics import hysteresis_percent
+from piezolib.robust.lti import realize
 
 __all__ = [
     "HysteresisLaw", "PlayHysteresis", "CALIBRATED_HYSTERESIS", "ADC_RANGE_V", "StageSettings",
@@ -1018,7 +1018,7 @@ def write_experiment_files(directory=None):
 
 def _write(path, record, stage, meta):
     s = stage.settings
-    lines = [f"# piezolib virtual stage experiment, written by python -m piezolib.stage",
+    lines = [f"# piezolib virtual stage experiment, written by python -m piezolib data",
              "# see data/README.md; stage settings are the VirtualStage defaults",
              f"# sample_rate_Hz = {stage.fs:g}"]
     lines += [f"# {k} = {v}" for k, v in meta.items()]
@@ -1044,7 +1044,7 @@ def load_record(path):
             text = fh.read().splitlines()
     except FileNotFoundError:
         raise FileNotFoundError(f"{path} is missing: regenerate the experiment files with "
-                                "`python -m piezolib.stage`") from None
+                                "`python -m piezolib data`") from None
     header_done = False
     for line in text:
         if line.startswith("#"):
@@ -1110,20 +1110,3 @@ def load_hysteresis_loops(directory=None):
     """
     paths = experiment_paths(directory)
     return {A: load_record(paths[A])[0] for A in EXPERIMENT_SEEDS}
-
-
-def _main():
-    import time
-    start = time.perf_counter()
-    for path in write_experiment_files():
-        print(path)
-    loops = load_hysteresis_loops()
-    got = case_I_hysteresis(loops)
-    paper_row = paper.table4().loc["case_I"]
-    for A, value in got.items():
-        print(f"Case I hysteresis at {A:4.0f} V: {value:6.2f} %  (paper {paper_row[A]:.2f} %)")
-    print(f"done in {time.perf_counter() - start:.1f} s")
-
-
-if __name__ == "__main__":
-    _main()

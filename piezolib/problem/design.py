@@ -3,13 +3,13 @@
 :func:`design_controller` runs the whole chain on the published G, H_m, H_e,
 H_y:
 
-1. the synthesis plant :func:`piezolib.genplant.design_plant` (eq. 16 plus a
+1. the synthesis plant :func:`piezolib.problem.genplant.design_plant` (eq. 16 plus a
    control-effort output rho u_b, rho = 1e-3, because D12 = 2e-10);
-2. DK-iteration :func:`piezolib.dk.musyn` with 4th-order D-scalings on a
+2. DK-iteration :func:`piezolib.robust.dk.musyn` with 4th-order D-scalings on a
    300-point grid from 1e-2 to 1e7 rad/s;
 3. reduction to ``order`` states (6 = the paper's order) by frequency-weighted
    balanced residualisation with the weight G S of the full-order loop
-   (:func:`piezolib.reduction.reduce_controller`): ||(K - K_r) G S||_inf < 1
+   (:func:`piezolib.robust.reduction.reduce_controller`): ||(K - K_r) G S||_inf < 1
    guarantees that the reduced loop is stable, and residualisation keeps the
    DC gain, i.e. the tracking accuracy at low frequency;
 4. Tustin discretisation at 10 kHz with pre-warping at the controller's
@@ -36,13 +36,13 @@ from dataclasses import dataclass, field
 import control as ct
 import numpy as np
 
-from . import paper
-from ._checks import check_integer, check_positive
-from .discretize import DiscreteController, discretize
-from .dk import MusynResult, musyn
-from .genplant import DESIGN_BLOCK_STRUCTURE, DESIGN_EFFORT_WEIGHT, design_plant
-from .reduction import ReducedController, reduce_controller
-from .robust import loop_functions
+from piezolib import paper
+from piezolib._checks import check_integer, check_positive
+from piezolib.robust.discrete import DiscreteController, discretize
+from piezolib.robust.dk import MusynResult, musyn
+from piezolib.problem.genplant import DESIGN_BLOCK_STRUCTURE, DESIGN_EFFORT_WEIGHT, design_plant
+from piezolib.robust.reduction import ReducedController, reduce_controller
+from piezolib.robust.lti import loop_functions
 
 __all__ = ["ControllerDesign", "design_controller", "DESIGN_GRID", "DESIGN_D_ORDER"]
 

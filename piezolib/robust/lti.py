@@ -19,11 +19,11 @@ import numpy as np
 import scipy.linalg as la
 import scipy.optimize as opt
 
-from ._checks import check_finite_array, check_positive, check_siso, check_lti
+from piezolib._checks import check_finite_array, check_positive, check_siso, check_lti
 
 __all__ = [
     "DEFAULT_TIME_SCALE", "frequency_grid", "scaled_coefficients", "scale_time", "balance",
-    "realize", "max_singular_value",
+    "realize", "max_singular_value", "time_scale_of", "to_scaled", "from_scaled", "with_signals",
     "LoopFunctions", "loop_functions", "closed_loop_poles", "is_stable",
     "hinf_norm", "bandwidth",
 ]
@@ -95,6 +95,47 @@ def scale_time(sys, omega_s):
     root = np.sqrt(omega_s)
     return ct.ss(sys.A / omega_s, sys.B / root, sys.C / root, sys.D,
                  inputs=sys.input_labels, outputs=sys.output_labels)
+
+
+def time_scale_of(*systems):
+    """A conditioning time scale [rad/s] chosen from the models themselves.
+
+    The geometric mean of the smallest and largest nonzero pole magnitude over
+    all ``systems`` (1.0 for static models): scaling time by it puts the
+    poles around |p| = 1.
+    """
+    mags = []
+    for k, sys in enumerate(systems):
+        sys = ct.ss(check_lti(f"systems[{k}]", sys))
+        if sys.nstates:
+            mags.append(np.abs(np.linalg.eigvals(sys.A)))
+    if not mags:
+        return 1.0
+    mags = np.concatenate(mags)
+    mags = mags[mags > 1e-12 * max(1.0, mags.max())]
+    if mags.size == 0:
+        return 1.0
+    return float(np.sqrt(mags.min() * mags.max()))
+
+
+def to_scaled(sys, omega_s):
+    """Balanced state-space model of ``sys`` in scaled time p = s/omega_s."""
+    return balance(ct.ss(scale_time(sys, omega_s)))
+
+
+def from_scaled(sys, omega_s, inputs=None, outputs=None, name=None):
+    """Back from scaled time (inverse of :func:`to_scaled`), balanced, signals named."""
+    out = balance(scale_time(ct.ss(sys), 1.0 / omega_s))
+    return with_signals(out, inputs, outputs, name)
+
+
+def with_signals(sys, inputs=None, outputs=None, name=None):
+    """Copy of state-space ``sys`` with signal names (default: those of ``sys``)."""
+    sys = ct.ss(sys)
+    return ct.ss(sys.A, sys.B, sys.C, sys.D, sys.dt,
+                 inputs=list(sys.input_labels if inputs is None else inputs),
+                 outputs=list(sys.output_labels if outputs is None else outputs),
+                 name=name)
 
 
 def balance(sys):

@@ -3,7 +3,7 @@
 Why not ``control.hinfsyn`` (SLICOT SB10AD): on a first realisation of this
 project's generalized plant (coefficients up to 1e23, weight poles from -3.78
 to -7.5e7 rad/s, D12 = 2e-10) it ran for minutes without returning; on the
-better-conditioned realisation of :mod:`piezolib.genplant`, with the effort
+better-conditioned realisation of :mod:`piezolib.problem.genplant`, with the effort
 output added, it returns within seconds but reports gamma = 1.41 while the
 recomputed closed-loop norm of its controller is 2.01 (the verified optimum
 is 1.867; its Riccati condition estimates are 2e-10 and 8e-15).  A reported
@@ -43,8 +43,8 @@ import control as ct
 import numpy as np
 import scipy.linalg as la
 
-from ._checks import check_integer, check_lti, check_positive
-from .robust import balance, hinf_norm, max_singular_value, scale_time
+from piezolib._checks import check_integer, check_lti, check_positive
+from piezolib.robust.lti import balance, hinf_norm, max_singular_value, scale_time
 
 __all__ = ["HinfResult", "HinfSynthesisError", "hinfsyn", "auto_time_scale",
            "DEFAULT_EFFORT_WEIGHT"]

@@ -19,9 +19,9 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
-from . import paper
-from ._checks import check_positive, check_siso
-from .robust import realize
+from piezolib import paper
+from piezolib._checks import check_positive, check_siso
+from piezolib.robust.lti import realize
 
 __all__ = ["DiscreteController", "discretize", "least_damped_frequency"]
 

@@ -29,7 +29,7 @@ import control as ct
 import numpy as np
 import scipy.optimize as opt
 
-from ._checks import check_finite_array, check_integer, check_same_length
+from piezolib._checks import check_finite_array, check_integer, check_same_length
 
 __all__ = ["MagnitudeFit", "fit_magnitude"]
 

@@ -12,8 +12,8 @@ import numbers
 import numpy as np
 import pandas as pd
 
-from ._checks import check_nonnegative
-from ._paths import results_dir
+from piezolib._checks import check_nonnegative
+from piezolib.workbook.paths import results_dir
 
 __all__ = ["COLUMNS", "REASONS", "NOTEBOOK_TABLES", "verdict", "ClaimTable", "save_results",
            "load_claims", "reproduction_table", "verdict_counts"]

@@ -11,7 +11,7 @@ import matplotlib as mpl
 import matplotlib.pyplot as plt
 import numpy as np
 
-from ._paths import figures_dir
+from piezolib.workbook.paths import figures_dir
 
 __all__ = ["STYLE", "use_style", "new_figure", "save_figure", "figure_path",
            "db", "plot_magnitude", "block_diagram"]

@@ -11,7 +11,7 @@ robust performance (RP)   peak over omega of mu(M) for the structure of eq. 21
 
 M is F_l(P, K) with the exact published P (no regularisation).  Norms use
 :func:`piezolib.robust.hinf_norm` (grid + local refinement); mu uses
-:func:`piezolib.mu.mussv` on a grid (default 1e-2 ... 1e8 rad/s, 1500 points)
+:func:`piezolib.robust.mu.mussv` on a grid (default 1e-2 ... 1e8 rad/s, 1500 points)
 refined by a dense local grid around each peak.
 """
 
@@ -21,10 +21,11 @@ import control as ct
 import numpy as np
 import pandas as pd
 
-from ._checks import check_finite_array, check_siso
-from .genplant import BLOCK_STRUCTURE, _defaults, generalized_plant, lft_response
-from .mu import mussv
-from .robust import closed_loop_poles, hinf_norm, is_stable, loop_functions, realize
+from piezolib._checks import check_finite_array, check_siso
+from piezolib.problem.genplant import BLOCK_STRUCTURE, _defaults, generalized_plant
+from piezolib.robust.lft import lft_response
+from piezolib.robust.mu import mussv
+from piezolib.robust.lti import closed_loop_poles, hinf_norm, is_stable, loop_functions, realize
 
 __all__ = ["RobustnessAnalysis", "analyze", "table3", "robust_performance_peak", "ANALYSIS_GRID"]
 

@@ -34,9 +34,9 @@ import numpy.polynomial.polynomial as npoly
 import scipy.optimize as opt
 from scipy.signal import find_peaks, peak_widths
 
-from ._checks import (check_finite_array, check_integer, check_positive,
+from piezolib._checks import (check_finite_array, check_integer, check_positive,
                       check_proper, check_siso)
-from . import paper, robust
+from piezolib import paper, robust
 
 __all__ = [
     "ModelSet", "model_set", "level_offsets", "perturbed_plant", "set_response",

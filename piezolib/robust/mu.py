@@ -69,7 +69,7 @@ from dataclasses import dataclass, field
 import control as ct
 import numpy as np
 
-from ._checks import check_finite_array, check_integer
+from piezolib._checks import check_finite_array, check_integer
 
 __all__ = ["MuResult", "mussv", "parse_blk"]
 
@@ -954,7 +954,7 @@ def mussv(M, blk, omega=None, *, lower=True, restarts=3, iterations=60, tol=1e-1
     entry, although sigma_max is 2.41.
 
     >>> import numpy as np
-    >>> from piezolib.mu import mussv
+    >>> from piezolib.robust.mu import mussv
     >>> r = mussv(np.array([[1.0, 2.0], [0.0, 1.0]]), [(1, 1), (1, 1)])
     >>> round(float(r.upper[0]), 6), round(float(r.lower[0]), 6)
     (1.0, 1.0)

@@ -83,7 +83,7 @@ Contents
   and the one shared feedforward model of notebooks 03 and 06 (cached);
 * :func:`table4_reference`, :func:`table4_measure`: how the Table 4 loops are
   produced and measured (shared by Cases I-III; the cases themselves are run
-  by :func:`piezolib.loop.run_case`);
+  by :func:`piezolib.workbook.loop.run_case`);
 * :func:`hysteresis_percent` / :func:`hysteresis_measure` (eq. 25-26),
   re-exported from :mod:`piezolib.metrics`.
 
@@ -106,9 +106,9 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 import scipy.optimize as opt
 
-from . import paper, signals
-from ._checks import check_finite_array, check_integer, check_positive, check_same_length
-from .metrics import HysteresisMeasure, hysteresis_measure, hysteresis_percent
+from piezolib import paper, signals
+from piezolib._checks import check_finite_array, check_integer, check_positive, check_same_length
+from piezolib.metrics import HysteresisMeasure, hysteresis_measure, hysteresis_percent
 
 __all__ = [
     "FORMS", "STARTS", "DahlModel", "DahlResponse", "NotInvertibleError",
@@ -1093,7 +1093,7 @@ WORKBOOK_DAHL = ("bliman_sorine", True, "rest")
 def fit_case_I_loops(form, offset, start, directory=None, stride=10):
     """Joint fit of one candidate to the Table 4 Case I loops (cached in-process).
 
-    The four 10 Hz loops of :func:`piezolib.stage.load_hysteresis_loops`
+    The four 10 Hz loops of :func:`piezolib.problem.stage.load_hysteresis_loops`
     (v = u_c [V], x = v_y [V]), the first period left out of the residuals
     (the model still runs through it), every ``stride``-th sample used in the
     fit.  The result is cached per argument set: treat it as read-only.
@@ -1122,7 +1122,7 @@ def fit_case_I_loops(form, offset, start, directory=None, stride=10):
 @functools.lru_cache(maxsize=None)
 def _fit_case_I_loops(form, offset, start, directory, stride):
     """:func:`fit_case_I_loops` with normalised arguments (one cache entry per fit)."""
-    from . import stage as _stage     # lazy: the stage module is heavier than this one
+    from piezolib.problem import stage as _stage     # lazy: the stage module is heavier than this one
     loops = _stage.load_hysteresis_loops(directory)
     period = int(round(paper.SAMPLING_FREQUENCY_HZ / paper.HYSTERESIS_TEST["frequency_Hz"]))
     return fit_dahl([(rec.u_c_V, rec.v_y_V) for rec in loops.values()], form=form,
@@ -1151,7 +1151,7 @@ def choose_fit(fits):
 def workbook_dahl_fit(directory=None):
     """The workbook's feedforward model: :data:`WORKBOOK_DAHL` fitted to the Case I loops.
 
-    One shared, cached fit for notebooks 03 and 06 and :mod:`piezolib.loop`,
+    One shared, cached fit for notebooks 03 and 06 and :mod:`piezolib.workbook.loop`,
     so that they cannot diverge.  Notebook 03 checks that :func:`choose_fit`
     picks :data:`WORKBOOK_DAHL` among :data:`CASE_I_CANDIDATES`.
 

@@ -20,9 +20,9 @@ stateful :class:`~piezolib.hysteresis.DahlFeedforward` to rounding); only the
 feedback needs a sample-by-sample loop: for an n-state controller one
 (n+1) x (n+1) matrix-vector product [x_{k+1}; u_b[k]] = [[A, B], [C, D]]
 [x_k; v_e[k]] and one :meth:`StageSimulation.step
-<piezolib.stage.StageSimulation.step>` per sample, 5-10 us.  Without
+<piezolib.problem.stage.StageSimulation.step>` per sample, 5-10 us.  Without
 feedback the stage runs vectorised (:meth:`VirtualStage.run
-<piezolib.stage.VirtualStage.run>`).
+<piezolib.problem.stage.VirtualStage.run>`).
 
 The three cases of Sec. V
 -------------------------
@@ -52,7 +52,7 @@ there Case I uses g = 1: u_c is the triangle from 0 to A/10 V, exactly the
 experiment the virtual stage is calibrated on.
 
 Saturation is never hidden: every :class:`LoopResult` carries the stage's
-:class:`~piezolib.stage.Saturation` summaries (DAC/amplifier input,
+:class:`~piezolib.problem.stage.Saturation` summaries (DAC/amplifier input,
 amplifier output, ADC) and the experiments tabulate the counts.
 """
 
@@ -64,12 +64,12 @@ import control as ct
 import numpy as np
 import pandas as pd
 
-from . import paper, signals
-from ._checks import check_finite_array, check_integer, check_positive, check_proper, check_siso
-from .discretize import DiscreteController, discretize
-from .hysteresis import (DahlModel, feedforward as dahl_feedforward, table4_measure,
+from piezolib import paper, signals
+from piezolib._checks import check_finite_array, check_integer, check_positive, check_proper, check_siso
+from piezolib.robust.discrete import DiscreteController, discretize
+from piezolib.hysteresis.dahl import (DahlModel, feedforward as dahl_feedforward, table4_measure,
                          table4_reference, workbook_dahl_fit)
-from .metrics import improvement_percent, tracking_error_percent
+from piezolib.metrics import improvement_percent, tracking_error_percent
 
 __all__ = [
     "CASES", "LoopResult", "discrete_controller", "run_loop", "run_case",
@@ -107,7 +107,7 @@ def discrete_controller(K, fs=paper.SAMPLING_FREQUENCY_HZ):
         continuous-time SISO model (v_e -> u_b): discretised by Tustin with
         :func:`piezolib.discretize.discretize` (pre-warped at its sharpest
         feature).  A discrete-time SISO model: used as it is; its sample time
-        must be 1/fs.  A :class:`~piezolib.discretize.DiscreteController`:
+        must be 1/fs.  A :class:`~piezolib.robust.DiscreteController`:
         its ``K``.
     fs : float
         Loop rate [Hz].
@@ -163,7 +163,7 @@ class LoopResult:
         Feedforward part of the control input [V].
     u_b_V : ndarray
         Feedback part [V] (zeros without a controller).
-    record : piezolib.stage.StageRecord
+    record : piezolib.problem.stage.StageRecord
         What the stage applied (``u_c_V`` as the DAC produced it) and measured.
     feedforward : str
         Description of the feedforward path.
@@ -266,7 +266,7 @@ def run_loop(stage, v_r, *, feedforward=None, controller=None):
 
     Parameters
     ----------
-    stage : piezolib.stage.VirtualStage
+    stage : piezolib.problem.stage.VirtualStage
         Each run starts from the stage's rest state with its noise seed.
     v_r : array_like
         Reference voltage [V] at the stage's rate, 1-D (x_r = 3 um/V * v_r).
@@ -292,7 +292,7 @@ def run_loop(stage, v_r, *, feedforward=None, controller=None):
         Bad reference, a controller at another sample time, or a controller
         output that stops being finite (an unstable loop).
     """
-    from .stage import VirtualStage     # stage is imported lazily by the package
+    from piezolib.problem.stage import VirtualStage     # stage is imported lazily by the package
     if not isinstance(stage, VirtualStage):
         raise TypeError(f"stage must be a VirtualStage, got {type(stage).__name__}")
     v_r = check_finite_array("v_r", v_r, ndim=1, min_length=2)

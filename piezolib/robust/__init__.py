@@ -1,0 +1,27 @@
+"""Robust-control toolkit: LTI helpers, LFTs, mu bounds, H-infinity and mu synthesis.
+
+General tools for any plant; nothing here knows the paper.  Every model is
+passed explicitly and every numerical scaling is chosen from the model given.
+
+lti         time scaling, balancing, realisation, loop functions, norms
+lft         lower linear fractional transformation and its frequency response
+mu          structured singular value bounds (``mussv``, MATLAB ``blk`` convention)
+hinf        verified H-infinity synthesis by gamma-iteration (``hinfsyn``)
+dfit        stable minimum-phase fits of magnitude data (D-scalings)
+dk          mu-synthesis by DK-iteration (``musyn``)
+reduction   (weighted) balanced controller reduction
+discrete    Tustin discretisation with response checks
+"""
+
+from piezolib.robust.lti import *          # noqa: F401,F403
+from piezolib.robust.lft import *          # noqa: F401,F403
+from piezolib.robust.mu import *           # noqa: F401,F403
+from piezolib.robust.hinf import *         # noqa: F401,F403
+from piezolib.robust.dfit import *         # noqa: F401,F403
+from piezolib.robust.dk import *           # noqa: F401,F403
+from piezolib.robust.reduction import *    # noqa: F401,F403
+from piezolib.robust.discrete import *     # noqa: F401,F403
+from piezolib.robust import dfit, discrete, dk, hinf, lft, lti, mu, reduction
+
+__all__ = (lti.__all__ + lft.__all__ + mu.__all__ + hinf.__all__ + dfit.__all__ + dk.__all__
+           + reduction.__all__ + discrete.__all__)
