@@ -12,6 +12,8 @@ import time
 import numpy as np
 
 from piezolib import hysteresis as hy
+from piezolib.problem import hysteresis as ph
+from piezolib.workbook.experiments import table4_reference
 
 from bench_stage import best_of      # scripts run from benchmarks/ see each other
 
@@ -20,7 +22,7 @@ MODEL = hy.DahlModel(alpha1=3.0, alpha2=4.0, beta1=0.0, beta2=0.2 * 4 / 30, gamm
 
 
 def main():
-    t, v = hy.table4_reference(40.0)                     # 3 periods at 10 kHz: 3001 samples
+    t, v = table4_reference(40.0)                        # 3 periods at 10 kHz: 3001 samples
     ff = hy.DahlFeedforward(MODEL)
     n = 100_000
     refs = 2.0 + 2.0 * np.sin(np.linspace(0, 200 * np.pi, n))
@@ -43,26 +45,27 @@ def main():
               f"{best_of(lambda: hy.simulate_dahl(m, v)) * 1e3:.2f} ms")
     loops = []
     for amplitude in (10.0, 20.0, 30.0, 40.0):
-        t, u = hy.table4_reference(amplitude)
+        t, u = table4_reference(amplitude)
         x = hy.simulate_dahl(MODEL.with_offset(-0.15), u).x
         loops.append((u, x + np.random.default_rng(0).normal(0, 5e-4, x.size)))
     for form in hy.FORMS:
         for offset in (False, True):
             start = time.perf_counter()
-            fit = hy.fit_dahl(loops, form=form, offset=offset, discard=1000, stride=10)
+            fit = hy.fit_dahl(loops, gamma_a=MODEL.gamma_a, form=form, offset=offset,
+                              discard=1000, stride=10)
             print(f"fit_dahl {form}, offset={offset}, 4 synthetic loops, stride 10: "
                   f"{time.perf_counter() - start:.2f} s ({fit.result.nfev} evaluations, "
                   f"worst RMS {fit.rms_percent.max():.3f} %)")
     # the virtual stage's Case I loops: every candidate of notebook 03 (uncached: one fit each)
     total = time.perf_counter()
-    for key in hy.CASE_I_CANDIDATES:
+    for key in ph.CASE_I_CANDIDATES:
         start = time.perf_counter()
-        fit = hy.fit_case_I_loops(*key)
+        fit = ph.fit_case_I_loops(*key)
         print(f"fit_case_I_loops{key}: {time.perf_counter() - start:.2f} s "
               f"(pooled RMS {fit.pooled_rms_percent:.2f} %)")
-    print(f"all {len(hy.CASE_I_CANDIDATES)} candidates: {time.perf_counter() - total:.2f} s; "
+    print(f"all {len(ph.CASE_I_CANDIDATES)} candidates: {time.perf_counter() - total:.2f} s; "
           f"workbook_dahl_fit() afterwards (cached): "
-          f"{best_of(hy.workbook_dahl_fit) * 1e6:.1f} us")
+          f"{best_of(ph.workbook_dahl_fit) * 1e6:.1f} us")
 
 
 if __name__ == "__main__":

@@ -1,4 +1,4 @@
-"""Speed of the 10 kHz loop of Fig. 1 (piezolib.workbook.loop) and of notebook 06 (prints numbers; no asserts).
+"""Speed of the 10 kHz loop of Fig. 1, the Sec. V experiments and notebook 06 (prints numbers).
 
 Goals: a 1 s closed-loop run at 10 kHz (10 001 samples) well under a second
 with any of the three controllers; open-loop runs (Cases I, II) in a few
@@ -14,12 +14,12 @@ import sys
 import time
 from pathlib import Path
 
-from piezolib import hysteresis as hy
-from piezolib.workbook import loop
 from piezolib import paper
 from piezolib.problem import stage as vstage
 from piezolib.problem.design import design_controller
+from piezolib.problem.hysteresis import workbook_dahl_fit
 from piezolib.robust.discrete import discretize
+from piezolib.workbook import experiments
 
 from bench_stage import best_of      # scripts run from benchmarks/ see each other
 
@@ -30,16 +30,18 @@ def main():
     args = parser.parse_args()
 
     stage = vstage.VirtualStage(seed=0)
-    dahl = hy.workbook_dahl_fit().model                      # the notebooks' feedforward model
-    design = design_controller()
+    dahl = workbook_dahl_fit().model                         # the notebooks' feedforward model
+    G, H_m, H_e, H_y, K_pub = paper.problem()
+    design = design_controller(G, H_m, H_e, H_y)
+    fs = paper.SAMPLING_FREQUENCY_HZ
     controllers = {"ours, 6th order": design.K_discrete,
-                   f"ours, full order ({design.K_full.nstates})": discretize(design.K_full).K,
-                   "published K (eq. 24)": discretize(paper.controller()).K}
-    t, v_r = loop.tracking_reference(10.0, 10)               # 1 s of a 10 Hz, 12 um triangle
+                   f"ours, full order ({design.K_full.nstates})": discretize(design.K_full, fs).K,
+                   "published K (eq. 24)": discretize(K_pub, fs).K}
+    t, v_r = experiments.tracking_reference(10.0, 10)        # 1 s of a 10 Hz, 12 um triangle
     n = v_r.size
 
-    t_open = best_of(lambda: loop.run_case("I", stage, v_r, dahl))
-    t_ff = best_of(lambda: loop.run_case("II", stage, v_r, dahl))
+    t_open = best_of(lambda: experiments.run_case("I", stage, v_r, dahl))
+    t_ff = best_of(lambda: experiments.run_case("II", stage, v_r, dahl))
     print(f"1 s run ({n} samples), Case I (open loop, vectorised):   {t_open * 1e3:7.1f} ms")
     print(f"1 s run ({n} samples), Case II (Dahl feedforward):       {t_ff * 1e3:7.1f} ms")
 
@@ -52,12 +54,12 @@ def main():
     print(f"stage stepping alone, 1 s:                               {t_stage * 1e3:7.1f} ms "
           f"({t_stage / n * 1e6:.1f} us/sample)")
     for name, K in controllers.items():
-        t_c = best_of(lambda: loop.run_case("III", stage, v_r, dahl, K))
+        t_c = best_of(lambda: experiments.run_case("III", stage, v_r, dahl, K))
         print(f"1 s run, Case III with {name:28s}     {t_c * 1e3:7.1f} ms "
               f"({t_c / n * 1e6:.1f} us/sample, goal < 1000 ms)")
     K = controllers["ours, 6th order"]
-    t_exp = best_of(lambda: (loop.hysteresis_test(stage, dahl, K),
-                             loop.tracking_test(stage, dahl, K)), repeat=1)
+    t_exp = best_of(lambda: (experiments.hysteresis_test(stage, dahl, K),
+                             experiments.tracking_test(stage, dahl, K)), repeat=1)
     print(f"Tables 4 and 5 (all cases), one controller:              {t_exp * 1e3:7.1f} ms")
 
     if not args.skip_notebook:

@@ -37,8 +37,9 @@ BLK = [(1, 1), (1, 2)]
 def problem_response(n):
     """Frequency grid [rad/s] and M(j omega), shape (n, 3, 2)."""
     omega = np.logspace(0, 6, n)
-    P = genplant.generalized_plant()
-    return omega, robust.lft_response(P, paper.controller(), omega)
+    G, H_m, H_e, H_y, K = paper.problem()
+    P = genplant.generalized_plant(G, H_m, H_e, H_y)
+    return omega, robust.lft_response(P, K, omega)
 
 
 def best_time(fn, repeats):

@@ -43,12 +43,13 @@ from piezolib.robust.mu import mussv
 
 OMEGA_S = 1e4                      # time scale handed to dkpy [rad/s]
 DESIGN_BLK = genplant.DESIGN_BLOCK_STRUCTURE
+MODELS = paper.problem()[:4]      # G, H_m, H_e, H_y
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 
 def exact_mu(K_scaled, omega):
     """mu upper bound of the exact M (eq. 18) for a controller given in scaled time."""
-    P = robust.balance(robust.scale_time(genplant.generalized_plant(), OMEGA_S))
+    P = robust.to_scaled(genplant.generalized_plant(*MODELS), OMEGA_S)
     poles = np.linalg.eigvals(P.lft(K_scaled).A)
     if np.any(poles.real >= 0):
         return float("nan"), False
@@ -61,7 +62,7 @@ def run_dkpy(queue, omega, iterations, d_order):
     try:
         import dkpy
         warnings.simplefilter("ignore")
-        Ps = robust.balance(robust.scale_time(genplant.design_plant(), OMEGA_S))
+        Ps = robust.to_scaled(genplant.design_plant(*MODELS), OMEGA_S)
         dk = dkpy.DkIterFixedOrder(controller_synthesis=dkpy.HinfSynSlicot(),
                                    structured_singular_value=dkpy.SsvLmiBisection(),
                                    d_scale_fit=dkpy.DScaleFitSlicot(),
@@ -98,7 +99,7 @@ def main():
     ap.add_argument("--skip-notebook", action="store_true", help="do not time notebook 05")
     args = ap.parse_args()
     omega = np.logspace(-2, 7, args.n)
-    P = genplant.design_plant()
+    P = genplant.design_plant(*MODELS)
     print(f"synthesis plant: {P.nstates} states, outputs {P.output_labels}; blk {DESIGN_BLK}; "
           f"{args.n} frequencies {omega[0]:g} ... {omega[-1]:g} rad/s; D order {args.d_order}; "
           f"{os.cpu_count()} CPU(s)")
@@ -106,9 +107,9 @@ def main():
     times, res = [], None
     for _ in range(args.repeats):
         t0 = time.perf_counter()
-        res = musyn(P, DESIGN_BLK, 1, 1, omega, d_order=args.d_order, verbose=False)
+        res = musyn(P, DESIGN_BLK, 1, 1, omega, d_order=args.d_order)
         times.append(time.perf_counter() - t0)
-    K_ours = robust.balance(robust.scale_time(res.K, OMEGA_S))
+    K_ours = robust.to_scaled(res.K, OMEGA_S)
     mu_ours, stable_ours = exact_mu(K_ours, omega)
     print("\npiezolib.robust.dk.musyn")
     print(f"  time                    : {min(times):8.2f} s (best of {args.repeats})")
@@ -161,7 +162,7 @@ def main():
         seconds = time_notebook(ROOT / "notebooks" / "05_mu_synthesis.ipynb")
         print(f"\nnotebook 05 executed headless: {seconds:.1f} s "
               f"(goal < 30 s: {'met' if seconds < 30 else 'NOT met'})")
-    K_pub = robust.balance(robust.scale_time(paper.controller(), OMEGA_S))
+    K_pub = robust.to_scaled(paper.controller(), OMEGA_S)
     print(f"\npublished K for reference: mu_RP of the exact M {exact_mu(K_pub, omega)[0]:.4f}")
 
 

@@ -11,8 +11,8 @@ import time
 import warnings
 
 from piezolib import identification as ident
-from piezolib import paper
 from piezolib.problem import stage as vstage
+from piezolib.problem import stage_data
 
 
 def best_of(func, repeat=3):
@@ -26,7 +26,7 @@ def best_of(func, repeat=3):
 
 def main():
     stage = vstage.VirtualStage(seed=0)
-    u, _ = vstage.chirp_input(vstage.IDENTIFICATION_CHIRP)
+    u, _ = stage_data.chirp_input(stage_data.IDENTIFICATION_CHIRP, stage.fs)
     t = best_of(lambda: stage.run(u))
     print(f"run(), 2.25 s chirp ({len(u)} samples):      {t * 1e3:7.1f} ms")
 
@@ -46,9 +46,9 @@ def main():
         t = best_of(vstage.calibrate_hysteresis, repeat=1)
     print(f"calibrate_hysteresis():                    {t:7.2f} s")
 
-    ex = vstage.load_chirp("identification")
+    ex = stage_data.load_chirp("identification")
     du, dy, _ = ex.deviations()
-    t = best_of(lambda: ident.identify(du, dy, paper.SAMPLING_FREQUENCY_HZ), 1)
+    t = best_of(lambda: ident.identify(du, dy, stage.fs), 1)
     print(f"identify(), {len(du)} samples:              {t:7.2f} s")
     phi, target, _ = ident.arx_regressors(du, dy, 6, 6, 1)
     t = best_of(lambda: ident.rls(phi, target, initial_gain=1e10), 1)

@@ -21,7 +21,7 @@ from bench_stage import best_of      # scripts run from benchmarks/ see each oth
 def main():
     omega = robust.frequency_grid(1.0, 1e6, 2000)
     G, K, H_m = paper.plant(), paper.controller(), paper.uncertainty_weight()
-    mset = unc.model_set()
+    mset = unc.model_set(G, paper.UNCERTAINTY_SPREAD, paper.UNCERTAINTY_LEVELS)
 
     fast = best_of(lambda: unc.set_response(mset, omega))
     s = 1j * omega

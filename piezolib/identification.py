@@ -1,56 +1,50 @@
-"""System identification of the paper's Sec. III-A (Fig. 3, eq. 1-4).
+"""System identification: RLS (eq. 1-3), ARX/output-error, exact ZOH inverse.
 
-The four steps of Fig. 3, as implemented here:
+The four steps of the paper's Fig. 3 on sampled input/output data ``u``,
+``y`` [V] at the sampling frequency ``fs`` [Hz]: recursive least squares
+(:func:`rls`) on ARX regressors (:func:`fit_arx`), Steiglitz-McBride passes to
+the output-error estimate (:func:`fit_output_error`), the exact inverse of the
+ZOH discretisation (:func:`d2c`), a numerator refit with the poles fixed
+(:func:`refit_numerator`), all in :func:`identify`; validation by simulated
+fit (:func:`fit_percent`), residual whiteness (:func:`whiteness`) and an
+empirical frequency response.  Returned models have the neutral signal names
+``u`` -> ``y``.  Time in seconds, frequencies in rad/s.
 
-I.   excitation: a small chirp around an operating point (``stage.load_chirp``);
-II.  structure: 6 poles and 3 zeros in continuous time (eq. 4).  At 10 kHz
-     with a zero-order hold, such a model is exactly an ARX/output-error model
-     with na = 6, nb = 6 and one sample of delay (the ZOH adds sampling zeros);
-III. estimation: recursive least squares exactly as eq. 1-3 (:func:`rls`) on
-     the ARX regressor (:func:`fit_arx`); because white sensor noise biases
-     plain ARX, the regression is run on data prefiltered by the previous
-     denominator until it converges to the output-error estimate
-     (Steiglitz-McBride, :func:`fit_output_error`); then the exact inverse of
-     the ZOH discretisation (:func:`d2c`, matrix logarithm) gives the poles,
-     and an output-error least-squares fit of b0 ... b3 with those poles
-     fixed (:func:`refit_numerator`) gives the 3-zero structure of eq. 4
-     (:func:`identify` runs all of this);
-IV.  validation on an independent chirp: simulated-versus-measured fit
-     (:func:`fit_percent`), whiteness of the residuals (:func:`whiteness`),
-     Bode overlay (:func:`bode_overlay`, :func:`empirical_frequency_response`).
+Why output-error passes follow ARX, and why the numerator is refitted:
+``docs/stage.md``.
 
-Why the numerator is refitted: the exact d2c of the exact ZOH model of a
-relative-degree-3 system has zero s^5 and s^4 numerator coefficients; with
-estimated parameters they come out small but non-zero.  Truncating them would
-change the model without any fit to the data; instead the poles, which RLS
-estimates well, are kept and the four numerator coefficients of eq. 4 are
-re-estimated by linear least squares on the simulated (output-error)
-response, the prediction-error criterion of Step III applied to the
-structure of eq. 4.
+Examples
+--------
+Noise-free data of a known resonance give it back:
 
-Units: u and y in volts, time in seconds, frequencies in rad/s.
+>>> import control as ct, numpy as np
+>>> G = ct.tf([2e6], [1.0, 200.0, 1e6])
+>>> u = np.random.default_rng(0).standard_normal(4000)
+>>> y = zoh_simulate(G, u, fs=10e3)
+>>> model = identify(u, y, fs=10e3, n_poles=2, n_zeros=0).model
+>>> model.input_labels, model.output_labels, round(float(model.dcgain()), 6)
+(['u'], ['y'], 2.0)
 """
 
 from dataclasses import dataclass
 
 import control as ct
 import numpy as np
-import pandas as pd
 import scipy.linalg as la
 import scipy.signal as sg
 import scipy.stats as stats
 
 from piezolib._checks import (check_finite_array, check_integer, check_lti, check_positive,
-                      check_same_length, check_siso)
-from piezolib.robust.lti import DEFAULT_TIME_SCALE, balance, realize, scale_time
+                              check_same_length, check_siso)
+from piezolib.robust.lti import balance, scale_time, time_scale_of, to_scaled
 
 __all__ = [
     "RLSResult", "rls", "arx_regressors", "ArxModel", "fit_arx", "DEFAULT_INITIAL_GAIN",
+    "MIN_SAMPLES_PER_PARAMETER",
     "OutputErrorModel", "fit_output_error", "d2c",
     "zoh_coefficients", "zoh_simulate", "refit_numerator", "IdentifiedModel",
     "identify", "fit_percent", "Whiteness", "whiteness", "pole_pairs",
     "monic_coefficients", "coefficient_table", "empirical_frequency_response",
-    "bode_overlay",
 ]
 
 
@@ -170,7 +164,7 @@ class ArxModel:
     rls : RLSResult
         Parameter histories of the estimation.
     system : control.TransferFunction
-        The model as a discrete-time transfer function in z.
+        The model as a discrete-time transfer function in z, ``u`` -> ``y``.
     """
 
     a: np.ndarray
@@ -180,6 +174,7 @@ class ArxModel:
     system: ct.TransferFunction
 
 
+#: Fewest equations per estimated parameter that :func:`fit_arx` accepts.
 MIN_SAMPLES_PER_PARAMETER = 10
 
 #: W(0) / I of the identification.  The 10 kHz regressors are strongly
@@ -219,7 +214,7 @@ def fit_arx(u, y, fs, na=6, nb=6, nk=1, initial_gain=DEFAULT_INITIAL_GAIN):
     result = rls(phi, target, initial_gain=initial_gain)
     a = np.concatenate(([1.0], result.parameters[:na]))
     b = np.concatenate((np.zeros(nk), result.parameters[na:]))
-    return ArxModel(a, b, 1.0 / fs, result, _discrete_tf(b, a, 1.0 / fs, "G_arx"))
+    return ArxModel(a, b, 1.0 / fs, result, _discrete_tf(b, a, 1.0 / fs, "arx"))
 
 
 def _discrete_tf(b, a, dt, name):
@@ -228,7 +223,7 @@ def _discrete_tf(b, a, dt, name):
     length = max(len(a), len(b))
     num = np.concatenate((b, np.zeros(length - len(b))))
     den = np.concatenate((a, np.zeros(length - len(a))))
-    return ct.tf(np.trim_zeros(num, "f"), den, dt, inputs="u_c", outputs="v_y", name=name)
+    return ct.tf(np.trim_zeros(num, "f"), den, dt, inputs="u", outputs="y", name=name)
 
 
 def _checked_regressors(u, y, na, nb, nk):
@@ -336,23 +331,39 @@ def d2c(sysd, method="zoh"):
 
 
 def zoh_coefficients(sys, dt):
-    """(b, a) of the exact ZOH discretisation of a SISO continuous model.
+    """Direct-form coefficients of the exact ZOH discretisation of a SISO model.
 
-    Built from a balanced realisation in scaled time (the paper's models have
-    coefficients up to 1e23), so that the direct-form coefficients (highest
-    power of z first, a[0] = 1) are accurate; use with scipy.signal.lfilter.
+    Computed from a balanced realisation in scaled time
+    (:func:`piezolib.robust.lti.to_scaled` at
+    :func:`~piezolib.robust.lti.time_scale_of` the model), so that models with
+    coefficients up to 1e23 give accurate coefficients.
+
+    Parameters
+    ----------
+    sys : control.LTI
+        SISO continuous-time model.
+    dt : float
+        Sample time [s].
+
+    Returns
+    -------
+    b, a : ndarray
+        Numerator and denominator in powers of z^-1 (highest power of z
+        first, a[0] = 1; b[0] = 0 exactly without direct feedthrough), for
+        ``scipy.signal.lfilter``.
     """
     check_siso("sys", sys)
     if not sys.isctime(strict=True):
         raise ValueError("sys must be a continuous-time model")
     dt = check_positive("dt", dt)
-    ss = realize(sys, _time_scale_of(sys))
+    w = time_scale_of(sys)
+    ss = to_scaled(sys, w)
     n = ss.nstates
     D = np.asarray(ss.D, dtype=float).reshape(1, 1)
     if n == 0:
         return D.ravel().copy(), np.array([1.0])
     M = np.zeros((n + 1, n + 1))
-    M[:n, :n], M[:n, n:] = ss.A * dt, ss.B * dt
+    M[:n, :n], M[:n, n:] = ss.A * (w * dt), ss.B * (w * dt)    # the sample time in scaled time
     E = la.expm(M)
     b, a = sg.ss2tf(E[:n, :n], E[:n, n:], ss.C, D)
     b = np.asarray(b, dtype=float).ravel() / a[0]
@@ -360,14 +371,6 @@ def zoh_coefficients(sys, dt):
     if D[0, 0] == 0:
         b[0] = 0.0                   # exactly: no direct feedthrough
     return b, a
-
-
-def _time_scale_of(sys):
-    """A power of ten near the largest pole magnitude [rad/s] (at least 1):
-    scaling time by it brings the poles near 1 before any conversion."""
-    poles = ct.poles(sys)
-    big = float(np.max(np.abs(poles))) if poles.size else 1.0
-    return 10.0 ** max(0, round(np.log10(big))) if big > 0 else 1.0
 
 
 def zoh_simulate(sys, u, fs):
@@ -380,7 +383,7 @@ def zoh_simulate(sys, u, fs):
 
 
 # --- 3-zero structure ------------------------------------------------------------------
-def refit_numerator(poles, u, y, fs, n_zeros=3, time_scale=DEFAULT_TIME_SCALE):
+def refit_numerator(poles, u, y, fs, n_zeros=3, time_scale=None):
     """Output-error least-squares fit of b0 ... b_nz with the poles fixed.
 
     The simulated response of b(s)/a(s) to the ZOH input is linear in the
@@ -399,12 +402,15 @@ def refit_numerator(poles, u, y, fs, n_zeros=3, time_scale=DEFAULT_TIME_SCALE):
     n_zeros : int, optional
         Numerator degree (3 in eq. 4).
     time_scale : float, optional
-        Internal scaling [rad/s].
+        Internal scaling [rad/s]; default the geometric mean of the smallest
+        and the largest pole magnitude (the rule of
+        :func:`piezolib.robust.lti.time_scale_of`).
 
     Returns
     -------
     control.TransferFunction
-        b(s)/a(s) with a monic of degree len(poles), time in seconds.
+        b(s)/a(s) with a monic of degree len(poles), time in seconds,
+        ``u`` -> ``y``.
     """
     u, y = _check_io(u, y)
     fs = check_positive("fs", fs)
@@ -415,6 +421,10 @@ def refit_numerator(poles, u, y, fs, n_zeros=3, time_scale=DEFAULT_TIME_SCALE):
         raise ValueError(f"n_zeros ({n_zeros}) must be below the number of poles ({n})")
     if np.any(poles.real >= 0):
         raise ValueError(f"poles must be stable, got {poles[poles.real >= 0]}")
+    if time_scale is None:
+        magnitudes = np.abs(poles)
+        time_scale = float(np.sqrt(magnitudes.min() * magnitudes.max()))
+    time_scale = check_positive("time_scale", time_scale)
     den_p = np.real(np.poly(poles / time_scale))         # monic in p
     basis = []
     for j in range(n_zeros + 1):
@@ -427,7 +437,7 @@ def refit_numerator(poles, u, y, fs, n_zeros=3, time_scale=DEFAULT_TIME_SCALE):
     powers = np.arange(n_zeros + 1)
     b = coef_p * time_scale ** (n - powers)               # b_0 ... b_nz
     a = den_p[::-1] * time_scale ** (n - np.arange(n + 1))  # a_0 ... a_n (a_n = 1)
-    return ct.tf(b[::-1], a[::-1], inputs="u_c", outputs="v_y", name="G_identified")
+    return ct.tf(b[::-1], a[::-1], inputs="u", outputs="y", name="identified")
 
 
 @dataclass(frozen=True)
@@ -519,7 +529,7 @@ def fit_output_error(u, y, fs, na=6, nb=6, nk=1, iterations=50, tol=1e-8,
     final = fit_arx(sg.lfilter([1.0], den, u), sg.lfilter([1.0], den, y), fs,
                     na, nb, nk, initial_gain)
     return OutputErrorModel(final.a, final.b, final.dt, final, tuple(prefilters),
-                            converged, _discrete_tf(final.b, final.a, final.dt, "G_oe"))
+                            converged, _discrete_tf(final.b, final.a, final.dt, "oe"))
 
 
 @dataclass(frozen=True)
@@ -534,7 +544,7 @@ class IdentifiedModel:
     continuous_full : control.StateSpace
         d2c of the discrete model (6 poles, up to 5 zeros).
     model : control.TransferFunction
-        The 6-pole / 3-zero model of eq. 4 (u_c -> v_y, seconds).
+        The 6-pole / 3-zero model of eq. 4 (``u`` -> ``y``, seconds).
     dropped_share : float
         Largest ratio, up to the Nyquist frequency, of the numerator terms
         above s^3 of ``continuous_full`` to its terms up to s^3 (zero for an
@@ -653,21 +663,58 @@ def whiteness(residual, max_lag=20, alpha=0.05):
 
 
 def pole_pairs(sys):
-    """Natural frequencies [rad/s] and damping ratios of the complex pole
-    pairs of a continuous model, sorted by frequency."""
+    """Natural frequencies and damping ratios of a model's complex pole pairs.
+
+    Parameters
+    ----------
+    sys : control.LTI
+        SISO continuous-time model.
+
+    Returns
+    -------
+    wn : ndarray
+        Natural frequencies [rad/s], ascending.
+    zeta : ndarray
+        Damping ratios, in the same order.
+    """
     check_siso("sys", sys)
-    poles = la.eigvals(realize(sys, _time_scale_of(sys)).A) \
-        if not isinstance(sys, ct.StateSpace) else la.eigvals(sys.A)
+    w = time_scale_of(sys)
+    poles = la.eigvals(to_scaled(sys, w).A) * w          # computed in scaled time
     upper = poles[poles.imag > 0]
     wn = np.abs(upper)
     order = np.argsort(wn)
     return wn[order], (-upper.real / wn)[order]
 
 
-def monic_coefficients(sys, n_poles=6, n_zeros=3, time_scale=DEFAULT_TIME_SCALE):
-    """(a0 ... a_{n-1}, b0 ... b_m) of b(s)/a(s) with a monic, lowest power
-    first, time in seconds (computed in scaled time for accuracy)."""
+def monic_coefficients(sys, n_poles=6, n_zeros=3, time_scale=None):
+    """Coefficients of b(s)/a(s) with a monic, lowest power first.
+
+    Parameters
+    ----------
+    sys : control.LTI
+        SISO continuous-time model with ``n_poles`` poles and at most
+        ``n_zeros`` zeros.
+    n_poles, n_zeros : int, optional
+        The structure (eq. 4: 6 and 3).
+    time_scale : float, optional
+        Internal scaling [rad/s] for accuracy; default
+        :func:`piezolib.robust.lti.time_scale_of` of ``sys``.
+
+    Returns
+    -------
+    a : ndarray
+        a0 ... a_{n-1} (time in seconds; a_n = 1 is left out).
+    b : ndarray
+        b0 ... b_m, m = ``n_zeros``.
+
+    Raises
+    ------
+    ValueError
+        When ``sys`` has another number of poles or more zeros.
+    """
     check_siso("sys", sys)
+    time_scale = time_scale_of(sys) if time_scale is None else check_positive(
+        "time_scale", time_scale)
     tf = ct.tf(scale_time(sys, time_scale))
     den = np.atleast_1d(tf.den[0][0]).astype(float)
     num = np.atleast_1d(tf.num[0][0]).astype(float) / den[0]
@@ -686,12 +733,20 @@ def monic_coefficients(sys, n_poles=6, n_zeros=3, time_scale=DEFAULT_TIME_SCALE)
 def coefficient_table(identified, reference, names=("identified", "published")):
     """a0 ... a5, b0 ... b3 of two 6-pole / 3-zero models side by side.
 
+    Parameters
+    ----------
+    identified, reference : control.LTI
+        SISO continuous-time models with 6 poles and at most 3 zeros.
+    names : pair of str, optional
+        Column labels of the two models.
+
     Returns
     -------
     pandas.DataFrame
         Index a0 ... b3; columns ``names`` and the relative error
         (first - second) / second.
     """
+    import pandas as pd
     a1, b1 = monic_coefficients(identified)
     a2, b2 = monic_coefficients(reference)
     index = [f"a{i}" for i in range(len(a1))] + [f"b{i}" for i in range(len(b1))]
@@ -721,51 +776,3 @@ def empirical_frequency_response(u, y, fs, nperseg=2048):
     _, puy = sg.csd(u, y, fs, nperseg=nperseg)
     keep = (f > 0) & (puu > 0)
     return 2 * np.pi * f[keep], puy[keep] / puu[keep]
-
-
-def bode_overlay(systems, omega, measured=None, axes=None):
-    """Bode magnitude and phase of several models (and optionally data).
-
-    Parameters
-    ----------
-    systems : dict
-        {label: control.LTI} (SISO).  Continuous models are evaluated at
-        s = j omega, discrete ones at z = exp(j omega dt) (drawn dashed), as
-        sampled data see them.
-    omega : array_like
-        Frequency grid [rad/s].
-    measured : tuple, optional
-        (omega, response) from :func:`empirical_frequency_response`, drawn
-        as dots.
-    axes : pair of matplotlib Axes, optional
-        Magnitude and phase axes; created when omitted.
-
-    Returns
-    -------
-    fig, (ax_mag, ax_phase)
-    """
-    from piezolib.workbook.plotting import db, new_figure
-    omega = check_finite_array("omega", omega, ndim=1, min_length=2)
-    if axes is None:
-        fig, axes = new_figure(2, 1, sharex=True, figsize=(7.0, 5.0))
-    ax_mag, ax_phase = axes
-    fig = ax_mag.figure
-    if measured is not None:
-        w, h = measured
-        ax_mag.semilogx(w, db(h), ".", ms=2.5, color="0.55", label="measured (Welch)")
-        ax_phase.semilogx(w, np.degrees(np.unwrap(np.angle(h))), ".", ms=2.5, color="0.55")
-    for label, sys in systems.items():
-        check_siso(label, sys)
-        if sys.isdtime(strict=True):
-            w = omega[omega < np.pi / sys.dt]
-            h = np.asarray(sys(np.exp(1j * w * sys.dt))).ravel()
-            style = dict(ls="--", lw=1.0)
-        else:
-            w, h, style = omega, np.asarray(sys(1j * omega)).ravel(), {}
-        ax_mag.semilogx(w, db(h), label=label, **style)
-        ax_phase.semilogx(w, np.degrees(np.unwrap(np.angle(h))), **style)
-    ax_mag.set_ylabel("magnitude [dB]")
-    ax_phase.set_ylabel("phase [deg]")
-    ax_phase.set_xlabel("frequency [rad/s]")
-    ax_mag.legend()
-    return fig, (ax_mag, ax_phase)

@@ -48,6 +48,7 @@ Transcription notes
 """
 
 from dataclasses import dataclass, fields
+from typing import NamedTuple
 
 import control as ct
 import numpy as np
@@ -71,6 +72,7 @@ __all__ = [
     "FIGURES_OF_MERIT", "DESIGN_GOALS", "HYSTERESIS_TEST", "TRACKING_TEST",
     "CONCLUSION_AVERAGES", "TEXT_VARIANTS",
     "CASE_ROWS", "case_rows_index", "table1", "table2", "table4", "table5",
+    "DesignProblem", "problem",
 ]
 
 # --- Sec. II and V: hardware and experimental settings ----------------------
@@ -452,6 +454,54 @@ def table5():
             [85.59, 78.09, 70.39, 54.73, 35.14, 26.01]]
     columns = pd.Index(TRACKING_TEST["frequencies_Hz"], name="frequency_Hz")
     return pd.DataFrame(data, index=case_rows_index(), columns=columns)
+
+
+class DesignProblem(NamedTuple):
+    """The paper's design problem: plant, weights and published controller.
+
+    All five are SISO python-control models in ordinary time (seconds), with
+    named signals; frequencies in rad/s.
+
+    Attributes
+    ----------
+    G : control.TransferFunction
+        Plant of eq. 4, ``u_c`` [V] -> ``v_y`` [V].
+    H_m : control.TransferFunction
+        Multiplicative uncertainty weight of eq. 8, ``u_c`` [V] -> ``y_Delta`` [V].
+    H_e : control.TransferFunction
+        Error weight of eq. 15, ``v_e`` [V] -> ``y1`` (dimensionless).
+    H_y : control.TransferFunction
+        Output weight of eq. 15, ``v_y`` [V] -> ``y2`` (dimensionless).
+    K : control.TransferFunction
+        Reduced controller of eq. 24, ``v_e`` [V] -> ``u_b`` [V].
+    """
+
+    G: ct.TransferFunction
+    H_m: ct.TransferFunction
+    H_e: ct.TransferFunction
+    H_y: ct.TransferFunction
+    K: ct.TransferFunction
+
+
+def problem():
+    """Return the published design problem in one call.
+
+    Returns
+    -------
+    DesignProblem
+        ``(G, H_m, H_e, H_y, K)`` built from the published values
+        (:func:`plant`, :func:`uncertainty_weight`, :func:`error_weight`,
+        :func:`output_weight`, :func:`controller`); it unpacks as
+        ``G, H_m, H_e, H_y, K = problem()``.
+
+    Examples
+    --------
+    >>> G, H_m, H_e, H_y, K = problem()
+    >>> G.input_labels, K.output_labels
+    (['u_c'], ['u_b'])
+    """
+    return DesignProblem(G=plant(), H_m=uncertainty_weight(), H_e=error_weight(),
+                         H_y=output_weight(), K=controller())
 
 
 def _with_overrides(params, cls, overrides):

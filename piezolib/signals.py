@@ -1,20 +1,43 @@
 """Reference and excitation signals sampled at the DAQ rate.
 
-All generators return ``(t, y)`` with ``t`` in seconds starting at 0 and
-sampled at ``fs`` [Hz] (default: the paper's 10 kHz).
+All generators take the sampling frequency ``fs`` [Hz] and return
+``(t, y)`` with ``t`` in seconds starting at 0.
+
+Examples
+--------
+>>> t, v = triangle(4.0, 10.0, fs=10e3, periods=2)   # 0 -> 4 -> 0, twice
+>>> len(t), float(v.max())
+(2001, 4.0)
 """
 
 import numpy as np
 import scipy.signal as sg
 
-from piezolib import paper
-from piezolib._checks import check_positive, check_integer
+from piezolib._checks import check_integer, check_positive
 
 __all__ = ["time_vector", "triangle", "chirp"]
 
 
-def time_vector(duration_s, fs=paper.SAMPLING_FREQUENCY_HZ):
-    """Sample times 0, 1/fs, ... covering ``duration_s`` seconds (end excluded)."""
+def time_vector(duration_s, fs):
+    """Sample times 0, 1/fs, ... covering ``duration_s`` seconds (end excluded).
+
+    Parameters
+    ----------
+    duration_s : float
+        Length [s].
+    fs : float
+        Sampling frequency [Hz].
+
+    Returns
+    -------
+    ndarray
+        ``round(duration_s * fs)`` sample times [s].
+
+    Raises
+    ------
+    ValueError
+        For a non-positive argument or fewer than 2 samples.
+    """
     duration_s = check_positive("duration_s", duration_s)
     fs = check_positive("fs", fs)
     n = int(round(duration_s * fs))
@@ -23,7 +46,7 @@ def time_vector(duration_s, fs=paper.SAMPLING_FREQUENCY_HZ):
     return np.arange(n) / fs
 
 
-def triangle(peak, frequency_hz, periods=1, fs=paper.SAMPLING_FREQUENCY_HZ, minimum=0.0):
+def triangle(peak, frequency_hz, fs, periods=1, minimum=0.0):
     """Symmetric triangle wave rising from ``minimum`` to ``peak`` and back.
 
     The wave starts at ``minimum`` at t = 0, reaches ``peak`` at half a
@@ -37,10 +60,10 @@ def triangle(peak, frequency_hz, periods=1, fs=paper.SAMPLING_FREQUENCY_HZ, mini
         Maximum value (any unit: V or um).
     frequency_hz : float
         Triangle frequency [Hz].
+    fs : float
+        Sampling frequency [Hz], at least 4 x ``frequency_hz``.
     periods : int, optional
         Number of full periods.
-    fs : float, optional
-        Sampling frequency [Hz].
     minimum : float, optional
         Minimum value; must be below ``peak``.
 
@@ -50,6 +73,11 @@ def triangle(peak, frequency_hz, periods=1, fs=paper.SAMPLING_FREQUENCY_HZ, mini
         Time [s].
     y : ndarray
         The triangle, same unit as ``peak``.
+
+    Raises
+    ------
+    ValueError
+        For ``peak <= minimum``, a non-positive frequency or too low ``fs``.
     """
     frequency_hz = check_positive("frequency_hz", frequency_hz)
     fs = check_positive("fs", fs)
@@ -66,8 +94,7 @@ def triangle(peak, frequency_hz, periods=1, fs=paper.SAMPLING_FREQUENCY_HZ, mini
     return t, minimum + (peak - minimum) * shape
 
 
-def chirp(amplitude, f0_hz, f1_hz, duration_s, fs=paper.SAMPLING_FREQUENCY_HZ,
-          method="logarithmic"):
+def chirp(amplitude, f0_hz, f1_hz, duration_s, fs, method="logarithmic"):
     """Cosine sweep ``amplitude * cos(phi(t))`` from ``f0_hz`` to ``f1_hz``.
 
     The sweep starts at its crest (phase 0 at t = 0), so ``amplitude - y``
@@ -82,7 +109,7 @@ def chirp(amplitude, f0_hz, f1_hz, duration_s, fs=paper.SAMPLING_FREQUENCY_HZ,
         Start and end frequencies [Hz], 0 < f0 < f1 < fs/2.
     duration_s : float
         Length [s]; the instantaneous frequency reaches ``f1_hz`` at the end.
-    fs : float, optional
+    fs : float
         Sampling frequency [Hz].
     method : {"logarithmic", "linear"}, optional
         Exponential sweep (equal time per octave) or linear sweep.
@@ -93,6 +120,11 @@ def chirp(amplitude, f0_hz, f1_hz, duration_s, fs=paper.SAMPLING_FREQUENCY_HZ,
         Time [s], ``round(duration_s * fs)`` samples from 0.
     y : ndarray
         The sweep, same unit as ``amplitude``.
+
+    Raises
+    ------
+    ValueError
+        Unless 0 < ``f0_hz`` < ``f1_hz`` < ``fs``/2, or for an unknown ``method``.
     """
     amplitude = check_positive("amplitude", amplitude)
     f0_hz = check_positive("f0_hz", f0_hz)

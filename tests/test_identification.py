@@ -168,3 +168,30 @@ def test_bad_data_raise(u, y, match):
         I.fit_arx(u, y, FS)
     with pytest.raises(ValueError, match=match):
         I.identify(u, y, FS)
+
+
+def test_estimated_models_have_neutral_signal_names():
+    u, y = arx_data(500)
+    models = [I.fit_arx(u, y, FS, na=3, nb=2).system,
+              I.fit_output_error(u, y, FS, na=3, nb=2).system]
+    u_g = np.random.default_rng(7).standard_normal(3000) * 0.1
+    result = I.identify(u_g, I.zoh_simulate(paper.plant(), u_g, FS), FS)
+    models += [result.discrete.system, result.continuous_full, result.model]
+    for model in models:
+        assert (model.input_labels, model.output_labels) == (["u"], ["y"]), model.name
+
+
+def test_time_scale_defaults_to_one_chosen_from_the_model():
+    G = paper.plant()
+    for time_scale in (1e3, 1e4, 1e5):
+        for got, ref in zip(I.monic_coefficients(G, time_scale=time_scale),
+                            I.monic_coefficients(G)):
+            assert np.allclose(got, ref, rtol=1e-12, atol=0)
+    u = np.random.default_rng(8).standard_normal(3000)
+    y = I.zoh_simulate(G, u, FS)
+    poles = ct.poles(G)
+    explicit = I.monic_coefficients(I.refit_numerator(poles, u, y, FS, time_scale=1e4))[1]
+    chosen = I.monic_coefficients(I.refit_numerator(poles, u, y, FS))[1]
+    assert np.allclose(explicit, chosen, rtol=1e-8, atol=0)
+    with pytest.raises(ValueError, match="time_scale"):
+        I.monic_coefficients(G, time_scale=-1.0)

@@ -1,58 +1,97 @@
-"""Hysteresis % (eq. 25-26) on loops of known width."""
+"""Tracking error % (Table 5) and improvement rows (Tables 4-5) on signals with known answers."""
 
 import numpy as np
 import pytest
 
 from piezolib import metrics, signals
 
-
-def elliptic_loop(phase_lag, periods=3, n=4000, amplitude=4.0):
-    """v = A(1 - cos th)/2, x = A(1 - cos(th - phi))/2: hysteresis % = 100 tan(phi)."""
-    theta = np.linspace(0, 2 * np.pi * periods, n * periods + 1)
-    return (amplitude * (1 - np.cos(theta)) / 2,
-            amplitude * (1 - np.cos(theta - phase_lag)) / 2)
+FS = 10_000.0
 
 
-@pytest.mark.parametrize("phi", [0.02, 0.1, 0.3])
-def test_ellipse_width_is_tan_phi(phi):
-    v, x = elliptic_loop(phi)
-    assert metrics.hysteresis_percent(v, x) == pytest.approx(100 * np.tan(phi), rel=5e-3)
+def triangle_um(frequency_hz=10.0, periods=2, peak=12.0):
+    return signals.triangle(peak, frequency_hz, periods=periods, fs=FS)
 
 
-def test_offset_branches_on_triangle():
-    t, v = signals.triangle(4.0, 10.0, periods=2)
-    x = 3.0 * v - 0.2 * np.sign(np.gradient(v))   # branches 0.4 apart around the midpoint
-    m = metrics.hysteresis_measure(v, x)
-    assert m.v_mid == pytest.approx(2.0)
-    assert m.x_lo - m.x_up == pytest.approx(0.4, abs=1e-9)
-    assert (m.n_up, m.n_down) == (2, 2)
+def test_error_is_desired_minus_reached():
+    x_r = np.array([0.0, 1.0, 2.0])
+    x = np.array([0.5, 1.0, 1.0])
+    assert np.array_equal(metrics.tracking_error(x_r, x), [-0.5, 0.0, 1.0])
 
 
-def test_noise_and_several_periods_are_averaged():
-    v, x = elliptic_loop(0.1, periods=8)
-    rng = np.random.default_rng(1)
-    noisy = metrics.hysteresis_percent(v, x + rng.normal(0, 0.01, x.size))
-    assert noisy == pytest.approx(100 * np.tan(0.1), abs=0.15)
+@pytest.mark.parametrize("gain_error", [0.02, -0.05, 0.1])
+def test_gain_error_gives_its_own_percentage(gain_error):
+    # x = (1 - g) x_r: e = g x_r runs from 0 to 12 g -> both readings 100 |g| %
+    t, x_r = triangle_um()
+    x = (1 - gain_error) * x_r
+    assert metrics.tracking_error_percent(x_r, x) == pytest.approx(100 * abs(gain_error))
+    assert metrics.peak_to_peak_error_percent(x_r, x) == pytest.approx(100 * abs(gain_error))
 
 
-def test_no_loop_gives_zero():
-    t, v = signals.triangle(4.0, 10.0, periods=1)
-    assert metrics.hysteresis_percent(v, 2 * v) == pytest.approx(0.0, abs=1e-12)
+@pytest.mark.parametrize("offset, amplitude", [(0.0, 0.06), (0.03, 0.06), (-0.1, 0.02)])
+def test_offset_plus_ripple(offset, amplitude):
+    # e = c + a cos(2 pi k / 100) reaches c + a and c - a exactly:
+    # max|e| = |c| + a, max e - min e = 2a, both over R = 12 um
+    t, x_r = triangle_um(periods=3)
+    e = offset + amplitude * np.cos(2 * np.pi * np.arange(t.size) / 100)
+    x = x_r - e
+    assert metrics.tracking_error_percent(x_r, x) == pytest.approx(
+        100 * (abs(offset) + amplitude) / 12.0, rel=1e-12)
+    assert metrics.peak_to_peak_error_percent(x_r, x) == pytest.approx(
+        100 * 2 * amplitude / 12.0, rel=1e-12)
 
 
-@pytest.mark.parametrize("v, x, match", [
-    (np.linspace(0, 1, 100), np.linspace(0, 1, 100), "no full cycle"),
-    (np.ones(100), np.arange(100.0), "constant"),
-    (np.r_[np.nan, np.ones(99)], np.ones(100), "v contains 1 non-finite"),
-    (np.ones(100), np.ones(99), "equal lengths"),
-])
-def test_bad_records_raise(v, x, match):
-    with pytest.raises(ValueError, match=match):
-        metrics.hysteresis_percent(v, x)
+@pytest.mark.parametrize("frequency_hz, delay", [(1.0, 1), (10.0, 3), (50.0, 2)])
+def test_pure_delay_of_a_triangle(frequency_hz, delay):
+    # x[k] = x_r[k - d]: on the ramps |e| = slope * d / fs with slope 2 R f,
+    # so max|e| / R = 200 f d / fs percent (and the peak-to-peak is twice that)
+    t, x_r = triangle_um(frequency_hz, periods=3)
+    x = np.r_[np.zeros(delay), x_r[:-delay]]
+    s = slice(int(FS / frequency_hz), None)          # whole periods after the first
+    want = 200 * frequency_hz * delay / FS
+    assert metrics.tracking_error_percent(x_r[s], x[s], 12.0) == pytest.approx(want, rel=1e-9)
+    assert metrics.peak_to_peak_error_percent(x_r[s], x[s], 12.0) == pytest.approx(2 * want,
+                                                                                    rel=1e-9)
 
 
-def test_triangle_shape():
-    t, y = signals.triangle(2.0, 10.0, periods=1, fs=1000.0)
-    assert len(t) == 101 and y[0] == 0 and y[50] == pytest.approx(2.0) and y[-1] == 0
-    with pytest.raises(ValueError, match="peak"):
-        signals.triangle(0.0, 10.0)
+def test_default_range_is_that_of_the_reference():
+    t, x_r = triangle_um(peak=6.0)
+    x = x_r - 0.06
+    assert metrics.tracking_error_percent(x_r, x) == pytest.approx(1.0)
+    assert metrics.tracking_error_percent(x_r, x, 12.0) == pytest.approx(0.5)
+
+
+def test_perfect_tracking_is_zero():
+    t, x_r = triangle_um()
+    assert metrics.tracking_error_percent(x_r, x_r.copy()) == 0.0
+
+
+def test_improvement_formula():
+    # Table 4 at 10 V: (6.19 - 0.45) / 6.19 = 92.73 %
+    assert metrics.improvement_percent(6.19, 0.45) == pytest.approx(92.73, abs=5e-3)
+    assert metrics.improvement_percent(2.0, 3.0) == pytest.approx(-50.0)
+    out = metrics.improvement_percent([1.0, 4.0], [0.5, 1.0])
+    assert np.allclose(out, [50.0, 75.0])
+
+
+@pytest.mark.parametrize("before, after, error", [
+    (0.0, 1.0, ValueError), (-1.0, 0.5, ValueError), (np.nan, 1.0, ValueError),
+    (1.0, np.inf, ValueError), ([1.0, 2.0], [1.0, 2.0, 3.0], ValueError), ("a", 1.0, TypeError)])
+def test_improvement_bad_input(before, after, error):
+    with pytest.raises(error):
+        metrics.improvement_percent(before, after)
+
+
+def test_tracking_error_bad_input():
+    x_r = np.linspace(0, 12, 100)
+    with pytest.raises(ValueError, match="equal lengths"):
+        metrics.tracking_error_percent(x_r, x_r[:-1])
+    with pytest.raises(ValueError, match="x contains"):
+        metrics.tracking_error_percent(x_r, np.r_[x_r[:-1], np.nan])
+    with pytest.raises(ValueError, match="x_r must be 1-dimensional"):
+        metrics.tracking_error_percent(x_r.reshape(10, 10), x_r.reshape(10, 10))
+    with pytest.raises(ValueError, match="constant"):
+        metrics.tracking_error_percent(np.ones(10), np.zeros(10))
+    with pytest.raises(ValueError, match="range_ must be positive"):
+        metrics.tracking_error_percent(x_r, x_r, range_=0.0)
+    with pytest.raises(ValueError, match="at least 2 samples"):
+        metrics.peak_to_peak_error_percent([1.0], [1.0], 12.0)

@@ -92,3 +92,23 @@ def test_tables_are_consistent_frames():
     for t in (t4, t5):
         implied = 100 * (t.loc["case_I"] - t.loc["case_II"]) / t.loc["case_I"]
         np.testing.assert_allclose(implied, t.loc["improvement_II_vs_I"], atol=0.1)
+
+
+def test_problem_returns_the_five_published_models_with_named_signals():
+    problem = paper.problem()
+    assert isinstance(problem, paper.DesignProblem)
+    G, H_m, H_e, H_y, K = problem
+    assert (problem.G, problem.H_m, problem.H_e, problem.H_y, problem.K) == (G, H_m, H_e, H_y, K)
+    signals = {"G": (["u_c"], ["v_y"]), "H_m": (["u_c"], ["y_Delta"]),
+               "H_e": (["v_e"], ["y1"]), "H_y": (["v_y"], ["y2"]), "K": (["v_e"], ["u_b"])}
+    for name, sys in zip(signals, problem):
+        assert isinstance(sys, ct.TransferFunction) and sys.name == name
+        assert (sys.input_labels, sys.output_labels) == signals[name]
+    # the same models as the single builders
+    s = 1j * np.logspace(0, 6, 50)
+    for sys, builder in ((G, paper.plant), (H_m, paper.uncertainty_weight),
+                         (H_e, paper.error_weight), (H_y, paper.output_weight),
+                         (K, paper.controller)):
+        np.testing.assert_array_equal(sys(s), builder()(s))
+    # the published controller is stable (d3, d4, d5 reading)
+    assert np.all(ct.poles(K).real < 0)

@@ -1,11 +1,15 @@
 """The paper's problem: its stage, its design problem and its analysis.
 
 genplant   generalized plant of Fig. 9 / eq. 16
-stage      virtual P-752.21 stage (the hardware stand-in) and its experiment files
+stage      virtual P-752.21 stage (the hardware stand-in)
+stage_data its experiment files (chirps, Table 4 Case I loops): definitions, CSV I/O
 design     the workbook's mu controller in one call
 analysis   Table 3: NS, NP, RS, RP of any controller
+hysteresis the paper's Dahl model and the workbook's Dahl fit to the Case I loops
 
-The published numbers themselves live in :mod:`piezolib.paper`.
+The published numbers themselves live in :mod:`piezolib.paper`, whose
+``problem()`` returns the models G, H_m, H_e, H_y, K that the functions here
+take explicitly (plant first, then the weights).
 """
 
-__all__ = ["genplant", "stage", "design", "analysis"]
+__all__ = ["genplant", "stage", "stage_data", "design", "analysis", "hysteresis"]

@@ -9,7 +9,7 @@ robust stability (RS)     peak over omega of mu(M11) = |H_m T| (1 x 1 complex bl
 robust performance (RP)   peak over omega of mu(M) for the structure of eq. 21
 ========================  ==========================================================
 
-M is F_l(P, K) with the exact published P (no regularisation).  Norms use
+M is F_l(P, K) with the exact P of eq. 16 (no regularisation).  Norms use
 :func:`piezolib.robust.hinf_norm` (grid + local refinement); mu uses
 :func:`piezolib.robust.mu.mussv` on a grid (default 1e-2 ... 1e8 rad/s, 1500 points)
 refined by a dense local grid around each peak.
@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 
 from piezolib._checks import check_finite_array, check_siso
-from piezolib.problem.genplant import BLOCK_STRUCTURE, _defaults, generalized_plant
+from piezolib.problem.genplant import BLOCK_STRUCTURE, check_models, generalized_plant
 from piezolib.robust.lft import lft_response
 from piezolib.robust.mu import mussv
 from piezolib.robust.lti import closed_loop_poles, hinf_norm, is_stable, loop_functions, realize
@@ -89,13 +89,20 @@ def _refined_peak(P, K, omega, res, points=201, lower=True):
     return float(res.upper[k]), float(omega[k]), lower_peak
 
 
-def robust_performance_peak(K, G=None, H_m=None, H_e=None, H_y=None, *, omega=None):
+def robust_performance_peak(K, G, H_m, H_e, H_y, *, omega=None):
     """Peak of the mu_RP upper bound and its frequency [rad/s] (inf, nan if K destabilises).
 
-    A light version of :func:`analyze` for sweeps (no lower bound, no norms).
+    A light version of :func:`analyze` for sweeps (no lower bound, no norms);
+    arguments as in :func:`analyze`.
+
+    Returns
+    -------
+    mu_peak : float
+    omega_peak : float
+        [rad/s]
     """
     check_siso("K", K)
-    G, H_m, H_e, H_y = _defaults(G, H_m, H_e, H_y)
+    G, H_m, H_e, H_y = check_models(G, H_m, H_e, H_y)
     omega = ANALYSIS_GRID if omega is None else check_finite_array("omega", omega, ndim=1,
                                                                      min_length=16)
     if not is_stable(G, K):
@@ -105,15 +112,16 @@ def robust_performance_peak(K, G=None, H_m=None, H_e=None, H_y=None, *, omega=No
     return _refined_peak(P, K, omega, res, points=101, lower=False)[:2]
 
 
-def analyze(K, G=None, H_m=None, H_e=None, H_y=None, *, omega=None, name=None):
+def analyze(K, G, H_m, H_e, H_y, *, omega=None, name=None):
     """Evaluate Table 3's conditions for the controller K.
 
     Parameters
     ----------
     K : control.LTI
         SISO controller from v_e [V] to u_b [V].
-    G, H_m, H_e, H_y : control.LTI, optional
-        Plant and weights; default: the published models.
+    G, H_m, H_e, H_y : control.LTI
+        Plant (u_c [V] -> v_y [V]) and the weights of the problem, e.g. those
+        of :func:`piezolib.paper.problem`.
     omega : array_like, optional
         Analysis grid [rad/s]; default :data:`ANALYSIS_GRID`.
     name : str, optional
@@ -124,9 +132,16 @@ def analyze(K, G=None, H_m=None, H_e=None, H_y=None, *, omega=None, name=None):
     RobustnessAnalysis
         For a K that does not stabilise G the norms and mu peaks are inf (no
         condition of Table 3 holds), their frequencies and the curves NaN.
+
+    Examples
+    --------
+    >>> from piezolib import paper
+    >>> G, H_m, H_e, H_y, K = paper.problem()
+    >>> round(analyze(K, G, H_m, H_e, H_y).norm_He_S, 2)
+    0.81
     """
     check_siso("K", K)
-    G, H_m, H_e, H_y = _defaults(G, H_m, H_e, H_y)
+    G, H_m, H_e, H_y = check_models(G, H_m, H_e, H_y)
     omega = ANALYSIS_GRID if omega is None else check_finite_array("omega", omega, ndim=1,
                                                                      min_length=16)
     loop = loop_functions(G, K)

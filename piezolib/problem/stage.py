@@ -1,94 +1,16 @@
-"""Virtual stand-in for the P-752.21 stage, E-505 amplifier, D-015 sensor and
-PXIe-6361 DAQ of the paper (Sec. II).
+"""Virtual stand-in for the paper's stage, amplifier, sensor and DAQ (Sec. II).
 
-The paper's experiments ran on hardware we do not have.  :class:`VirtualStage`
-is a documented model of that chain which takes the control input u_c [V]
-sampled at 10 kHz and returns what the DAQ would measure.  Signal path, one
-sample period T = 0.1 ms::
+:class:`VirtualStage` takes the control input u_c [V] at 10 kHz and returns
+what the DAQ would measure: DAC (16 bit, ZOH) -> amplifier (x10, limits) ->
+Prandtl-Ishlinskii hysteresis of unit small-signal gain -> G(s) of eq. 4
+(exact ZOH) -> sensor noise -> ADC (16 bit).  Out-of-range signals are limited
+and reported (:class:`StageSaturationWarning`, :class:`Saturation`).  The
+hysteresis is calibrated on Table 4 Case I only (:func:`calibrate_hysteresis`).
 
-    u_c[k] --DAC (16 bit, -2...12 V, ZOH)--> amplifier (x10, -30...130 V) --> v_a
-    v_a --Prandtl-Ishlinskii hysteresis H (small-signal gain 1)--> v_h
-    v_h / 10 --G(s) of eq. 4, exact ZOH discretisation--> y   (x = 3 um/V * y)
-    y + sensor noise --ADC (16 bit, -10...10 V, sampled at kT)--> v_y[k]
-
-Where the hysteresis sits, and why nothing is counted twice
------------------------------------------------------------
-G(s) (eq. 4) was identified from u_c to v_y with a small chirp, so it already
-contains the small-signal gains and dynamics of amplifier, actuator, stage and
-sensor.  The stage therefore applies G once, to the amplifier voltage after a
-*normalised* rate-independent hysteresis operator H whose small-signal gain is
-exactly 1: H = v_a + sum_i w_i (F_{r_i}[v_a] - r_i), a weighted sum of play
-operators F_r with thresholds r_i >= 1 V.  Any oscillation of v_a whose
-peak-to-peak size stays below 2 r_1 = 2 V after a reversal moves no play, so
-for such signals (the identification chirps) the stage *is* the published
-G(s) exactly; this is the "virtual stage's truth" of notebook 01
-(:meth:`VirtualStage.small_signal_model`).  Larger strokes engage plays: the
-loops open and the stroke gain grows with amplitude (chord gain 1.11 ... 1.37
-for the 10 ... 40 V loops of Table 4), as piezo actuators do.  Prandtl-
-Ishlinskii rather than Bouc-Wen because it is rate-independent by
-construction, has an exact linear small-signal zone that makes the
-identification truth unambiguous, and its amplitude dependence (more plays
-engage as the stroke grows) reproduces the rising hysteresis % of Table 4
-with two parameters.  It is deliberately *not* the Dahl model of Sec. III-C,
-so the Dahl fit of notebook 03 meets genuine model mismatch.
-
-The amplifier's 3 kHz bandwidth is taken to be inside G (G is the measured
-u_c -> v_y response, amplifier included) and is not added again; the
-amplifier is a static gain of 10 with output limits, so ``v_a_V`` is
-10 u_c as produced by the DAC.  Below 100 Hz, where hysteresis matters, a
-3 kHz first-order lag would shift the phase by less than 2 degrees.
-
-The sensor is ideal inside G: ``x_um`` is 3 um/V times the noise-free output
-of G at the sampling instants (the paper's 3 um/V scale of v_r and v_y).
-
-Assumptions (defaults of :class:`StageSettings`; all overridable)
------------------------------------------------------------------
-
-=========================  ====================  ===========================================
-quantity                   value                 source / reason
-=========================  ====================  ===========================================
-sampling, control rate     10 kHz                paper Sec. V
-DAC                        16 bit over           PXIe-6361 16-bit (Sec. II); range = E-505
-                           -2 ... 12 V, ZOH      input range, so the DAC clips where the
-                                                 amplifier input would
-amplifier                  gain 10, output       E-505 (Sec. II); static: its 3 kHz
-                           -30 ... 130 V         bandwidth is inside G
-hysteresis                 Prandtl-Ishlinskii,   calibrated only on Table 4 Case I
-                           20 plays r_i = 1 V x  (:func:`calibrate_hysteresis`); weights
-                           1.25^(i-1), weights   w_i = c (r_i - r_{i-1}) exp(-r_i / rho),
-                           exponential in r      c = 0.0554 /V, rho = 20.96 V
-initial state              at rest, v_a = 0 on   as if last lowered to 0 V; a triangle
-                           the descending branch from 0 V is periodic from its first stroke
-linear dynamics            G(s) of eq. 4 applied exact ZOH discretisation (piecewise-
-                           to v_h / 10           constant v_a gives piecewise-constant v_h)
-sensor noise               0.5 mV rms white      assumed: a few LSB of a 16-bit DAQ input
-                           (1.5 nm), Gaussian    plus sensor electronics; the D-015's own
-                                                 0.01 nm resolution is negligible
-ADC                        16 bit over           PXIe-6361 16-bit, its +-10 V range (the
-                           -10 ... 10 V          smallest holding the D-015's 0...10 V
-                                                 output; assumed); LSB 0.31 mV = 0.92 nm
-causality                  v_y[k] from u_c[0..   ZOH DAC, ADC sampling at kT, G strictly
-                           k-1]                  proper
-not modelled               creep, drift,         the paper neglects creep for short runs
-                           temperature, load     (Sec. I); no other data to calibrate on
-=========================  ====================  ===========================================
-
-Out-of-range input is never clipped silently: a :class:`StageSaturationWarning`
-names the range and the offending values, and every record carries
-:class:`Saturation` summaries for the DAC/amplifier input, the amplifier
-output and the ADC.
-
-Experiment files
-----------------
-:func:`write_experiment_files` (also ``python -m piezolib data``) runs the
-experiments the notebooks read and writes them to ``data/`` as CSV:
-two chirps (identification and an independent validation chirp, paper
-Sec. III-A) and the Table 4 Case I triangles of 10/20/30/40 V actuator
-amplitude at 10 Hz.  :func:`load_chirp` and :func:`load_hysteresis_loops`
-read them back.
+Signal path, assumptions table and calibration rule: ``docs/stage.md``.  The
+experiment files recorded on this stage: :mod:`piezolib.problem.stage_data`.
 """
 
-import io
 import math
 import warnings
 from dataclasses import dataclass, field, fields, replace
@@ -100,20 +22,16 @@ import scipy.signal as sg
 
 from piezolib import paper, signals
 from piezolib._checks import (check_finite_array, check_integer, check_nonnegative,
-                      check_positive, check_same_length, check_siso, check_stable)
-from piezolib.workbook.paths import data_dir
+                              check_positive, check_same_length, check_siso, check_stable)
 from piezolib.identification import zoh_coefficients
-from piezolib.metrics import hysteresis_percent
+from piezolib.hysteresis.measure import hysteresis_percent
 from piezolib.robust.lti import realize
 
 __all__ = [
     "HysteresisLaw", "PlayHysteresis", "CALIBRATED_HYSTERESIS", "ADC_RANGE_V", "StageSettings",
-    "Saturation", "StageRecord", "StageSaturationWarning", "VirtualStage",
+    "Saturation", "RECORD_COLUMNS", "StageRecord", "StageSaturationWarning", "VirtualStage",
     "StageSimulation", "case_I_input", "run_case_I", "case_I_hysteresis",
-    "calibrate_hysteresis", "ChirpSettings", "IDENTIFICATION_CHIRP",
-    "VALIDATION_CHIRP", "chirp_input", "ChirpExperiment", "EXPERIMENT_SEEDS",
-    "experiment_paths", "write_experiment_files", "load_chirp",
-    "load_hysteresis_loops", "load_record",
+    "calibrate_hysteresis",
 ]
 
 
@@ -264,7 +182,7 @@ ADC_RANGE_V = (-10.0, 10.0)
 
 @dataclass(frozen=True)
 class StageSettings:
-    """Everything :class:`VirtualStage` assumes (see the module table).
+    """Everything :class:`VirtualStage` assumes (table in ``docs/stage.md``).
 
     Attributes
     ----------
@@ -352,6 +270,10 @@ class Saturation:
                    float(requested.min()), float(requested.max()))
 
 
+#: Signals of a :class:`StageRecord`, in the column order of the experiment files.
+RECORD_COLUMNS = ("t_s", "u_c_V", "v_a_V", "x_um", "v_y_V")
+
+
 @dataclass(frozen=True, eq=False)
 class StageRecord:
     """One run of the virtual stage, sample k at t = k T.
@@ -386,11 +308,9 @@ class StageRecord:
     adc_saturation: Saturation
     seed: object = None
 
-    _ARRAYS = ("t_s", "u_c_V", "v_a_V", "x_um", "v_y_V")
-
     def __post_init__(self):
         n = None
-        for name in self._ARRAYS:
+        for name in RECORD_COLUMNS:
             arr = np.array(getattr(self, name), dtype=float)
             if arr.ndim != 1 or (n is not None and len(arr) != n):
                 raise ValueError(f"{name} must be 1-D with the length of t_s")
@@ -415,16 +335,16 @@ class StageRecord:
     def segment(self, start=None, stop=None):
         """Samples start:stop as a record (saturation info of the whole run)."""
         cut = slice(start, stop)
-        return replace(self, **{name: getattr(self, name)[cut] for name in self._ARRAYS})
+        return replace(self, **{name: getattr(self, name)[cut] for name in RECORD_COLUMNS})
 
     def columns(self):
         """The signals as a dict of arrays, in file column order."""
-        return {name: getattr(self, name) for name in self._ARRAYS}
+        return {name: getattr(self, name) for name in RECORD_COLUMNS}
 
 
 # --- the stage --------------------------------------------------------------------
 class VirtualStage:
-    """Virtual P-752.21 stage with amplifier, sensor and DAQ (module docstring).
+    """Virtual P-752.21 stage with amplifier, sensor and DAQ (``docs/stage.md``).
 
     Parameters
     ----------
@@ -506,7 +426,7 @@ class VirtualStage:
         return 2 * self.hysteresis.thresholds_V[0] / self.gain
 
     def assumptions(self):
-        """The stage's assumptions, as used, in a table (see the module docstring).
+        """The stage's assumptions, as used, in a table (see ``docs/stage.md``).
 
         Returns
         -------
@@ -649,6 +569,22 @@ class StageSimulation:
     def v_y_V(self):
         """Measurement v_y[k] at the current sample [V]."""
         return self._current[1]
+
+    @property
+    def state(self):
+        """Internal state after :attr:`k` samples, as plain Python floats.
+
+        Returns
+        -------
+        filter_state : tuple of float
+            State of the direct-form II transposed filter of the discretised
+            plant (its input is v_h / gain [V]).
+        play_outputs_V : tuple of float
+            Outputs of the play operators [V] (empty for a linear stage):
+            the ``state`` that :meth:`PlayHysteresis.apply` returns after the
+            same actuator voltages.
+        """
+        return tuple(self._z), (() if self._plays is None else tuple(self._plays))
 
     def _noise_at(self, k):
         while k >= self._noise_start + len(self._noise):
@@ -813,7 +749,7 @@ def case_I_hysteresis(records):
     ----------
     records : dict
         {amplitude: StageRecord}, e.g. from :func:`run_case_I` or
-        :func:`load_hysteresis_loops`.
+        :func:`piezolib.problem.stage_data.load_hysteresis_loops`.
 
     Returns
     -------
@@ -864,249 +800,3 @@ def calibrate_hysteresis(law=CALIBRATED_HYSTERESIS, targets=None):
     fitted = replace(law, density_per_V=float(f"{math.exp(sol.x[0]):.6g}"),
                      decay_V=float(f"{math.exp(sol.x[1]):.6g}"))
     return fitted, dict(zip(amplitudes, percents(fitted).tolist()))
-
-
-# --- chirp experiments ------------------------------------------------------------
-@dataclass(frozen=True)
-class ChirpSettings:
-    """A small-signal chirp experiment (paper Sec. III-A, Step I).
-
-    u_c rises from 0 to ``top_V`` along a raised cosine (``ramp_s``), holds
-    for ``hold_s`` (the operating point is read there), then follows
-    ``top_V - amplitude_V (1 - cos phi(t))``: a cosine sweep from ``f0_Hz``
-    to ``f1_Hz`` that starts at its crest and never exceeds ``top_V``.
-    Approaching from below and staying below the last maximum keeps every
-    play still when 2 ``amplitude_V`` is below the stage's small-signal limit.
-    """
-
-    name: str
-    top_V: float
-    amplitude_V: float
-    f0_Hz: float
-    f1_Hz: float
-    duration_s: float
-    method: str
-    seed: int
-    ramp_s: float = 0.2
-    hold_s: float = 0.05
-
-
-IDENTIFICATION_CHIRP = ChirpSettings("identification", top_V=2.0, amplitude_V=0.08,
-                                     f0_Hz=5.0, f1_Hz=4500.0, duration_s=2.0,
-                                     method="logarithmic", seed=1)
-VALIDATION_CHIRP = ChirpSettings("validation", top_V=3.0, amplitude_V=0.06,
-                                 f0_Hz=20.0, f1_Hz=4500.0, duration_s=1.5,
-                                 method="linear", seed=2)
-
-#: Noise seeds of the Table 4 Case I files (one per amplitude).
-EXPERIMENT_SEEDS = {10.0: 10, 20.0: 20, 30.0: 30, 40.0: 40}
-
-
-def chirp_input(settings, fs=paper.SAMPLING_FREQUENCY_HZ):
-    """u_c [V] of a chirp experiment and the index where the sweep starts."""
-    n_ramp = int(round(settings.ramp_s * fs))
-    n_hold = int(round(settings.hold_s * fs))
-    ramp = settings.top_V * (1 - np.cos(np.pi * np.arange(n_ramp) / n_ramp)) / 2
-    _, sweep = signals.chirp(settings.amplitude_V, settings.f0_Hz, settings.f1_Hz,
-                             settings.duration_s, fs, settings.method)
-    # top - a (1 - cos): exactly top at the crests, never above it
-    u = np.concatenate((ramp, np.full(n_hold, settings.top_V),
-                        settings.top_V - (settings.amplitude_V - sweep)))
-    return u, n_ramp + n_hold
-
-
-@dataclass(frozen=True)
-class ChirpExperiment:
-    """A chirp record with its segments.
-
-    Attributes
-    ----------
-    record : StageRecord
-        The whole run (ramp, hold, sweep).
-    start : int
-        Index of the first sweep sample.
-    hold_start : int
-        Index of the first hold sample (operating point read between
-        ``hold_start`` and ``start``).
-    metadata : dict
-        Header of the file (settings, seed, units).
-    """
-
-    record: StageRecord
-    start: int
-    hold_start: int
-    metadata: dict
-
-    @property
-    def sweep(self):
-        """The sweep part of the record."""
-        return self.record.segment(self.start)
-
-    @property
-    def operating_point(self):
-        """(u_c [V], v_y [V]) at the operating point: the held input and the
-        mean measured output over the hold."""
-        r = self.record
-        return float(r.u_c_V[self.start - 1]), float(np.mean(r.v_y_V[self.hold_start:self.start]))
-
-    def deviations(self):
-        """Input and output as deviations from the operating point, from the
-        start of the hold (the stage is at rest there): the data of
-        :func:`piezolib.identification.identify`.
-
-        Returns
-        -------
-        u, y : ndarray
-            u_c - u_op and v_y - v_y,op [V] from ``hold_start`` on.
-        sweep_start : int
-            Index of the first sweep sample in ``u`` and ``y``.
-        """
-        u_op, y_op = self.operating_point
-        rec = self.record.segment(self.hold_start)
-        return rec.u_c_V - u_op, rec.v_y_V - y_op, self.start - self.hold_start
-
-
-# --- experiment files ---------------------------------------------------------------
-_COLUMNS = StageRecord._ARRAYS
-_FORMATS = ("%.4f", "%.7f", "%.6f", "%.6f", "%.7f")
-_UNITS = ("time [s]", "control input u_c as produced by the DAC [V]",
-          "actuator voltage v_a = amplifier output [V]",
-          "true displacement x [um] (not available on real hardware)",
-          "measured sensor output v_y [V], noise and ADC quantisation included")
-
-
-def experiment_paths(directory=None):
-    """{key: path} of the experiment files (keys 'identification',
-    'validation' and the Case I amplitudes 10.0 ... 40.0)."""
-    d = data_dir() if directory is None else directory
-    paths = {"identification": d / "chirp_identification.csv",
-             "validation": d / "chirp_validation.csv"}
-    for A in paper.HYSTERESIS_TEST["actuator_amplitudes_V"]:
-        paths[float(A)] = d / f"hysteresis_loop_{int(A)}V.csv"
-    return paths
-
-
-def write_experiment_files(directory=None):
-    """Run the experiments on the default virtual stage and write the CSVs.
-
-    Deterministic: fixed seeds and fixed float formats make reruns
-    byte-identical.  Returns the list of written paths.
-    """
-    from pathlib import Path
-    paths = experiment_paths(None if directory is None else Path(directory))
-    written = []
-    for settings in (IDENTIFICATION_CHIRP, VALIDATION_CHIRP):
-        stage = VirtualStage(seed=settings.seed)
-        u, start = chirp_input(settings, stage.fs)
-        record = stage.run(u)
-        meta = {"experiment": f"{settings.name} chirp (paper Sec. III-A, Step I)",
-                **{f.name: getattr(settings, f.name) for f in fields(ChirpSettings)},
-                "hold_start_index": start - int(round(settings.hold_s * stage.fs)),
-                "sweep_start_index": start}
-        written.append(_write(paths[settings.name], record, stage, meta))
-    for A, seed in EXPERIMENT_SEEDS.items():
-        stage = VirtualStage(seed=seed)
-        record = stage.run(case_I_input(A, stage))
-        meta = {"experiment": "Table 4 Case I: open loop, no compensator",
-                "actuator_amplitude_V": A,
-                "frequency_Hz": paper.HYSTERESIS_TEST["frequency_Hz"], "periods": 3,
-                "seed": seed,
-                "hysteresis_percent": round(case_I_hysteresis({A: record})[A], 4)}
-        written.append(_write(paths[A], record, stage, meta))
-    return written
-
-
-def _write(path, record, stage, meta):
-    s = stage.settings
-    lines = [f"# piezolib virtual stage experiment, written by python -m piezolib data",
-             "# see data/README.md; stage settings are the VirtualStage defaults",
-             f"# sample_rate_Hz = {stage.fs:g}"]
-    lines += [f"# {k} = {v}" for k, v in meta.items()]
-    lines += [f"# noise_rms_V = {s.noise_rms_V:g}",
-              f"# hysteresis = {s.hysteresis!r}"]
-    for sat in (record.input_saturation, record.output_saturation, record.adc_saturation):
-        lines.append(f"# saturation {sat.where}: count = {sat.count}")
-    lines += [f"# column {c}: {u}" for c, u in zip(_COLUMNS, _UNITS)]
-    body = io.StringIO()
-    np.savetxt(body, np.column_stack(list(record.columns().values())),
-               fmt=list(_FORMATS), delimiter=",")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "w", newline="\n") as fh:
-        fh.write("\n".join(lines) + "\n" + ",".join(_COLUMNS) + "\n" + body.getvalue())
-    return path
-
-
-def load_record(path):
-    """Read an experiment CSV; return (StageRecord, metadata dict)."""
-    meta, sat_counts, rows = {}, {}, []
-    try:
-        with open(path) as fh:
-            text = fh.read().splitlines()
-    except FileNotFoundError:
-        raise FileNotFoundError(f"{path} is missing: regenerate the experiment files with "
-                                "`python -m piezolib data`") from None
-    header_done = False
-    for line in text:
-        if line.startswith("#"):
-            body = line[1:].strip()
-            if body.startswith("saturation ") and "count =" in body:
-                where, count = body[len("saturation "):].split(": count =")
-                sat_counts[where.strip()] = int(count)
-            elif " = " in body:
-                key, value = body.split(" = ", 1)
-                meta[key.strip()] = _parse_value(value.strip())
-        elif not header_done:
-            if tuple(line.split(",")) != _COLUMNS:
-                raise ValueError(f"{path}: expected columns {_COLUMNS}, got {line!r}")
-            header_done = True
-        else:
-            rows.append(line)
-    data = np.loadtxt(rows, delimiter=",", ndmin=2)
-    sats = [Saturation(where, limits, sat_counts.get(where, 0)) for where, limits in
-            (("DAC/amplifier input", paper.AMPLIFIER_INPUT_RANGE_V),
-             ("amplifier output", paper.AMPLIFIER_OUTPUT_RANGE_V),
-             ("ADC", ADC_RANGE_V))]
-    record = StageRecord(*data.T, *sats, seed=meta.get("seed"))
-    return record, meta
-
-
-def _parse_value(text):
-    for conv in (int, float):
-        try:
-            return conv(text)
-        except ValueError:
-            pass
-    return text
-
-
-def load_chirp(which="identification", directory=None):
-    """Load the identification or the validation chirp experiment.
-
-    Parameters
-    ----------
-    which : {"identification", "validation"}
-    directory : path, optional
-        Default ``data/``.
-
-    Returns
-    -------
-    ChirpExperiment
-    """
-    if which not in ("identification", "validation"):
-        raise ValueError(f"which must be 'identification' or 'validation', got {which!r}")
-    record, meta = load_record(experiment_paths(directory)[which])
-    return ChirpExperiment(record, int(meta["sweep_start_index"]),
-                           int(meta["hold_start_index"]), meta)
-
-
-def load_hysteresis_loops(directory=None):
-    """Load the Table 4 Case I loops.
-
-    Returns
-    -------
-    dict
-        {actuator amplitude [V] (10.0, 20.0, 30.0, 40.0): StageRecord} with
-        time, u_c, v_a, x and v_y of three periods of the 10 Hz triangle.
-    """
-    paths = experiment_paths(directory)
-    return {A: load_record(paths[A])[0] for A in EXPERIMENT_SEEDS}

@@ -5,23 +5,29 @@ passed explicitly and every numerical scaling is chosen from the model given.
 
 lti         time scaling, balancing, realisation, loop functions, norms
 lft         lower linear fractional transformation and its frequency response
-mu          structured singular value bounds (``mussv``, MATLAB ``blk`` convention)
+blocks      uncertainty-block type ``Block`` and the MATLAB ``blk`` parser
+mu          structured singular value bounds (``mussv``); mu_upper, mu_mixed and
+            mu_lower hold its upper-bound (D, D-G) and lower-bound algorithms
 hinf        verified H-infinity synthesis by gamma-iteration (``hinfsyn``)
+sos         second-order-section magnitude model (shared by dfit and uncertainty)
 dfit        stable minimum-phase fits of magnitude data (D-scalings)
 dk          mu-synthesis by DK-iteration (``musyn``)
 reduction   (weighted) balanced controller reduction
 discrete    Tustin discretisation with response checks
+
+Derivations and design notes: ``docs/robust.md``.
 """
 
 from piezolib.robust.lti import *          # noqa: F401,F403
 from piezolib.robust.lft import *          # noqa: F401,F403
+from piezolib.robust.blocks import *       # noqa: F401,F403
 from piezolib.robust.mu import *           # noqa: F401,F403
 from piezolib.robust.hinf import *         # noqa: F401,F403
 from piezolib.robust.dfit import *         # noqa: F401,F403
 from piezolib.robust.dk import *           # noqa: F401,F403
 from piezolib.robust.reduction import *    # noqa: F401,F403
 from piezolib.robust.discrete import *     # noqa: F401,F403
-from piezolib.robust import dfit, discrete, dk, hinf, lft, lti, mu, reduction
+from piezolib.robust import blocks, dfit, discrete, dk, hinf, lft, lti, mu, reduction
 
-__all__ = (lti.__all__ + lft.__all__ + mu.__all__ + hinf.__all__ + dfit.__all__ + dk.__all__
-           + reduction.__all__ + discrete.__all__)
+__all__ = (lti.__all__ + lft.__all__ + blocks.__all__ + mu.__all__ + hinf.__all__
+           + dfit.__all__ + dk.__all__ + reduction.__all__ + discrete.__all__)

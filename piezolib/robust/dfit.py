@@ -7,18 +7,14 @@ minimum-phase, biproper transfer functions d(s) so that both d(s) and 1/d(s)
 can multiply the plant.
 
 :func:`fit_magnitude` fits log|d(j omega)| by weighted nonlinear least squares
-over a product of first- and second-order sections
-
-    d(s) = k prod_i (s^2 + 2 zeta_zi w_zi s + w_zi^2) / w_zi^2
-             / ((s^2 + 2 zeta_pi w_pi s + w_pi^2) / w_pi^2)     (x (s/z + 1)/(s/p + 1))
-
-parameterised by the logarithms of k, w and zeta.  Every parameter value is a
-stable, minimum-phase model (w > 0, zeta > 0), so no projection is needed and
-the fit is deterministic (fixed starts, ``scipy.optimize.least_squares`` with
-an analytic Jacobian).  The problem is not convex: three deterministic starts
-(plus a warm start from the previous DK iteration) are tried and the best is
-kept, which recovers known functions exactly in the tests but can still end
-in a local minimum on awkward data.
+over the gain-and-sections model of :mod:`piezolib.robust.sos` (logarithms of
+the gain, the section frequencies and dampings), so every parameter value is a
+stable, minimum-phase model and no projection is needed.  The fit is
+deterministic (fixed starts, ``scipy.optimize.least_squares`` with the
+model's analytic Jacobian).  The problem is not convex: three deterministic
+starts (plus a warm start from the previous DK iteration) are tried and the
+best is kept, which recovers known functions exactly in the tests but can
+still end in a local minimum on awkward data.
 (SLICOT SB10YD fits complex data, which would first need a phase from the
 Bode gain-phase relation; fitting the magnitude directly avoids that.)
 """
@@ -30,6 +26,7 @@ import numpy as np
 import scipy.optimize as opt
 
 from piezolib._checks import check_finite_array, check_integer, check_same_length
+from piezolib.robust import sos
 
 __all__ = ["MagnitudeFit", "fit_magnitude"]
 
@@ -51,7 +48,8 @@ class MagnitudeFit:
     max_log_error : float
         Largest |log|d_fit| - log|d|| on the grid.
     parameters : ndarray
-        Logarithms of k, of the section frequencies and dampings (warm starts).
+        ``theta`` of :mod:`piezolib.robust.sos` (log gain, log section
+        frequencies and dampings); a warm start for the next fit.
     """
 
     tf: ct.TransferFunction
@@ -59,48 +57,6 @@ class MagnitudeFit:
     rms_log_error: float
     max_log_error: float
     parameters: np.ndarray
-
-
-def _log_magnitude(theta, logw, order, jac=False):
-    """log|d(j w)| for parameters theta on log-frequencies logw (and its Jacobian)."""
-    u = np.exp(2 * logw)                      # omega^2
-    out = np.full_like(logw, theta[0])
-    J = np.zeros((logw.size, theta.size)) if jac else None
-    if jac:
-        J[:, 0] = 1.0
-    i = 1
-    for _ in range(order // 2):
-        for sign in (1.0, -1.0):
-            a, z2 = np.exp(2 * theta[i]), np.exp(2 * theta[i + 1])    # wn^2, zeta^2
-            N = (a - u) ** 2 + 4 * z2 * a * u
-            out += sign * 0.5 * (np.log(N) - 2 * np.log(a))
-            if jac:
-                J[:, i] = sign * (a * (2 * (a - u) + 4 * z2 * u) / N - 2.0)
-                J[:, i + 1] = sign * 4 * z2 * a * u / N
-            i += 2
-    if order % 2:
-        for sign in (1.0, -1.0):
-            z2 = np.exp(2 * theta[i])
-            out += sign * 0.5 * np.log1p(u / z2)
-            if jac:
-                J[:, i] = -sign * u / (z2 + u)
-            i += 1
-    return (out, J) if jac else out
-
-
-def _transfer_function(theta, order):
-    num, den = np.array([np.exp(theta[0])]), np.ones(1)
-    i = 1
-    for _ in range(order // 2):
-        wz, zz, wp, zp = np.exp(theta[i:i + 4])
-        num = np.polymul(num, [1 / wz ** 2, 2 * zz / wz, 1.0])
-        den = np.polymul(den, [1 / wp ** 2, 2 * zp / wp, 1.0])
-        i += 4
-    if order % 2:
-        z, p = np.exp(theta[i:i + 2])
-        num = np.polymul(num, [1 / z, 1.0])
-        den = np.polymul(den, [1 / p, 1.0])
-    return ct.tf(num / den[0], den / den[0])
 
 
 def _starts(logw, order, logk, n_starts):
@@ -118,19 +74,6 @@ def _starts(logw, order, logk, n_starts):
             theta += [centres[-1], centres[-1] + 0.05]
         starts.append(np.array(theta))
     return starts
-
-
-def _bounds(logw, order):
-    lo, hi = logw.min() - np.log(10), logw.max() + np.log(10)
-    zl, zh = np.log(_ZETA_BOUNDS[0]), np.log(_ZETA_BOUNDS[1])
-    lower, upper = [-np.inf], [np.inf]
-    for _ in range(order // 2):
-        lower += [lo, zl, lo, zl]
-        upper += [hi, zh, hi, zh]
-    if order % 2:
-        lower += [lo, lo]
-        upper += [hi, hi]
-    return np.array(lower), np.array(upper)
 
 
 def fit_magnitude(omega, magnitude, order, weight=None, *, n_starts=3, initial=None):
@@ -178,7 +121,9 @@ def fit_magnitude(omega, magnitude, order, weight=None, *, n_starts=3, initial=N
     else:
         if 2 * order + 1 > omega.size:
             raise ValueError(f"order {order} needs at least {2 * order + 1} frequencies")
-        lower, upper = _bounds(logw, order)
+        lower, upper = sos.parameter_bounds(
+            order, (logw.min() - np.log(10), logw.max() + np.log(10)),
+            (np.log(_ZETA_BOUNDS[0]), np.log(_ZETA_BOUNDS[1])))
         starts = _starts(logw, order, logk, n_starts)
         if initial is not None and initial.order == order:
             starts.append(np.asarray(initial.parameters, float))
@@ -186,13 +131,13 @@ def fit_magnitude(omega, magnitude, order, weight=None, *, n_starts=3, initial=N
         for start in starts:
             start = np.clip(start, lower + 1e-9, upper - 1e-9)
             res = opt.least_squares(
-                lambda th: sw * (_log_magnitude(th, logw, order) - target), start,
-                jac=lambda th: sw[:, None] * _log_magnitude(th, logw, order, jac=True)[1],
+                lambda th: sw * (sos.log_magnitude(th, logw, order) - target), start,
+                jac=lambda th: sw[:, None] * sos.log_magnitude(th, logw, order, jacobian=True)[1],
                 bounds=(lower, upper), method="trf", x_scale="jac", max_nfev=100 * (order + 1))
             if best is None or res.cost < best.cost:
                 best = res
         theta = best.x
-    err = _log_magnitude(theta, logw, order) - target
-    return MagnitudeFit(tf=_transfer_function(theta, order), order=order,
+    err = sos.log_magnitude(theta, logw, order) - target
+    return MagnitudeFit(tf=sos.transfer_function(theta, order), order=order,
                         rms_log_error=float(np.sqrt(np.sum(sw ** 2 * err ** 2))),
                         max_log_error=float(np.max(np.abs(err))), parameters=theta)

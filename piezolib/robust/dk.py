@@ -1,39 +1,33 @@
-"""mu-synthesis by DK-iteration (eq. 22-23).
+"""mu-synthesis by DK-iteration (eq. 22-23): :func:`musyn`.
 
-Each iteration alternates
-
-* K-step: an H-infinity controller for the D-scaled plant
-  D_l P D_r^-1 (:func:`piezolib.robust.hinf.hinfsyn`: bounded and verified), and
-* D-step: mu upper bound of M = F_l(P, K) on a frequency grid
-  (:func:`piezolib.robust.mu.mussv`), whose optimal scalings d_i(omega) are fitted by
-  stable minimum-phase transfer functions (:func:`piezolib.robust.dfit.fit_magnitude`).
-
-Only complex full blocks are supported (the paper's structure, eq. 21);
-real scalar blocks would need G-scalings.  The whole iteration runs in scaled
-time (s -> s/omega_s) so that the fits and Riccati equations see O(1)
-numbers; the returned controller is in ordinary time.
-
-Stopping rules: the peak of the mu upper bound has not improved by more than
-``rtol`` (relative) for ``patience`` iterations, ``max_iter`` iterations, or
-the ``time_budget`` is spent.  The controller with the lowest mu peak is
-returned, with the history of every iteration.
+Alternates H-infinity K-steps on the D-scaled plant with mu D-steps whose
+scalings are fitted by stable minimum-phase transfer functions; supports
+complex full blocks.  The iteration, its time scaling and stopping rules
+are described in ``docs/robust.md``.
 """
 
+import logging
 import time
 from dataclasses import dataclass, field
 
 import control as ct
 import numpy as np
-import pandas as pd
 
 from piezolib._checks import check_finite_array, check_integer, check_lti, check_positive
+from piezolib.robust.blocks import parse_blk
 from piezolib.robust.dfit import fit_magnitude
+from piezolib.robust.hinf import HinfSynthesisError, hinfsyn
 from piezolib.robust.lft import lft_response
-from piezolib.robust.hinf import HinfSynthesisError, auto_time_scale, hinfsyn
-from piezolib.robust.mu import MuResult, mussv, parse_blk
-from piezolib.robust.lti import balance, scale_time
+from piezolib.robust.lti import balance, from_scaled, scale_time, time_scale_of, to_scaled
+from piezolib.robust.mu import MuResult, mussv
 
 __all__ = ["MusynResult", "musyn", "scaled_plant"]
+
+logger = logging.getLogger(__name__)
+
+# columns of MusynResult.history, one row per DK iteration
+_HISTORY_COLUMNS = ("iteration", "d_order", "gamma", "mu_upper", "mu_lower", "omega_peak",
+                   "K_order", "seconds")
 
 
 @dataclass(frozen=True)
@@ -50,9 +44,10 @@ class MusynResult:
         Frequency of the upper-bound peak [rad/s].
     gamma : float
         H-infinity level of the K-step that produced ``K``.
-    history : pandas.DataFrame
-        One row per iteration: ``iteration``, ``d_order``, ``gamma``,
-        ``mu_upper``, ``mu_lower``, ``omega_peak``, ``K_order``, ``seconds``.
+    records : tuple of dict
+        One dict per iteration with keys ``iteration``, ``d_order``,
+        ``gamma``, ``mu_upper``, ``mu_lower``, ``omega_peak`` [rad/s],
+        ``K_order``, ``seconds``; :attr:`history` is the same as a DataFrame.
     best_iteration : int
         Row of ``history`` holding ``K``.
     stop_reason : str
@@ -78,7 +73,7 @@ class MusynResult:
     mu_lower_peak: float
     omega_peak: float
     gamma: float
-    history: pd.DataFrame
+    records: tuple
     best_iteration: int
     stop_reason: str
     d_scalings: list
@@ -87,6 +82,13 @@ class MusynResult:
     elapsed: float
     time_scale: float
     regularization: str = ""
+
+    @property
+    def history(self):
+        """``records`` as a pandas.DataFrame, one row per iteration (pandas imported here)."""
+        import pandas as pd
+
+        return pd.DataFrame(list(self.records), columns=list(_HISTORY_COLUMNS))
 
     @property
     def mu_upper(self):
@@ -99,21 +101,42 @@ class MusynResult:
         return self.mu.lower
 
 
-def scaled_plant(P, blocks, d_tfs, nmeas, ncon):
-    """D_l P D_r^-1 for full blocks with scalings ``d_tfs`` (last block: 1).
+def scaled_plant(P, blk, d_tfs, nmeas, ncon):
+    """D_l P D_r^-1 for complex full blocks with scalings ``d_tfs`` (last block: 1).
 
-    ``blocks`` are complex full blocks as given by :func:`piezolib.robust.mu.parse_blk`.
     Block i (Delta_i is r_i x c_i) scales the c_i performance outputs it
     receives by d_i(s) and the r_i performance inputs it drives by 1/d_i(s);
     measurements and controls are not scaled.
+
+    Parameters
+    ----------
+    P : control.StateSpace
+        Generalized plant (performance channels, then ``nmeas`` measurements
+        and ``ncon`` controls).
+    blk : sequence of (int, int) or of Block
+        Complex full blocks (:func:`piezolib.robust.blocks.parse_blk`).
+    d_tfs : sequence of control.LTI
+        d_i(s) of the first ``len(d_tfs)`` blocks (stable, minimum phase);
+        the remaining blocks get 1.
+    nmeas, ncon : int
+        Number of measurements and controls.
+
+    Returns
+    -------
+    control.StateSpace
+        The scaled plant, balanced.
     """
+    check_lti("P", P)
+    blocks = _full_blocks(blk, P.noutputs - nmeas, P.ninputs - ncon)
+    if len(d_tfs) > len(blocks):
+        raise ValueError(f"{len(d_tfs)} scalings for {len(blocks)} blocks")
     one = ct.ss([], [], [], [[1.0]])
     left, right = [], []
     for b, d in zip(blocks, list(d_tfs) + [None] * (len(blocks) - len(d_tfs))):
         d_ss = one if d is None else ct.ss(d)
         d_inv = one if d is None else ct.ss(1 / ct.tf(d))
-        left += [d_ss] * b.n_out
-        right += [d_inv] * b.n_in
+        left += [d_ss] * b.cols
+        right += [d_inv] * b.rows
     left += [one] * nmeas
     right += [one] * ncon
     DL = ct.append(*left)
@@ -125,8 +148,9 @@ def _full_blocks(blk, p, q):
     """The blocks of a structure of complex full blocks (MATLAB convention)."""
     blocks = parse_blk(blk, p, q)
     for b in blocks:
-        if b.kind != "full":
-            raise ValueError(f"musyn supports complex full blocks only; got a {b.kind!r} block")
+        if not b.is_full:
+            raise ValueError("musyn supports complex full blocks only; got the "
+                             f"{b.kind} repeated scalar block {b.blk_row}")
     return blocks
 
 
@@ -153,8 +177,11 @@ def _fit_scalings(omega_s, mu_res, blocks, order, prev_fits):
 
 
 def musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=4, max_iter=8, rtol=5e-3,
-          patience=2, time_budget=120.0, verbose=True, hinf_options=None, time_scale=None):
+          patience=2, time_budget=120.0, hinf_options=None, time_scale=None):
     """mu-synthesis of a controller for P by DK-iteration.
+
+    Progress goes to the logger ``piezolib.robust.dk`` at INFO level, one
+    line per iteration (``logging.basicConfig(level=logging.INFO)`` shows it).
 
     Parameters
     ----------
@@ -162,7 +189,7 @@ def musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=4, max_iter=8, rtol=5e
         Generalized plant, ordinary time.  Inputs: performance/uncertainty
         inputs then ``ncon`` controls; outputs: performance/uncertainty
         outputs then ``nmeas`` measurements.
-    blk : sequence of (int, int)
+    blk : sequence of (int, int) or of Block
         Complex full blocks (r, c) in MATLAB ``mussv`` convention, the
         performance block last (its scaling is fixed to 1).
     nmeas, ncon : int
@@ -180,16 +207,22 @@ def musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=4, max_iter=8, rtol=5e
         (relative) for ``patience`` consecutive iterations.
     time_budget : float
         Wall-time budget [s] of the whole iteration.
-    verbose : bool
-        Print one line per iteration.
     hinf_options : dict, optional
         Extra keyword arguments of :func:`piezolib.robust.hinf.hinfsyn`.
     time_scale : float, optional
-        Internal time scale [rad/s]; default :func:`piezolib.robust.hinf.auto_time_scale`.
+        Internal time scale [rad/s]; default :func:`piezolib.robust.lti.time_scale_of` of P.
 
     Returns
     -------
     MusynResult
+
+    Raises
+    ------
+    ValueError, TypeError
+        A structure with other than complex full blocks or not fitting P, a
+        bad grid or option.
+    HinfSynthesisError
+        The first K-step fails.
     """
     t0 = time.perf_counter()
     check_lti("P", P)
@@ -214,8 +247,8 @@ def musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=4, max_iter=8, rtol=5e
     options = {"time_budget": max(time_budget / 4, 5.0)}
     options.update(hinf_options or {})
 
-    ws = auto_time_scale(P) if time_scale is None else check_positive("time_scale", time_scale)
-    Ps = balance(scale_time(P, ws))
+    ws = time_scale_of(P) if time_scale is None else check_positive("time_scale", time_scale)
+    Ps = to_scaled(P, ws)
     omega_s = omega / ws
     rows, best, fits, stall, reason = [], None, [], 0, "max_iter reached"
     regularization = set()
@@ -241,11 +274,9 @@ def musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=4, max_iter=8, rtol=5e
                "mu_lower": float(mu_res.lower.max()), "omega_peak": float(omega[k]),
                "K_order": K.nstates, "seconds": time.perf_counter() - t_it}
         rows.append(row)
-        if verbose:
-            print(f"DK {it:2d}: gamma {hinf.gamma:7.4f}  mu {row['mu_upper']:.4f} "
-                  f"(lower {row['mu_lower']:.4f}) at {row['omega_peak']:9.4g} rad/s  "
-                  f"K order {K.nstates:3d}  D order {row['d_order']}  "
-                  f"{row['seconds']:.2f} s", flush=True)
+        logger.info("DK %2d: gamma %7.4f  mu %.4f (lower %.4f) at %9.4g rad/s  K order %3d  "
+                    "D order %d  %.2f s", it, hinf.gamma, row["mu_upper"], row["mu_lower"],
+                    row["omega_peak"], K.nstates, row["d_order"], row["seconds"])
         if best is None or row["mu_upper"] < best["row"]["mu_upper"] * (1 - rtol):
             stall = 0
         else:
@@ -262,15 +293,12 @@ def musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=4, max_iter=8, rtol=5e
             break
         fits = _fit_scalings(omega_s, mu_res, blocks, d_order, fits)
 
-    K = best["K"]
-    K = balance(scale_time(K, 1.0 / ws))
-    K = ct.ss(K.A, K.B, K.C, K.D, inputs=list(P.output_labels[-nmeas:]),
-              outputs=list(P.input_labels[-ncon:]), name="K")
+    K = from_scaled(best["K"], ws, P.output_labels[-nmeas:], P.input_labels[-ncon:], name="K")
     d_scalings = [scale_time(ct.tf(f.tf), 1.0 / ws) for f in best["fits"]]
     return MusynResult(
         K=K, mu_peak=best["row"]["mu_upper"], mu_lower_peak=best["row"]["mu_lower"],
         omega_peak=best["row"]["omega_peak"], gamma=best["row"]["gamma"],
-        history=pd.DataFrame(rows), best_iteration=best["iteration"], stop_reason=reason,
+        records=tuple(rows), best_iteration=best["iteration"], stop_reason=reason,
         d_scalings=d_scalings, omega=omega, mu=best["mu"],
         elapsed=time.perf_counter() - t0, time_scale=ws,
         regularization="; ".join(sorted(regularization)))

@@ -1,39 +1,9 @@
-"""Dependable H-infinity synthesis: bounded gamma search, verified result.
+"""Dependable H-infinity synthesis: bounded gamma search, verified result (:func:`hinfsyn`).
 
-Why not ``control.hinfsyn`` (SLICOT SB10AD): on a first realisation of this
-project's generalized plant (coefficients up to 1e23, weight poles from -3.78
-to -7.5e7 rad/s, D12 = 2e-10) it ran for minutes without returning; on the
-better-conditioned realisation of :mod:`piezolib.problem.genplant`, with the effort
-output added, it returns within seconds but reports gamma = 1.41 while the
-recomputed closed-loop norm of its controller is 2.01 (the verified optimum
-is 1.867; its Riccati condition estimates are 2e-10 and 8e-15).  A reported
-gamma cannot be trusted here, so this module runs its own gamma-iteration
-around its own central-controller formulas and checks every answer:
-
-* Time scaling and balancing.  The plant is written in scaled time
-  p = s/omega_s (omega_s = geometric mean of the smallest and largest pole
-  magnitudes unless given) and balanced before anything is solved.
-* Normalisation.  D12 and D21 are brought to [0; I] and [0, I] by orthogonal
-  output/input rotations and invertible control/measurement scalings.
-* Riccati step.  For a trial gamma the two H-infinity Riccati equations of
-  the general (D11 != 0) case are solved on the extended Hamiltonian pencil
-  (QR compression and ordered QZ); the tests are gamma > the D11 bound,
-  stabilising solutions X, Y >= 0 and rho(XY) < gamma^2.  The central
-  controller follows the general-case (D11 != 0) formulas of Zhou, Doyle and
-  Glover, *Robust and Optimal Control* (1996), Ch. 17, for D22 = 0; a nonzero
-  D22 is handled by the usual loop shift K (I + D22 K)^-1.
-* Trust nothing.  Every trial that passes the Riccati tests is closed around
-  the plant; it counts as feasible only if all closed-loop poles are stable
-  and the closed-loop peak gain on a grid is <= gamma (1 + ``verify_rtol``).
-  Bisection on that verified test is bounded by ``max_iter`` trials and
-  ``time_budget`` seconds.  The final controller is checked once more on a
-  dense grid with local refinement (:func:`piezolib.robust.hinf_norm`).
-* Assumption violations are handled explicitly.  A rank-deficient D12 (the
-  paper's plant: 2e-10) gets an added control-effort output
-  ``effort_weight * u``; a rank-deficient D21 gets a measurement-noise input
-  ``noise_weight * n``.  The result says which was added
-  (``HinfResult.regularization``), and also reports the norm on the
-  unregularised plant.  Unstabilisable or undetectable plants raise at once.
+Its own gamma-iteration around the central-controller formulas (Zhou, Doyle
+and Glover 1996, Ch. 17), in scaled time, with every answer verified on the
+closed loop.  Why not ``control.hinfsyn``, and how each step works, is in
+``docs/robust.md``.
 """
 
 import time
@@ -44,10 +14,10 @@ import numpy as np
 import scipy.linalg as la
 
 from piezolib._checks import check_integer, check_lti, check_positive
-from piezolib.robust.lti import balance, hinf_norm, max_singular_value, scale_time
+from piezolib.robust.lti import (balance, from_scaled, hinf_norm, max_singular_value,
+                                 time_scale_of, to_scaled)
 
-__all__ = ["HinfResult", "HinfSynthesisError", "hinfsyn", "auto_time_scale",
-           "DEFAULT_EFFORT_WEIGHT"]
+__all__ = ["HinfResult", "HinfSynthesisError", "hinfsyn", "DEFAULT_EFFORT_WEIGHT"]
 
 #: Effort / noise weight added when D12 / D21 is rank deficient ("auto").
 DEFAULT_EFFORT_WEIGHT = 1e-3
@@ -113,18 +83,6 @@ class HinfResult:
     elapsed: float
     converged: bool = True
     attempts: tuple = field(default=(), repr=False)
-
-
-def auto_time_scale(sys):
-    """Geometric mean [rad/s] of the smallest and largest nonzero pole magnitude."""
-    sys = ct.ss(check_lti("sys", sys))
-    if sys.nstates == 0:
-        return 1.0
-    mags = np.abs(np.linalg.eigvals(sys.A))
-    mags = mags[mags > 1e-12 * max(1.0, mags.max())]
-    if mags.size == 0:
-        return 1.0
-    return float(np.sqrt(mags.min() * mags.max()))
 
 
 # --- plant partition, regularisation and normalisation ----------------------
@@ -388,7 +346,8 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60, time_b
         Regularisation used when D12 / D21 is rank deficient: 'auto' adds
         1e-3 * u (1e-3 * n), a float sets the weight, None raises instead.
     time_scale : float, optional
-        Internal time scale omega_s [rad/s]; default :func:`auto_time_scale`.
+        Internal time scale omega_s [rad/s]; default
+        :func:`piezolib.robust.lti.time_scale_of` ``(P)``.
     verify_rtol : float
         Tolerance of the verification ||F_l(P_reg, K)||_inf <= gamma (1 + verify_rtol).
 
@@ -421,9 +380,9 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60, time_b
     max_iter = check_integer("max_iter", max_iter, minimum=2)
     time_budget = check_positive("time_budget", time_budget)
     verify_rtol = check_positive("verify_rtol", verify_rtol)
-    ws = auto_time_scale(P) if time_scale is None else check_positive("time_scale", time_scale)
+    ws = time_scale_of(P) if time_scale is None else check_positive("time_scale", time_scale)
 
-    Ps = balance(scale_time(P, ws))
+    Ps = to_scaled(P, ws)
     pl = _Plant.split(Ps, nmeas, ncon)
     _check_stabilisable(pl, ws)
     grid = _check_grid(pl.A, 200)
@@ -514,18 +473,15 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60, time_b
         p2, m2 = nz.D22.shape
         static = ct.ss(np.zeros((0, 0)), np.zeros((0, m2)), np.zeros((p2, 0)), nz.D22)
         Ks = ct.feedback(Ks, static, sign=-1)
-    K = balance(scale_time(balance(Ks), 1.0 / ws))
-    K = ct.ss(K.A, K.B, K.C, K.D, inputs=list(P.output_labels[-nmeas:]),
-              outputs=list(P.input_labels[-ncon:]), name="K")
+    K = from_scaled(balance(Ks), ws, P.output_labels[-nmeas:], P.input_labels[-ncon:], name="K")
     CLs = balance(Ps.lft(balance(Ks), nu=ncon, ny=nmeas))
     poles = np.linalg.eigvals(CLs.A) * ws if CLs.nstates else np.zeros(0)
     if poles.size and poles.real.max() >= 0:
         raise HinfSynthesisError("the controller does not stabilise the unregularised plant")
     norm, w_peak = hinf_norm(CLs, omega=_check_grid(CLs.A, 2000)) if CLs.nstates else (
         float(np.linalg.norm(CLs.D, 2)), 0.0)
-    CL = balance(scale_time(CLs, 1.0 / ws))
-    CL = ct.ss(CL.A, CL.B, CL.C, CL.D, inputs=list(P.input_labels[:-ncon]),
-               outputs=list(P.output_labels[:-nmeas]), name="closed_loop")
+    CL = from_scaled(CLs, ws, P.input_labels[:-ncon], P.output_labels[:-nmeas],
+                     name="closed_loop")
     return HinfResult(K=K, gamma=float(gamma), gamma_infeasible=float(lo), norm=float(norm),
                       omega_peak=float(w_peak * ws), closed_loop=CL,
                       closed_loop_poles=np.sort_complex(poles), regularization=regularization,

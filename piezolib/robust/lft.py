@@ -4,44 +4,80 @@ import control as ct
 import numpy as np
 
 from piezolib._checks import check_finite_array, check_lti, check_positive
-from piezolib.robust.lti import DEFAULT_TIME_SCALE, balance, scale_time
+from piezolib.robust.lti import balance, from_scaled, time_scale_of, to_scaled
 
 __all__ = ["lower_lft", "lft_response"]
 
 
-def lower_lft(P, K, omega_s=DEFAULT_TIME_SCALE):
-    """Lower LFT F_l(P, K) of eq. 17, computed in scaled time, names kept.
-
-    The last ``K.ninputs`` outputs of P are the measurements and the last
-    ``K.noutputs`` inputs are the controls.
-    """
+def _split(P, K):
+    """(nmeas, ncon) of the loop of P and K, checked."""
     check_lti("P", P)
     check_lti("K", K)
-    omega_s = check_positive("omega_s", omega_s)
     nmeas, ncon = K.ninputs, K.noutputs
     if P.noutputs <= nmeas or P.ninputs <= ncon:
         raise ValueError(f"P ({P.noutputs}x{P.ninputs}) is too small for a "
                          f"{ncon}x{nmeas} controller")
-    Ps = balance(scale_time(ct.ss(P), omega_s))
-    Ks = balance(scale_time(ct.ss(K), omega_s))
+    return nmeas, ncon
+
+
+def lower_lft(P, K, omega_s=None):
+    """Lower LFT F_l(P, K) (eq. 17), computed in scaled time, names kept.
+
+    Parameters
+    ----------
+    P : control.LTI
+        Generalized plant; its last ``K.ninputs`` outputs are the
+        measurements and its last ``K.noutputs`` inputs the controls.
+    K : control.LTI
+        Controller.
+    omega_s : float, optional
+        Internal time scale [rad/s]; default :func:`~piezolib.robust.lti.time_scale_of`
+        ``(P, K)``.
+
+    Returns
+    -------
+    control.StateSpace
+        F_l(P, K) in ordinary time, named ``"M"``, with P's remaining
+        input and output names.
+
+    Raises
+    ------
+    ValueError
+        P has no channels left besides the controller's.
+    """
+    nmeas, ncon = _split(P, K)
+    omega_s = time_scale_of(P, K) if omega_s is None else check_positive("omega_s", omega_s)
+    # realise first, then scale: for transfer-function inputs this closed
+    # loop was found more accurate than realising the scaled coefficients
+    Ps, Ks = to_scaled(ct.ss(P), omega_s), to_scaled(ct.ss(K), omega_s)
     M = balance(Ps.lft(Ks, nu=ncon, ny=nmeas))
-    M = balance(scale_time(M, 1.0 / omega_s))
-    return ct.ss(M.A, M.B, M.C, M.D, inputs=list(P.input_labels[:-ncon]),
-                 outputs=list(P.output_labels[:-nmeas]), name="M")
+    return from_scaled(M, omega_s, P.input_labels[:-ncon], P.output_labels[:-nmeas], name="M")
 
 
-def lft_response(P, K, omega, omega_s=DEFAULT_TIME_SCALE):
+def lft_response(P, K, omega, omega_s=None):
     """Frequency response of F_l(P, K) on ``omega`` [rad/s], shape (nf, p1, m1).
 
     P and K are in ordinary time; the loop is closed and evaluated in scaled
     time (s -> s/omega_s), where the realisations are well conditioned.
-    ``omega_s = 1`` evaluates the models as given.
+
+    Parameters
+    ----------
+    P, K : control.LTI
+        Generalized plant and controller (as in :func:`lower_lft`).
+    omega : array_like
+        Frequencies [rad/s].
+    omega_s : float, optional
+        Internal time scale [rad/s]; default :func:`~piezolib.robust.lti.time_scale_of`
+        ``(P, K)``; ``omega_s = 1`` evaluates the models as given.
+
+    Returns
+    -------
+    ndarray, shape (len(omega), p1, m1)
     """
-    check_lti("P", P)
-    check_lti("K", K)
+    _split(P, K)
     omega = check_finite_array("omega", omega, ndim=1)
-    omega_s = check_positive("omega_s", omega_s)
+    omega_s = time_scale_of(P, K) if omega_s is None else check_positive("omega_s", omega_s)
     if omega_s != 1.0:
-        P, K = balance(scale_time(ct.ss(P), omega_s)), balance(scale_time(ct.ss(K), omega_s))
+        P, K = to_scaled(ct.ss(P), omega_s), to_scaled(ct.ss(K), omega_s)
     CL = ct.ss(P).lft(ct.ss(K), nu=K.noutputs, ny=K.ninputs)
     return np.moveaxis(CL(1j * omega / omega_s, squeeze=False), -1, 0)

@@ -1,15 +1,10 @@
-"""Closed-loop analysis of the feedback loop of Fig. 1.
+"""LTI helpers: time scaling, balancing, realisation, loop functions, norms.
 
-The loop is the standard one-degree-of-freedom loop with the controller K on
-the error v_e = v_r - v_y and the plant G from u_c to v_y.  Its four closed-loop
-functions (eq. 19-20) are
-
-    S = 1/(1 + KG),  T = KG/(1 + KG),  KS = K/(1 + KG),  GS = G/(1 + KG).
-
-The published models have polynomial coefficients up to 1e23 (time in
-seconds, poles near 1e4 rad/s), so every realisation here is built in scaled
-time (s -> s/omega_s) and state-space balanced before its poles or norms are
-computed.  Frequencies are in rad/s throughout.
+Models with widely spread poles (or polynomial coefficients up to 1e23) are
+realised in scaled time p = s/omega_s and balanced before their poles or
+norms are computed; omega_s is chosen from the models (:func:`time_scale_of`).
+The one-degree-of-freedom loop, its closed-loop functions and the scaling
+rule are described in ``docs/robust.md``.  Frequencies are in rad/s.
 """
 
 from collections import namedtuple
@@ -22,17 +17,14 @@ import scipy.optimize as opt
 from piezolib._checks import check_finite_array, check_positive, check_siso, check_lti
 
 __all__ = [
-    "DEFAULT_TIME_SCALE", "frequency_grid", "scaled_coefficients", "scale_time", "balance",
+    "frequency_grid", "scaled_coefficients", "scale_time", "balance",
     "realize", "max_singular_value", "time_scale_of", "to_scaled", "from_scaled", "with_signals",
     "LoopFunctions", "loop_functions", "closed_loop_poles", "is_stable",
     "hinf_norm", "bandwidth",
 ]
 
-#: Time scale [rad/s] used to condition realisations of the paper's models.
-DEFAULT_TIME_SCALE = 1e4
-
 LoopFunctions = namedtuple("LoopFunctions", ["S", "T", "KS", "GS"])
-LoopFunctions.__doc__ = "The four closed-loop functions of eq. 19-20."
+LoopFunctions.__doc__ = "The four closed-loop functions S, T, KS, GS of a SISO loop."
 
 
 def frequency_grid(omega_min=1.0, omega_max=1e6, n=2000):
@@ -103,6 +95,22 @@ def time_scale_of(*systems):
     The geometric mean of the smallest and largest nonzero pole magnitude over
     all ``systems`` (1.0 for static models): scaling time by it puts the
     poles around |p| = 1.
+
+    Parameters
+    ----------
+    *systems : control.LTI
+        Continuous-time models (transfer functions or state space).
+
+    Returns
+    -------
+    float
+        omega_s [rad/s].
+
+    Examples
+    --------
+    >>> import control as ct
+    >>> time_scale_of(ct.tf([1], [1, 101, 100]))     # poles -1 and -100
+    10.0
     """
     mags = []
     for k, sys in enumerate(systems):
@@ -119,18 +127,60 @@ def time_scale_of(*systems):
 
 
 def to_scaled(sys, omega_s):
-    """Balanced state-space model of ``sys`` in scaled time p = s/omega_s."""
+    """Balanced state-space model of ``sys`` in scaled time p = s/omega_s.
+
+    Parameters
+    ----------
+    sys : control.LTI
+        Model in ordinary time (seconds).
+    omega_s : float
+        Time scale [rad/s], e.g. :func:`time_scale_of`.
+
+    Returns
+    -------
+    control.StateSpace
+        H(omega_s p), same signal names.
+    """
     return balance(ct.ss(scale_time(sys, omega_s)))
 
 
 def from_scaled(sys, omega_s, inputs=None, outputs=None, name=None):
-    """Back from scaled time (inverse of :func:`to_scaled`), balanced, signals named."""
+    """Back from scaled time (inverse of :func:`to_scaled`), balanced, signals named.
+
+    Parameters
+    ----------
+    sys : control.LTI
+        Model in scaled time p = s/omega_s.
+    omega_s : float
+        The time scale [rad/s] used by :func:`to_scaled`.
+    inputs, outputs : list of str, optional
+        Signal names (default: those of ``sys``).
+    name : str, optional
+        System name.
+
+    Returns
+    -------
+    control.StateSpace
+        The model in ordinary time (seconds).
+    """
     out = balance(scale_time(ct.ss(sys), 1.0 / omega_s))
     return with_signals(out, inputs, outputs, name)
 
 
 def with_signals(sys, inputs=None, outputs=None, name=None):
-    """Copy of state-space ``sys`` with signal names (default: those of ``sys``)."""
+    """Copy of state-space ``sys`` with signal names (default: those of ``sys``).
+
+    Parameters
+    ----------
+    sys : control.LTI
+    inputs, outputs : list of str, optional
+    name : str, optional
+
+    Returns
+    -------
+    control.StateSpace
+        Same matrices and sample time, new names.
+    """
     sys = ct.ss(sys)
     return ct.ss(sys.A, sys.B, sys.C, sys.D, sys.dt,
                  inputs=list(sys.input_labels if inputs is None else inputs),
@@ -154,23 +204,36 @@ def balance(sys):
                  inputs=sys.input_labels, outputs=sys.output_labels)
 
 
-def realize(sys, omega_s=DEFAULT_TIME_SCALE):
+def realize(sys, omega_s=None):
     """Balanced state-space realisation of ``sys``, built in scaled time.
 
     Converting a transfer function with coefficients up to 1e23 directly
     loses accuracy (and makes scipy warn about bad coefficients); the
     conversion is done on ``sys(omega_s p)`` and scaled back, which gives the
     same model in ordinary time.  Signal names are kept.
+
+    Parameters
+    ----------
+    sys : control.LTI
+    omega_s : float, optional
+        Time scale [rad/s]; default :func:`time_scale_of` ``(sys)``.
+
+    Returns
+    -------
+    control.StateSpace
     """
     check_lti("sys", sys)
-    scaled = balance(ct.ss(scale_time(sys, omega_s)))
-    out = balance(scale_time(scaled, 1.0 / omega_s))
-    return ct.ss(out, inputs=sys.input_labels, outputs=sys.output_labels,
-                 name=sys.name)
+    omega_s = time_scale_of(sys) if omega_s is None else check_positive("omega_s", omega_s)
+    return from_scaled(to_scaled(sys, omega_s), omega_s, sys.input_labels, sys.output_labels,
+                       name=sys.name)
 
 
-def loop_functions(G, K, omega_s=DEFAULT_TIME_SCALE):
-    """Return the closed-loop functions S, T, KS, GS of eq. 19-20.
+def loop_functions(G, K, omega_s=None):
+    """Return the closed-loop functions S, T, KS, GS of the loop (G, K).
+
+    S = 1/(1 + KG), T = KG/(1 + KG), KS = K/(1 + KG), GS = G/(1 + KG) for
+    the controller K on the error v_e = v_r - v_y and the plant G from u_c
+    to v_y (an input disturbance d adds to K's output).
 
     Parameters
     ----------
@@ -180,7 +243,8 @@ def loop_functions(G, K, omega_s=DEFAULT_TIME_SCALE):
         SISO controller from v_e [V] to u_b [V].
     omega_s : float, optional
         Internal time scale [rad/s] used to build well-conditioned
-        realisations; the returned models are in ordinary time (seconds).
+        realisations; default :func:`time_scale_of` ``(G, K)``.  The
+        returned models are in ordinary time (seconds).
 
     Returns
     -------
@@ -191,10 +255,9 @@ def loop_functions(G, K, omega_s=DEFAULT_TIME_SCALE):
     """
     check_siso("G", G)
     check_siso("K", K)
-    Gs = ct.ss(balance(ct.ss(scale_time(G, omega_s))),
-               inputs="u_c", outputs="v_y", name="G")
-    Ks = ct.ss(balance(ct.ss(scale_time(K, omega_s))),
-               inputs="v_e", outputs="u_b", name="K")
+    omega_s = time_scale_of(G, K) if omega_s is None else check_positive("omega_s", omega_s)
+    Gs = with_signals(to_scaled(G, omega_s), ["u_c"], ["v_y"], name="G")
+    Ks = with_signals(to_scaled(K, omega_s), ["v_e"], ["u_b"], name="K")
     sum_e = ct.summing_junction(["v_r", "-v_y"], "v_e", name="error")
     sum_u = ct.summing_junction(["u_b", "d"], "u_c", name="input")
     loop = ct.interconnect([Gs, Ks, sum_e, sum_u], inputs=["v_r", "d"],
@@ -202,24 +265,26 @@ def loop_functions(G, K, omega_s=DEFAULT_TIME_SCALE):
     loop = balance(loop)
 
     def pick(inp, out, name):
-        sub = ct.ss(loop[out, inp])
-        sub = balance(scale_time(sub, 1.0 / omega_s))
-        return ct.ss(sub, inputs=inp, outputs=out, name=name)
+        return from_scaled(loop[out, inp], omega_s, [inp], [out], name=name)
 
     return LoopFunctions(S=pick("v_r", "v_e", "S"), T=pick("v_r", "v_y", "T"),
                          KS=pick("v_r", "u_b", "KS"), GS=pick("d", "v_y", "GS"))
 
 
-def closed_loop_poles(G, K, omega_s=DEFAULT_TIME_SCALE):
-    """Poles [rad/s] of the loop of G and K, computed in scaled time."""
+def closed_loop_poles(G, K, omega_s=None):
+    """Poles [rad/s] of the loop of G and K, computed in scaled time.
+
+    ``omega_s`` [rad/s] defaults to :func:`time_scale_of` ``(G, K)``.
+    """
     check_siso("G", G)
     check_siso("K", K)
+    omega_s = time_scale_of(G, K) if omega_s is None else check_positive("omega_s", omega_s)
     L = ct.ss(scale_time(G, omega_s)) * ct.ss(scale_time(K, omega_s))
     cl = balance(ct.feedback(balance(L), 1))
     return np.sort_complex(np.linalg.eigvals(cl.A) * omega_s)
 
 
-def is_stable(G, K, omega_s=DEFAULT_TIME_SCALE):
+def is_stable(G, K, omega_s=None):
     """True when every closed-loop pole of the loop (G, K) has Re < 0."""
     return bool(np.all(closed_loop_poles(G, K, omega_s).real < 0))
 

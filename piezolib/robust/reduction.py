@@ -1,23 +1,9 @@
 """Controller order reduction by (frequency-weighted) balanced truncation.
 
-The paper reduces its 36th-order mu controller to 6th order by discarding the
-states with small Hankel singular values (Sec. IV-B).  Plain balanced
-truncation keeps the controller's own input-output behaviour, which is not
-what matters in closed loop.  :func:`reduce_controller` therefore accepts a
-stable input weight W (Enns' one-sided frequency-weighted balanced
-truncation): the controllability Gramian is taken from the cascade K W, so
-states that the loop hardly excites are removed first.  With W = G S (the
-closed-loop map from controller-output disturbance to controller input),
-the reduced controller K_r keeps the loop stable whenever
-||(K - K_r) G S||_inf < 1 (small-gain theorem), and this number is reported.
-
-Unstable controller poles are never discarded: the controller is split into
-its stable and antistable parts (ordered Schur form and a Sylvester equation)
-and only the stable part is reduced.  Everything runs in scaled time
-(s -> s/omega_s) on balanced realisations, and the Gramians are computed as
-Cholesky factors (SLICOT SB03OD) so that nearly singular Gramians (the
-controller's near-integrator at -3.78 rad/s, poles up to 7.7e7 rad/s) keep
-their accuracy; the truncation uses the square-root balancing formulas.
+:func:`reduce_controller` keeps unstable poles, reduces the stable part with
+an optional input weight W (Enns), and reports ||K - K_r||_inf and, with
+W = G S, the small-gain certificate ||(K - K_r) G S||_inf < 1.  Rationale and
+numerics in ``docs/robust.md``.
 """
 
 from dataclasses import dataclass
@@ -28,7 +14,8 @@ import scipy.linalg as la
 import slycot
 
 from piezolib._checks import check_integer, check_lti, check_positive
-from piezolib.robust.lti import DEFAULT_TIME_SCALE, balance, hinf_norm, max_singular_value, scale_time
+from piezolib.robust.lti import (balance, from_scaled, hinf_norm, max_singular_value,
+                                 time_scale_of, to_scaled)
 
 __all__ = ["ReducedController", "reduce_controller", "hankel_singular_values"]
 
@@ -132,18 +119,40 @@ def _balanced(sys, weight):
     return bal, hsv
 
 
-def hankel_singular_values(K, weight=None, omega_s=DEFAULT_TIME_SCALE):
-    """(Weighted) Hankel singular values of the stable part of ``K``, descending."""
+def hankel_singular_values(K, weight=None, omega_s=None):
+    """(Weighted) Hankel singular values of the stable part of ``K``, descending.
+
+    Parameters
+    ----------
+    K : control.LTI
+        Controller, ordinary time.
+    weight : control.LTI, optional
+        Stable input weight W (see :func:`reduce_controller`).
+    omega_s : float, optional
+        Internal time scale [rad/s]; default :func:`~piezolib.robust.lti.time_scale_of`
+        of K (and W).  Hankel singular values do not depend on it.
+
+    Returns
+    -------
+    ndarray
+    """
     K = ct.ss(check_lti("K", K))
-    Ks = balance(scale_time(K, omega_s))
+    omega_s = _time_scale(K, weight, omega_s)
+    Ks = to_scaled(K, omega_s)
     stable, _ = _split_stable(Ks)
     if stable.nstates == 0:
         return np.zeros(0)
-    W = None if weight is None else ct.ss(balance(scale_time(weight, omega_s)))
+    W = None if weight is None else to_scaled(weight, omega_s)
     return _balanced(stable, W)[1]
 
 
-def reduce_controller(K, order, weight=None, *, method="truncate", omega_s=DEFAULT_TIME_SCALE):
+def _time_scale(K, weight, omega_s):
+    if omega_s is not None:
+        return check_positive("omega_s", omega_s)
+    return time_scale_of(K) if weight is None else time_scale_of(K, weight)
+
+
+def reduce_controller(K, order, weight=None, *, method="truncate", omega_s=None):
     """Reduce ``K`` to ``order`` states by (weighted) balanced truncation.
 
     Parameters
@@ -158,8 +167,9 @@ def reduce_controller(K, order, weight=None, *, method="truncate", omega_s=DEFAU
     method : {'truncate', 'residualize'}
         Truncation (exact at high frequency) or singular perturbation
         (exact at DC).
-    omega_s : float
-        Internal time scale [rad/s].
+    omega_s : float, optional
+        Internal time scale [rad/s]; default :func:`~piezolib.robust.lti.time_scale_of`
+        of K (and W).
 
     Returns
     -------
@@ -168,7 +178,6 @@ def reduce_controller(K, order, weight=None, *, method="truncate", omega_s=DEFAU
     check_lti("K", K)
     K = ct.ss(K)
     order = check_integer("order", order, minimum=0)
-    omega_s = check_positive("omega_s", omega_s)
     if method not in ("truncate", "residualize"):
         raise ValueError(f"method must be 'truncate' or 'residualize', got {method!r}")
     if weight is not None:
@@ -180,13 +189,14 @@ def reduce_controller(K, order, weight=None, *, method="truncate", omega_s=DEFAU
             raise ValueError("weight must be stable")
     if order > K.nstates:
         raise ValueError(f"order ({order}) exceeds the controller order ({K.nstates})")
-    Ks = balance(scale_time(K, omega_s))
+    omega_s = _time_scale(K, weight, omega_s)
+    Ks = to_scaled(K, omega_s)
     stable, unstable = _split_stable(Ks)
     n_unstable = unstable.nstates
     if order < n_unstable:
         raise ValueError(f"order ({order}) is below the number of unstable controller "
                          f"poles ({n_unstable}), which are kept")
-    W = None if weight is None else ct.ss(balance(scale_time(weight, omega_s)))
+    W = None if weight is None else to_scaled(weight, omega_s)
     bal, hsv = _balanced(stable, W)
     k = min(order - n_unstable, bal.nstates)
     A, B, C, D = bal.A, bal.B, bal.C, bal.D
@@ -212,9 +222,7 @@ def reduce_controller(K, order, weight=None, *, method="truncate", omega_s=DEFAU
     werr = None
     if W is not None and n_unstable == 0:
         werr = hinf_norm(balance(diff * W), omega=grid)[0]
-    Kr = balance(scale_time(red, 1.0 / omega_s))
-    Kr = ct.ss(Kr.A, Kr.B, Kr.C, Kr.D, inputs=list(K.input_labels),
-               outputs=list(K.output_labels), name=f"K{Kr.nstates}")
+    Kr = from_scaled(red, omega_s, K.input_labels, K.output_labels, name=f"K{red.nstates}")
     return ReducedController(K=Kr, order=Kr.nstates, hsv=hsv, n_unstable=n_unstable,
                              error=float(error), relative_error=float(error / ref),
                              weighted_error=None if werr is None else float(werr),

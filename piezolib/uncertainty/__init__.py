@@ -1,6 +1,32 @@
-"""Uncertainty tools: model sets, relative-error envelope, covering weight, parametric margin."""
+"""Uncertainty tools: model sets, relative-error envelope, covering weight, parametric margin.
 
-from piezolib.uncertainty.core import *    # noqa: F401,F403
-from piezolib.uncertainty import core
+modelset     the parametric model set (perturbed denominator coefficients), responses, poles
+envelope     relative errors, their envelope and its refined peak, the exact box bound, coverage
+weight       fit of a stable minimum-phase weight covering an envelope
+margin       exact parametric stability margin (zero exclusion) and small-gain certificates
+polynomials  polynomial helpers shared by the modules above
 
-__all__ = list(core.__all__)
+Every model is passed explicitly; nothing here knows the paper.  Methods and
+derivations: ``docs/uncertainty.md``.
+"""
+
+from piezolib.uncertainty.modelset import (
+    MAX_MEMBERS, ModelSet, level_offsets, member_closed_loop_poles, member_poles, model_set,
+    perturbed_plant, set_response, unstable_members)
+from piezolib.uncertainty.envelope import (
+    Coverage, SpreadBracket, coverage, envelope_peak, largest_covered_spread,
+    relative_error_bound, relative_error_envelope, relative_errors)
+from piezolib.uncertainty.weight import fit_covering_weight
+from piezolib.uncertainty.margin import (
+    ParametricMargin, parametric_stability_margin, small_gain_spread, stability_gauge,
+    weight_certified_spread)
+
+__all__ = [
+    "ModelSet", "model_set", "level_offsets", "perturbed_plant", "set_response",
+    "relative_errors",
+    "member_poles", "member_closed_loop_poles", "unstable_members", "relative_error_envelope",
+    "envelope_peak", "relative_error_bound", "Coverage", "coverage",
+    "SpreadBracket", "largest_covered_spread", "fit_covering_weight",
+    "ParametricMargin", "stability_gauge", "parametric_stability_margin",
+    "small_gain_spread", "weight_certified_spread", "MAX_MEMBERS",
+]

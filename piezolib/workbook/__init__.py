@@ -1,10 +1,13 @@
 """What exists to run and present the notebooks.
 
-loop       the 10 kHz loop of Fig. 1 on the virtual stage; Cases I-III, Tables 4-5
-report     paper-versus-reproduced comparison tables
-plotting   the workbook's figure style and figure saving
-reproduce  headless run of the whole workbook (``python -m piezolib reproduce``)
-paths      where the workbook reads its inputs and writes its outputs
+loop         the 10 kHz loop of Fig. 1 on the virtual stage
+experiments  Cases I-III of Sec. V: the Table 4 and Table 5 experiments
+report       paper-versus-reproduced comparison tables
+plotting     the workbook's figure style and figure saving
+figures      one function per paper figure, grouped by notebook
+reproduce    headless run of the whole workbook (``python -m piezolib reproduce``)
+cli          the command line (``python -m piezolib {reproduce,data}``)
+paths        where the workbook reads its inputs and writes its outputs
 """
 
-__all__ = ["loop", "report", "plotting", "reproduce", "paths"]
+__all__ = ["loop", "experiments", "report", "plotting", "figures", "reproduce", "cli", "paths"]

@@ -29,12 +29,12 @@ def _parser():
 
 def _data(stream):
     from piezolib import paper
-    from piezolib.problem import stage
+    from piezolib.problem import stage, stage_data
 
     start = time.perf_counter()
-    for path in stage.write_experiment_files():
+    for path in stage_data.write_experiment_files():
         print(path, file=stream)
-    got = stage.case_I_hysteresis(stage.load_hysteresis_loops())
+    got = stage.case_I_hysteresis(stage_data.load_hysteresis_loops())
     paper_row = paper.table4().loc["case_I"]
     for amplitude, value in got.items():
         print(f"Case I hysteresis at {amplitude:4.0f} V: {value:6.2f} %  "

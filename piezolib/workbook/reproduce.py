@@ -20,7 +20,7 @@ __all__ = ["DATA_STEPS", "list_notebooks", "run_notebook", "run", "NotebookFailu
 
 #: Data-generating steps run before the notebooks, as "module:function" names
 #: of functions that take no arguments and return the list of files written.
-DATA_STEPS = ["piezolib.problem.stage:write_experiment_files"]
+DATA_STEPS = ["piezolib.problem.stage_data:write_experiment_files"]
 
 
 class NotebookFailure(RuntimeError):

@@ -1,5 +1,6 @@
 """The 10 kHz loop of Fig. 1 (piezolib.workbook.loop): exact open-loop equivalence, linear
-closed-loop theory, the discretised controller's response, saturation and bad input."""
+closed-loop theory, the discretised controller's response, saturation and bad input.
+The cases and experiments of Sec. V are tested in test_experiments.py."""
 
 import warnings
 
@@ -8,8 +9,9 @@ import numpy as np
 import pytest
 
 from piezolib import hysteresis, paper, signals
-from piezolib.workbook import loop
 from piezolib.problem.stage import StageSaturationWarning, VirtualStage
+from piezolib.robust.discrete import discretize
+from piezolib.workbook import loop
 
 FS = paper.SAMPLING_FREQUENCY_HZ
 #: A Dahl model in the workbook convention (u_c -> v_y, volts), well damped.
@@ -30,7 +32,7 @@ def linear_stage():
 
 
 def reference(peak=3.0, frequency_hz=20.0, periods=2):
-    return signals.triangle(peak, frequency_hz, periods=periods, fs=FS)[1]
+    return signals.triangle(peak, frequency_hz, FS, periods=periods)[1]
 
 
 # --- K = 0 and no compensation: the open-loop stage run, exactly -------------------
@@ -59,15 +61,6 @@ def test_open_loop_path_equals_zero_controller_path(stage):
         assert np.array_equal(a.v_y_V, b.v_y_V)
 
 
-def test_default_feedforward_is_the_workbook_model(stage):
-    v = reference()
-    shared = hysteresis.workbook_dahl_fit().model
-    assert np.array_equal(loop.run_case("II", stage, v, None).u_f_V,
-                          hysteresis.feedforward(shared, v))
-    with pytest.raises(TypeError, match="feedforward must be"):
-        loop.run_loop(stage, v, feedforward=(1.0, 2.0, 3.0))
-
-
 def test_feedforward_paths(stage):
     v = reference()
     assert np.all(loop.run_loop(stage, v).u_f_V == 0)                       # none
@@ -75,28 +68,6 @@ def test_feedforward_paths(stage):
     ff = loop.run_loop(stage, v, feedforward=DAHL).u_f_V
     step = hysteresis.DahlFeedforward(DAHL).run(v)                          # eq. 14
     assert np.allclose(ff, step, rtol=0, atol=1e-12)
-
-
-def test_cases_apply_what_the_module_says(stage):
-    v = reference()
-    I = loop.run_case("I", stage, v, DAHL)
-    assert np.array_equal(I.u_f_V, v / DAHL.g_a) and np.all(I.u_b_V == 0)
-    # with an offset model, Case I is its static part and Case II adds exactly H / g_a
-    shifted = DAHL.with_offset(-0.15)
-    I, II = (loop.run_case(c, stage, v, shifted) for c in ("I", "II"))
-    np.testing.assert_allclose(I.u_f_V, (v + 0.15) / DAHL.g_a, rtol=0, atol=1e-15)
-    np.testing.assert_allclose(II.u_f_V - I.u_f_V,
-                               hysteresis.dahl_hysteresis(shifted, v) / DAHL.g_a,
-                               rtol=0, atol=1e-14)
-    assert np.array_equal(loop.run_case("I", stage, v, shifted, case_I_gain=1.0).u_f_V, v)
-    assert np.array_equal(loop.run_case("I", stage, v, DAHL, case_I_gain=1.0).u_f_V, v)
-    II = loop.run_case("II", stage, v, DAHL)
-    assert np.array_equal(II.u_f_V, hysteresis.feedforward(DAHL, v))
-    III = loop.run_case("III", stage, v, DAHL, controller=paper.controller())
-    assert np.array_equal(III.u_f_V, II.u_f_V) and np.any(III.u_b_V != 0)
-    # the stage receives u_f + u_b (quantised by the DAC)
-    lsb = stage.dac.lsb
-    assert np.max(np.abs(III.record.u_c_V - III.u_c_requested_V)) <= lsb / 2 + 1e-15
 
 
 # --- linear closed loop: the LTI theory, sample for sample ---------------------------
@@ -140,8 +111,7 @@ def test_controller_forms():
     assert loop.discrete_controller(None) is None
     Kd = ct.tf([1.0, 0.5], [1.0, -0.5], Ts)
     assert np.allclose(ct.ss(loop.discrete_controller(Kd))(1.0), Kd(1.0))
-    from piezolib.robust.discrete import discretize
-    dc = discretize(paper.controller())
+    dc = discretize(paper.controller(), FS)
     z = np.exp(1j * 2 * np.pi * 50.0 / FS)
     assert np.allclose(loop.discrete_controller(dc)(z), dc.K(z))
 
@@ -166,35 +136,6 @@ def test_unstable_loop_raises_instead_of_nan(stage):
         loop.run_loop(stage, reference(periods=4), feedforward=1.0, controller=K)
 
 
-# --- experiments ---------------------------------------------------------------------
-def test_tracking_periods_and_reference():
-    assert loop.tracking_periods(1.0, discard_periods=2) == 3
-    assert loop.tracking_periods(50.0, discard_periods=2) == 2 + 5
-    assert loop.tracking_periods(10.0, discard_periods=0) == 1
-    t, v = loop.tracking_reference(10.0, 2)
-    assert v.max() == pytest.approx(paper.TRACKING_TEST["amplitude_um"] / paper.UM_PER_VOLT)
-    assert v.min() == 0.0 and t.size == 2001
-
-
-def test_small_experiments_have_the_table_layout(stage):
-    K = paper.controller()
-    h = loop.hysteresis_test(stage, DAHL, K, amplitudes_V=[20.0])
-    tr = loop.tracking_test(stage, DAHL, K, frequencies_Hz=[25.0])
-    for res, col in ((h, 20.0), (tr, 25.0)):
-        assert list(res.table.index) == list(paper.table4().index)
-        assert list(res.table.columns) == [col]
-        I, II, III = (res.table.loc[f"case_{c}", col] for c in ("I", "II", "III"))
-        assert res.table.loc["improvement_III_vs_II", col] == pytest.approx(100 * (II - III) / II)
-        assert set(res.runs) == {(c, col) for c in loop.CASES}
-        assert (res.saturation.values == 0).all()
-    # Case III tracks a 25 Hz triangle on the linear-in-the-small loop better than open loop
-    assert tr.table.loc["case_III", 25.0] < tr.table.loc["case_I", 25.0]
-    # the tracking error is the metric over whole periods after the discarded ones
-    run = tr.runs[("III", 25.0)]
-    s = run.steady_state(25.0, loop.DISCARD_PERIODS)
-    assert s.start == 2 * 400 and len(run) == 400 * loop.tracking_periods(25.0) + 1
-
-
 # --- bad input ----------------------------------------------------------------------------
 @pytest.mark.parametrize("kwargs, error, match", [
     (dict(v_r=np.r_[0.0, np.nan, 1.0]), ValueError, "v_r contains"),
@@ -216,17 +157,14 @@ def test_run_loop_bad_input(stage, kwargs, error, match):
         loop.run_loop(stage, v_r, **args)
 
 
-def test_bad_stage_case_and_missing_controller(stage):
+def test_bad_stage_and_too_short_run(stage):
     v = reference()
     with pytest.raises(TypeError, match="stage must be a VirtualStage"):
         loop.run_loop("stage", v)
-    with pytest.raises(ValueError, match="case must be one of"):
-        loop.run_case("IV", stage, v, DAHL)
-    with pytest.raises(ValueError, match="case III needs a controller"):
-        loop.run_case("III", stage, v, DAHL)
-    with pytest.raises(TypeError, match="dahl must be"):
-        loop.run_case("II", stage, v, paper.DAHL)
-    with pytest.raises(ValueError, match="controller must be given"):
-        loop.tracking_test(stage, DAHL, None)
     with pytest.raises(ValueError, match="leaves no samples"):
         loop.run_loop(stage, v).steady_state(20.0, discard_periods=2)
+
+
+def test_bad_feedforward_tuple(stage):
+    with pytest.raises(TypeError, match="feedforward must be"):
+        loop.run_loop(stage, reference(), feedforward=(1.0, 2.0, 3.0))

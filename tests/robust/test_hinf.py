@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 import scipy.optimize as opt
 
-from piezolib.problem import genplant
 from piezolib import paper, robust
-from piezolib.robust.hinf import HinfSynthesisError, auto_time_scale, hinfsyn
+from piezolib.problem import genplant
+from piezolib.robust.hinf import HinfSynthesisError, hinfsyn
 
 
 def scalar_plant(a):
@@ -132,20 +132,32 @@ def test_rank_deficient_d12_is_regularised_and_reported():
 
 
 def test_published_plant_regularisation_and_verification():
-    P = genplant.generalized_plant()                      # exact eq. 16, D12 = 2e-10
+    G, H_m, H_e, H_y, _ = paper.problem()
+    P = genplant.generalized_plant(G, H_m, H_e, H_y)      # exact eq. 16, D12 = 2e-10
     res = hinfsyn(P, 1, 1)
     assert "D12 rank deficient" in res.regularization
     assert res.norm <= res.gamma * (1 + 1e-3)
     assert res.K.input_labels == ["v_e"] and res.K.output_labels == ["u_b"]
-    assert robust.is_stable(paper.plant(), res.K)
+    assert robust.is_stable(G, res.K)
+    # the default time scale is chosen from P (time_scale_of)
+    assert res.time_scale == pytest.approx(robust.time_scale_of(P))
     # the same gamma from the plant given in a different time unit
     res2 = hinfsyn(P, 1, 1, time_scale=1e3)
     assert res2.gamma == pytest.approx(res.gamma, rel=5e-3)
 
 
-def test_auto_time_scale_is_geometric_mean_of_pole_magnitudes():
-    sys = ct.ss(ct.tf([1], [1, 101, 100]))                # poles -1, -100
-    assert auto_time_scale(sys) == pytest.approx(10.0)
+def test_controller_and_closed_loop_are_in_ordinary_time():
+    P = random_plant(np.random.default_rng(8))
+    P = ct.ss(P.A * 1e3, P.B * 1e3, P.C, P.D, inputs=["w1", "w2", "u"],
+              outputs=["z1", "z2", "y"])                  # poles ~1e3 rad/s
+    res = hinfsyn(P, 1, 1)
+    assert res.K.input_labels == ["y"] and res.K.output_labels == ["u"]
+    assert res.closed_loop.input_labels == ["w1", "w2"] and res.closed_loop.name == "closed_loop"
+    w = np.logspace(1, 5, 60)
+    np.testing.assert_allclose(res.closed_loop(1j * w), robust.lower_lft(P, res.K)(1j * w),
+                               rtol=1e-6, atol=1e-12)
+    np.testing.assert_allclose(np.sort_complex(ct.poles(res.closed_loop)),
+                               res.closed_loop_poles, rtol=1e-6)
 
 
 def test_bad_arguments():

@@ -1,13 +1,11 @@
-"""Controller reduction and Tustin discretisation."""
+"""Controller reduction by (weighted) balanced truncation and residualisation."""
 
 import control as ct
 import numpy as np
 import pytest
 
-from piezolib import paper, robust
+from piezolib import robust
 from piezolib.problem.analysis import analyze
-from piezolib.problem.design import design_controller
-from piezolib.robust.discrete import discretize, least_damped_frequency
 from piezolib.robust.reduction import hankel_singular_values, reduce_controller
 
 
@@ -61,44 +59,32 @@ def test_bad_arguments():
         reduce_controller(K, 2, ct.tf([1], [1, -1]))
 
 
-@pytest.fixture(scope="module")
-def design():
-    return design_controller()
+def test_default_time_scale_comes_from_the_model():
+    # Hankel singular values do not depend on the time unit; the default
+    # scale (time_scale_of K and W) gives those of the unscaled model
+    K = known_system()
+    W = ct.tf([1], [1, 20])
+    np.testing.assert_allclose(hankel_singular_values(K), hankel_singular_values(K, omega_s=1.0),
+                               rtol=1e-8)
+    np.testing.assert_allclose(hankel_singular_values(K, W),
+                               hankel_singular_values(K, W, omega_s=1.0), rtol=1e-8)
+    red, ref = reduce_controller(K, 3, W), reduce_controller(K, 3, W, omega_s=1.0)
+    w = np.logspace(-2, 3, 50)
+    np.testing.assert_allclose(red.K(1j * w), ref.K(1j * w), rtol=1e-6)
+    assert red.weighted_error == pytest.approx(ref.weighted_error, rel=1e-6)
+    with pytest.raises(ValueError, match="omega_s must be positive"):
+        reduce_controller(K, 3, omega_s=0.0)
 
 
-def test_design_reduction_keeps_stability_and_reports_degradation(design):
+def test_design_reduction_keeps_stability_and_reports_degradation(paper_design, paper_models):
+    design = paper_design
     red = design.reduction
     assert red.order == 6 == design.K_reduced.nstates
     # small-gain certificate of the weighted reduction: ||(K - K6) G S|| < 1
     assert red.weighted_error < 1
-    assert robust.is_stable(paper.plant(), design.K_reduced)
-    full, reduced = analyze(design.K_full), analyze(design.K_reduced)
+    assert robust.is_stable(paper_models[0], design.K_reduced)
+    full = analyze(design.K_full, *paper_models)
+    reduced = analyze(design.K_reduced, *paper_models)
     # reduction can only cost mu here, and the cost is reported, not hidden
     assert reduced.mu_RP >= full.mu_RP * (1 - 1e-3)
     assert reduced.mu_RP - full.mu_RP < 0.1
-
-
-def test_tustin_matches_below_1khz_and_is_exact_at_the_prewarp_frequency():
-    K = ct.tf([1, 2 * 0.05 * 3000, 3000 ** 2], [1, 2 * 0.7 * 3000, 3000 ** 2])  # notch
-    assert least_damped_frequency(K, 1e4) == pytest.approx(3000, rel=1e-9)
-    d = discretize(K, prewarp="auto")
-    assert d.prewarp_frequency == pytest.approx(3000, rel=1e-9)
-    w0 = 3000.0
-    kd = np.ravel(d.K(np.exp(1j * w0 / d.fs)))
-    assert kd[0] == pytest.approx(np.ravel(K(1j * w0))[0], rel=1e-9)
-    assert d.matches and d.max_relative_error < 0.1
-    plain = discretize(K, prewarp=None)
-    assert plain.max_relative_error > d.max_relative_error
-
-
-def test_discretised_design_loop(design):
-    d = design.discrete
-    assert d.fs == paper.SAMPLING_FREQUENCY_HZ and d.K.dt == pytest.approx(1e-4)
-    assert d.matches and d.loop_stable
-
-
-def test_discretize_rejects_bad_input():
-    with pytest.raises(ValueError, match="Nyquist"):
-        discretize(ct.tf([1], [1, 1]), check_hz=6000)
-    with pytest.raises(ValueError, match="continuous-time"):
-        discretize(ct.tf([1], [1, 1], 1e-3))

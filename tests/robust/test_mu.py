@@ -4,10 +4,11 @@ import control as ct
 import numpy as np
 import pytest
 
-from piezolib import paper, robust
 from scipy.optimize import minimize_scalar
 
-from piezolib.robust.mu import MuResult, _pad_square, mussv, parse_blk
+from piezolib import paper, robust
+from piezolib.robust.blocks import Block, block_slices, parse_blk
+from piezolib.robust.mu import MuResult, mussv
 
 RP_BLK = [(1, 1), (1, 2)]          # eq. 21: Delta_r 1x1, Delta_f 1x2
 
@@ -53,8 +54,8 @@ def assert_attains_lower(M, res, rtol=1e-8):
     np.testing.assert_allclose(norms * res.lower[ok], 1, rtol=rtol)
     # Delta is block diagonal with the requested structure
     mask = np.zeros((q, p), bool)
-    for b in parse_blk(res.blk, p, q):
-        mask[b.inputs, b.outputs] = True
+    for inputs, outputs in block_slices(res.blocks):
+        mask[inputs, outputs] = True
     assert np.all(res.Delta[:, ~mask] == 0)
 
 
@@ -129,11 +130,12 @@ def test_lower_le_upper_le_sigma_max_and_certificates(blk):
     np.testing.assert_allclose(sigma_max(scaled), res.upper, rtol=1e-10)
     # D_l = d_i I_{c_i}, D_r = d_i I_{r_i}; the last full block has d = 1
     np.testing.assert_allclose(res.d[:, -1], 1.0)
-    for i, b in enumerate(parse_blk(blk, p, q)):
-        np.testing.assert_allclose(np.diagonal(res.Dl, axis1=1, axis2=2)[:, b.outputs],
-                                   np.repeat(res.d[:, i:i + 1], b.n_out, axis=1))
-        np.testing.assert_allclose(np.diagonal(res.Dr, axis1=1, axis2=2)[:, b.inputs],
-                                   np.repeat(res.d[:, i:i + 1], b.n_in, axis=1))
+    blocks = parse_blk(blk, p, q)
+    for i, (b, (inputs, outputs)) in enumerate(zip(blocks, block_slices(blocks))):
+        np.testing.assert_allclose(np.diagonal(res.Dl, axis1=1, axis2=2)[:, outputs],
+                                   np.repeat(res.d[:, i:i + 1], b.cols, axis=1))
+        np.testing.assert_allclose(np.diagonal(res.Dr, axis1=1, axis2=2)[:, inputs],
+                                   np.repeat(res.d[:, i:i + 1], b.rows, axis=1))
     assert_attains_lower(M, res)
 
 
@@ -296,18 +298,57 @@ def test_this_problem_with_real_model_uncertainty(problem):
     assert np.median(mixed.gap) < 1e-3
 
 
+def pad_square(M, blk):
+    """M with zero rows/columns that square up each full block (r, c) to m = max(r, c)."""
+    rows, cols, n = [], [], 0
+    for r, c in blk:
+        m = max(r, c) if c else abs(r)
+        rows += list(range(n, n + (c or abs(r))))
+        cols += list(range(n, n + abs(r)))
+        n += m
+    Mp = np.zeros(M.shape[:-2] + (n, n), complex)
+    Mp[..., np.array(rows)[:, None], np.array(cols)[None, :]] = M
+    square = [(max(r, c), max(r, c)) if c else (r, 0) for r, c in blk]
+    return Mp, square
+
+
 def test_padding_leaves_mu_unchanged():
-    # zero rows/columns that square up non-square full blocks (as done for
-    # AB13MD) change neither mu nor the D-scaled bound
+    # zero rows/columns that square up non-square full blocks change neither
+    # mu nor the D-scaled bound
     rng = np.random.default_rng(15)
     blk = [(1, 2), (2, 1), (1, 1)]
-    blocks = parse_blk(blk, 4, 4)
     M = crandn(rng, 10, 4, 4)
-    Mp, nblock, _, _, _ = _pad_square(M, blocks)
+    Mp, square = pad_square(M, blk)
+    assert square == [(2, 2), (2, 2), (1, 1)]
     original = mussv(M, blk)
-    padded = mussv(Mp, [(int(n), int(n)) for n in nblock])
+    padded = mussv(Mp, square)
     np.testing.assert_allclose(padded.upper, original.upper, rtol=1e-7)
     np.testing.assert_allclose(padded.lower, original.lower, rtol=1e-6)
+
+
+def test_mixed_bound_pads_non_square_blocks():
+    # with a real block the upper bound comes from AB13MD, which needs square
+    # full blocks: mussv pads them, so padding by hand gives the same bound
+    rng = np.random.default_rng(16)
+    blk = [(-1, 0), (1, 2), (2, 1)]
+    M = crandn(rng, 8, 4, 4)
+    Mp, square = pad_square(M, blk)
+    original, padded = mussv(M, blk), mussv(Mp, square)
+    np.testing.assert_allclose(original.upper, padded.upper, rtol=1e-12)
+    assert np.all(original.lower <= original.upper)
+    # the scalings of the padded positions are dropped: Dl is p x p, Dr q x q
+    assert original.Dl.shape == (8, 4, 4) and original.Dr.shape == (8, 4, 4)
+    np.testing.assert_allclose(original.d[:, 1:], padded.d[:, 1:], rtol=1e-12)
+
+
+def test_block_objects_and_result_blocks():
+    rng = np.random.default_rng(17)
+    M = crandn(rng, 5, 3, 2)
+    by_rows = mussv(M, RP_BLK)
+    by_blocks = mussv(M, [Block.full(1, 1), Block.full(1, 2)])
+    np.testing.assert_array_equal(by_rows.upper, by_blocks.upper)
+    assert by_blocks.blk == ((1, 1), (1, 2))
+    assert by_blocks.blocks == (Block.full(1, 1), Block.full(1, 2))
 
 
 # --- bad input ------------------------------------------------------------

@@ -1,4 +1,4 @@
-"""Virtual stage: determinism, step == run, causality, saturation, calibration, files."""
+"""Virtual stage simulator: determinism, step == run, causality, saturation, calibration."""
 
 import warnings
 
@@ -8,6 +8,9 @@ import pytest
 
 from piezolib import identification, paper, signals
 from piezolib.problem import stage as S
+from piezolib.problem.stage_data import IDENTIFICATION_CHIRP, chirp_input
+
+FS = paper.SAMPLING_FREQUENCY_HZ
 
 
 @pytest.fixture(scope="module")
@@ -16,7 +19,7 @@ def stage():
 
 
 def chirp_u():
-    return S.chirp_input(S.IDENTIFICATION_CHIRP)[0][:6000]
+    return chirp_input(IDENTIFICATION_CHIRP)[0][:6000]
 
 
 def test_same_seed_same_record_other_seed_other_noise(stage):
@@ -49,6 +52,7 @@ def test_step_equals_run_exactly(stage, make_u):
     assert np.array_equal(np.array(measured[:-1]), rec.v_y_V)
     assert rec.input_saturation == stepped.input_saturation
     assert rec.adc_saturation == stepped.adc_saturation
+    assert sim.k == len(u)
 
 
 def test_measurement_at_k_does_not_depend_on_input_at_k(stage):
@@ -64,7 +68,7 @@ def test_linear_part_is_the_exact_zoh_discretisation_of_G():
     quiet = S.VirtualStage(noise_rms_V=0.0, hysteresis=None)
     u = np.full(400, 1.0)
     rec = quiet.run(u)
-    t = np.arange(400) / paper.SAMPLING_FREQUENCY_HZ
+    t = np.arange(400) / FS
     _, y = ct.forced_response(ct.c2d(ct.ss(paper.plant()), 1e-4, "zoh"), t,
                               quiet.dac.convert(u))
     assert np.allclose(rec.x_um / paper.UM_PER_VOLT, y, rtol=1e-9, atol=1e-12)
@@ -74,8 +78,8 @@ def test_linear_part_is_the_exact_zoh_discretisation_of_G():
 
 
 def test_small_chirp_sees_exactly_the_small_signal_model():
-    settings = S.IDENTIFICATION_CHIRP
-    u, start = S.chirp_input(settings)
+    settings = IDENTIFICATION_CHIRP
+    u, start = chirp_input(settings)
     hyst = S.VirtualStage(noise_rms_V=0.0).run(u)
     lin = S.VirtualStage(noise_rms_V=0.0, hysteresis=None).run(u)
     offset = (hyst.x_um - lin.x_um)[start:]
@@ -104,7 +108,7 @@ def test_play_operator_matches_its_definition():
 
 def test_chord_gain_and_return_to_zero():
     h = S.CALIBRATED_HYSTERESIS.operator()
-    _, v = signals.triangle(40.0, 10.0, periods=2)
+    _, v = signals.triangle(40.0, 10.0, FS, periods=2)
     out, _ = h.apply(v)
     assert out[0] == pytest.approx(0.0, abs=1e-12) and out[-1] == pytest.approx(0.0, abs=1e-12)
     assert out.max() / 40.0 == pytest.approx(h.chord_gain(40.0), rel=1e-12)
@@ -180,59 +184,36 @@ def test_step_rejects_nan(stage):
         stage.start().step(float("nan"))
 
 
-def test_experiment_files_are_reproducible_and_current(tmp_path):
-    first = S.write_experiment_files(tmp_path / "a")
-    second = S.write_experiment_files(tmp_path / "b")
-    for p, q in zip(first, second):
-        assert p.read_bytes() == q.read_bytes()
-    committed = S.experiment_paths()
-    for p in first:
-        stored = [c for c in committed.values() if c.name == p.name][0]
-        assert stored.exists(), f"{stored} missing: run python -m piezolib data"
-        assert stored.read_bytes() == p.read_bytes(), f"{stored} is out of date"
-
-
-def test_loaders_round_trip(stage):
-    loops = S.load_hysteresis_loops()
-    assert sorted(loops) == [10.0, 20.0, 30.0, 40.0]
-    rec = loops[20.0]
-    assert len(rec) == 3001 and rec.v_a_V.max() == pytest.approx(20.0, abs=1e-3)
-    fresh = S.VirtualStage(seed=S.EXPERIMENT_SEEDS[20.0]).run(S.case_I_input(20.0))
-    assert np.allclose(rec.v_y_V, fresh.v_y_V, atol=1e-7)
-    chirp = S.load_chirp("validation")
-    u_op, y_op = chirp.operating_point
-    assert u_op == pytest.approx(S.VALIDATION_CHIRP.top_V, abs=1e-3)
-    assert chirp.sweep.u_c_V.max() <= u_op + 1e-7
-    assert chirp.metadata["seed"] == S.VALIDATION_CHIRP.seed
-    with pytest.raises(ValueError, match="which"):
-        S.load_chirp("other")
-
-
-def test_chirp_deviations_start_at_rest_on_the_operating_point():
-    chirp = S.load_chirp("identification")
-    u, y, k = chirp.deviations()
-    assert len(u) == len(y) == len(chirp.record) - chirp.hold_start
-    assert k == chirp.start - chirp.hold_start
-    assert np.all(u[:k] == 0.0) and abs(np.mean(y[:k])) < 1e-12   # the hold: at rest
-    assert np.array_equal(u[k:], chirp.sweep.u_c_V - chirp.operating_point[0])
-
-
 def test_one_step_is_fast_enough_for_closed_loops(stage):
     # not a timing test: only checks the state stays plain Python floats
     sim = stage.start()
     sim.step(1.0)
-    assert all(type(z) is float for z in sim._z) and all(type(y) is float for y in sim._plays)
+    filter_state, plays = sim.state
+    assert len(filter_state) == len(stage.a) - 1
+    assert len(plays) == len(stage.hysteresis.thresholds_V)
+    assert all(type(z) is float for z in filter_state) and all(type(y) is float for y in plays)
+    assert type(sim.v_y_V) is float
+
+
+def test_simulation_state_is_the_play_state_of_the_operator(stage):
+    u = S.case_I_input(30.0, periods=1)[:700]         # up, then partly down again
+    sim = stage.start()
+    for u_k in u:
+        sim.step(u_k)
+    rec = sim.record()
+    _, plays = stage.hysteresis.apply(rec.v_a_V)
+    assert sim.state[1] == pytest.approx(plays, abs=1e-12)
+    assert S.VirtualStage(hysteresis=None).start().state[1] == ()
+
+
+def test_record_columns_and_segment(stage):
+    rec = stage.run(np.full(100, 0.5))
+    assert tuple(rec.columns()) == S.RECORD_COLUMNS
+    part = rec.segment(10, 30)
+    assert len(part) == 20 and np.array_equal(part.v_y_V, rec.v_y_V[10:30])
+    assert part.input_saturation == rec.input_saturation
 
 
 def test_zoh_helper_is_shared_with_identification(stage):
     b, a = identification.zoh_coefficients(paper.plant(), 1e-4)
     assert np.array_equal(b, stage.b) and np.array_equal(a, stage.a)
-
-
-def test_chirp_starts_at_its_crest_and_checks_its_band():
-    t, y = signals.chirp(0.5, 10.0, 1000.0, 0.5)
-    assert len(t) == 5000 and y[0] == 0.5 and np.max(np.abs(y)) <= 0.5
-    with pytest.raises(ValueError, match="f1_hz"):
-        signals.chirp(0.5, 10.0, 6000.0, 0.5)
-    with pytest.raises(ValueError, match="method"):
-        signals.chirp(0.5, 10.0, 100.0, 0.5, method="quadratic")

@@ -1,0 +1,387 @@
+"""Least-squares fit of the Dahl model to measured loops, and the rule that picks among fits.
+
+:func:`fit_dahl` fits the voltage-driven model (output error on x) to one or
+several loops jointly, with or without the output offset x0; starting points
+come from an equation-error grid search.  :func:`choose_fit` is the selection
+rule (smallest pooled RMS error).  Method: ``docs/hysteresis.md``.
+"""
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+import scipy.optimize as opt
+
+from piezolib._checks import check_finite_array, check_integer, check_positive
+from piezolib.hysteresis.dahl import (FORMS, STARTS, DahlModel, NotInvertibleError,
+                                      dahl_hysteresis, simulate_dahl, simulate_dahl_records,
+                                      strokes)
+
+__all__ = ["DahlFit", "fit_dahl", "choose_fit", "ALPHA1_BOUNDS", "ALPHA2_BOUNDS", "G_A_BOUNDS"]
+
+
+@dataclass(frozen=True)
+class DahlFit:
+    """Result of :func:`fit_dahl`.
+
+    Attributes
+    ----------
+    model : DahlModel
+        Fitted model (``beta1 = 0``, ``gamma_a`` as given).
+    x_model : list of ndarray
+        Model displacement for each loop's whole input record [x-unit].
+    residuals : list of ndarray
+        ``x_model - x`` for each loop on the samples used [x-unit].
+    rms : ndarray
+        RMS residual per loop [x-unit].
+    rms_percent : ndarray
+        RMS residual per loop in % of that loop's output range.
+    max_percent : ndarray
+        Largest |residual| per loop in % of that loop's output range.
+    initial : DahlModel
+        Starting point of the best solution.
+    result : scipy.optimize.OptimizeResult
+        The output-error least-squares solution (scaled parameters; x0 is
+        projected out and not part of ``result.x``).
+    offset : bool
+        Whether the output offset ``model.x0`` was fitted (False: x0 = 0,
+        the paper's eq. 13).
+    """
+
+    model: DahlModel
+    x_model: list
+    residuals: list
+    rms: np.ndarray
+    rms_percent: np.ndarray
+    max_percent: np.ndarray
+    initial: DahlModel
+    result: object
+    offset: bool = False
+
+    @property
+    def worst_rms_percent(self):
+        """Largest per-loop RMS error [% of range]."""
+        return float(np.max(self.rms_percent))
+
+    @property
+    def pooled_rms_percent(self):
+        """RMS over the loops of the per-loop RMS errors [% of range].
+
+        The fit's own criterion (every loop weighs the same), evaluated on
+        all samples: the workbook's model selection rule (:func:`choose_fit`).
+        """
+        return float(np.sqrt(np.mean(self.rms_percent ** 2)))
+
+
+def _check_loops(loops, discard, stride):
+    """Validated loops as (v, x, used) with ``used`` the residual samples.
+
+    ``used`` holds every ``stride``-th sample from ``discard`` on plus every
+    turning point of v: the model output at these samples is exactly that of
+    the full record, because a rate-independent model only sees the path.
+    """
+    if isinstance(loops, tuple) and len(loops) == 2 and np.ndim(loops[0]) == 1 \
+            and np.size(loops[0]) > 2:
+        loops = [loops]                       # a single (v, x) pair
+    try:
+        loops = list(loops)
+    except TypeError:
+        raise TypeError("loops must be a sequence of (v, x) pairs of 1-D arrays") from None
+    if not loops:
+        raise ValueError("loops must hold at least one (v, x) pair")
+    discard = check_integer("discard", discard, minimum=0)
+    stride = check_integer("stride", stride, minimum=1)
+    out = []
+    for i, pair in enumerate(loops):
+        if not isinstance(pair, (tuple, list)) or len(pair) != 2:
+            raise TypeError(f"loops[{i}] must be a (v, x) pair of arrays, "
+                            f"got {type(pair).__name__}")
+        v = check_finite_array(f"loops[{i}] v", pair[0], ndim=1, min_length=8)
+        x = check_finite_array(f"loops[{i}] x", pair[1], ndim=1, min_length=8)
+        if v.size != x.size:
+            raise ValueError(f"loops[{i}]: v and x must have equal lengths "
+                             f"({v.size} and {x.size})")
+        runs = strokes(v)
+        late = [r for r in runs if r[1] > discard]
+        if not any(r[2] > 0 for r in late) or not any(r[2] < 0 for r in late) \
+                or np.ptp(x[discard:]) == 0:
+            raise ValueError(f"loops[{i}] has no full cycle after discarding {discard} "
+                             "samples: need an ascending and a descending stroke of v")
+        keep = np.union1d(np.arange(0, v.size, stride), [r[1] for r in runs] + [0])
+        out.append((v[keep], x[keep], np.flatnonzero(keep >= discard)))
+    return out
+
+
+def _unit_model(form, alpha1, alpha2, start):
+    """Model whose H is z1 for gamma_a = 1: H of a general model is beta2*gamma_a*z1."""
+    return DahlModel(alpha1, alpha2, 0.0, 1.0, 1.0, 1.0, form=form, start=start)
+
+
+def _z1_on_input_strokes(model, v, x):
+    """z1 driven by a (noisy) measured x, with directions taken from the input v."""
+    return dahl_hysteresis(model, x, return_state=True, directions=v)[1][:, 0]
+
+
+#: Fit bounds of alpha1 * R and alpha2 * R^2 (R: output range).  The upper
+#: bounds reach the first-order limit: for alpha1 R >> 1 the fast mode of
+#: the stroke dynamics (path length 1/alpha1) is negligible and the model
+#: acts as a first-order Dahl model, H -> +-b/alpha2 at the rate
+#: alpha2/alpha1 per x-unit; at alpha1 R = 1e5 the fast mode lasts 1e-5 of
+#: the range.  Below alpha2 R^2 = 1e-4 the steady state b/alpha2 becomes so
+#: large that H is the small difference of huge terms.
+ALPHA1_BOUNDS = (1e-3, 1e5)
+ALPHA2_BOUNDS = (1e-4, 1e8)
+#: Fit bounds of g_a relative to the loops' mean slope: H stays a deviation
+#: from g_a v.  Without them the Bliman-Sorine fit drifts to g_a -> 0 with H
+#: carrying the whole transduction (a degenerate, ill-conditioned limit).
+G_A_BOUNDS = (0.5, 2.0)
+_GRID_CELL = 1.5   # e-folds per grid cell of the starting-point search
+
+
+def _mean_slope(data):
+    """Least-squares slope of x on v over all loops (through the records' start)."""
+    num = sum(float(np.dot(v[used] - v[0], x[used] - x[0])) for v, x, used in data)
+    den = sum(float(np.dot(v[used] - v[0], v[used] - v[0])) for v, x, used in data)
+    if not num > 0 or not den > 0:
+        raise ValueError("the loops must show x increasing with v (positive mean slope)")
+    return num / den
+
+
+def _loop_weights(data):
+    """Residual weight per loop: 1 / (output range * sqrt(samples used))."""
+    return [1.0 / (np.ptp(x[used]) * math.sqrt(used.size)) for v, x, used in data]
+
+
+def _equation_error(form, data, log_a1, log_a2, g_bounds, offset, start):
+    """Residual and (g_a, b[, x0]) of the linear problem x = g_a v - b z1(x) [+ x0].
+
+    z1 is driven by the measured x, which makes the problem linear in g_a,
+    b = beta2 gamma_a and the offset x0.  g_a is held inside ``g_bounds``
+    (clipped, the other parameters then refitted).
+    """
+    unit = _unit_model(form, math.exp(log_a1), math.exp(log_a2), start)
+    rows, rhs = [], []
+    for (v, x, used), w in zip(data, _loop_weights(data)):
+        z1 = _z1_on_input_strokes(unit, v, x)
+        columns = [v[used], -z1[used]] + ([np.ones(used.size)] if offset else [])
+        rows.append(w * np.column_stack(columns))
+        rhs.append(w * x[used])
+    M, y = np.vstack(rows), np.concatenate(rhs)
+    theta = np.linalg.lstsq(M, y, rcond=None)[0]
+    if not g_bounds[0] <= theta[0] <= g_bounds[1]:
+        theta[0] = min(max(theta[0], g_bounds[0]), g_bounds[1])
+        theta[1:] = np.linalg.lstsq(M[:, 1:], y - theta[0] * M[:, 0], rcond=None)[0]
+    return M @ theta - y, theta
+
+
+def _alpha_bounds(R):
+    """Lower and upper bounds of (log alpha1, log alpha2) for output range R."""
+    lo = [math.log(ALPHA1_BOUNDS[0] / R), math.log(ALPHA2_BOUNDS[0] / R ** 2)]
+    hi = [math.log(ALPHA1_BOUNDS[1] / R), math.log(ALPHA2_BOUNDS[1] / R ** 2)]
+    return lo, hi
+
+
+def _initial_guesses(form, data, gamma_a, g_bounds, starts, offset, start):
+    """Equation-error starting points, best first.
+
+    For fixed (alpha1, alpha2), x = g_a v - b z1(x) [+ x0] is linear in
+    (g_a, b = beta2 gamma_a[, x0]) when z1 is driven by the measured x.  On a
+    log grid over (alpha1, alpha2) with cells 1.5 e-folds wide (about the
+    size of a basin) the ``starts`` best local minima are taken (distinct
+    valleys, not one valley's neighbours), and each is refined with the
+    linear parameters projected out.
+    """
+    R = max(float(np.ptp(x[used])) for v, x, used in data)
+    lo, hi = _alpha_bounds(R)
+    la1 = np.linspace(lo[0], hi[0], int((hi[0] - lo[0]) / _GRID_CELL) + 1)
+    la2 = np.linspace(lo[1], hi[1], int((hi[1] - lo[1]) / _GRID_CELL) + 1)
+
+    def error(p):
+        return _equation_error(form, data, p[0], p[1], g_bounds, offset, start)
+
+    cost = np.array([[float(np.sum(error((p, q))[0] ** 2)) for q in la2] for p in la1])
+    padded = np.pad(cost, 1, constant_values=np.inf)
+    neighbours = np.min([padded[1 + i:1 + i + cost.shape[0], 1 + j:1 + j + cost.shape[1]]
+                         for i in (-1, 0, 1) for j in (-1, 0, 1) if i or j], axis=0)
+    minima = np.argwhere(cost <= neighbours)
+    minima = minima[np.argsort(cost[tuple(minima.T)])][:starts]
+    found = []
+    for i, j in minima:
+        res = opt.least_squares(lambda p: error(p)[0], [la1[i], la2[j]], bounds=(lo, hi),
+                                xtol=1e-10, ftol=1e-10)
+        g, b, *x0 = error(res.x)[1]
+        found.append((res.cost, DahlModel(math.exp(res.x[0]), math.exp(res.x[1]), 0.0,
+                                          b / gamma_a, gamma_a, g, form=form,
+                                          x0=x0[0] if offset else 0.0, start=start)))
+    return [m for c, m in sorted(found, key=lambda item: item[0])]
+
+
+def _to_theta(model):
+    """Fit parameters: g_a, log alpha1, log alpha2, b = beta2 gamma_a."""
+    return np.array([model.g_a, math.log(model.alpha1), math.log(model.alpha2),
+                     model.beta2 * model.gamma_a])
+
+
+def _from_theta(theta, form, gamma_a, start, x0=0.0):
+    g, log_a1, log_a2, b = theta
+    return DahlModel(math.exp(log_a1), math.exp(log_a2), 0.0, b / gamma_a, gamma_a, g,
+                     form=form, x0=x0, start=start)
+
+
+def _project_offset(r, wv):
+    """x0 minimising |r + x0 wv|^2 (weighted residuals r, weights wv)."""
+    return -float(wv @ r) / float(wv @ wv)
+
+
+def _check_fit_options(form, offset, start):
+    """Validated (form, offset, start) of a fit, offset as a plain bool."""
+    if form not in FORMS:
+        raise ValueError(f"form must be one of {FORMS}, got {form!r}")
+    if not isinstance(offset, (bool, np.bool_)):
+        raise TypeError(f"offset must be True or False, got {offset!r}")
+    if start not in STARTS:
+        raise ValueError(f"start must be one of {STARTS}, got {start!r}")
+    return form, bool(offset), start
+
+
+def fit_dahl(loops, gamma_a, form="bliman_sorine", offset=False, start="virgin",
+             discard=0, stride=1, initial=None, starts=3):
+    """Least-squares fit of the Dahl parameters to one or several loops jointly.
+
+    The fitted model is the voltage-driven model (:func:`simulate_dahl`,
+    output error on x).  The free parameters are g_a, log alpha1, log alpha2
+    and b = beta2 gamma_a (Jacobian scaling; bounds relative to the largest
+    output range R: :data:`ALPHA1_BOUNDS` / R and :data:`ALPHA2_BOUNDS` / R^2,
+    g_a within :data:`G_A_BOUNDS` times the loops' mean slope), and with
+    ``offset`` the output offset x0 (one for all loops), which enters
+    linearly and is solved exactly at every evaluation (variable projection),
+    so it costs no extra simulation.  beta1 is held at 0 (the published
+    value) and ``gamma_a`` is fixed (only beta2*gamma_a is identifiable).
+    Candidate models whose voltage-driven form is not invertible get a large
+    constant residual.  Each loop's residual is divided by its output range
+    and by sqrt(samples used), so that every loop weighs the same.  The
+    output-error problem is solved from ``starts`` starting points: the best
+    local minima of a log grid over (alpha1, alpha2) on which g_a,
+    beta2*gamma_a (and x0) solve the linear equation-error problem
+    x = g_a v - beta2 gamma_a z1(x) [+ x0] (z1 driven by the measured x).
+    Each start is solved to a loose tolerance and the best one polished.
+
+    Parameters
+    ----------
+    loops : sequence of (v, x)
+        Input [v-unit] and measured displacement [x-unit] records, each with
+        at least one ascending and one descending stroke of v.
+    gamma_a : float
+        Input weight of eq. 10, > 0, held fixed: only beta2*gamma_a enters H
+        (the paper's model has 30).
+    form : {"bliman_sorine", "printed"}
+    offset : bool, optional
+        Fit the output offset x0 of :class:`DahlModel` (workbook extension).
+        Default False: the paper's eq. 13 exactly (x0 = 0).
+    start : {"virgin", "rest"}, optional
+        The fitted model's ``start``: the state it is in at the first sample
+        of every record (default "virgin": z = 0; "rest": after a long
+        descending stroke).
+    discard : int, optional
+        Samples at the start of each record left out of the residuals (the
+        model still runs through them), e.g. one period to skip the virgin
+        curve.
+    stride : int, optional
+        Use every ``stride``-th sample (and every turning point of v) in the
+        fit; the model output there is exact regardless, so this only trades
+        noise averaging for speed.  The reported residuals use all samples.
+    initial : DahlModel, optional
+        Single starting point instead of the grid search (its x0 is ignored:
+        x0 is solved exactly).
+    starts : int, optional
+        Number of grid starting points (ignored with ``initial``).
+
+    Returns
+    -------
+    DahlFit
+    """
+    form, offset, start = _check_fit_options(form, offset, start)
+    gamma_a = check_positive("gamma_a", gamma_a)
+    data = _check_loops(loops, discard, stride)
+    slope = _mean_slope(data)
+    g_bounds = (slope * G_A_BOUNDS[0], slope * G_A_BOUNDS[1])
+    if initial is None:
+        candidates = _initial_guesses(form, data, gamma_a, g_bounds,
+                                      check_integer("starts", starts, minimum=1), offset,
+                                      start)
+    else:
+        if not isinstance(initial, DahlModel):
+            raise TypeError(f"initial must be a DahlModel, got {type(initial).__name__}")
+        candidates = [replace(initial, form=form, beta1=0.0, start=start,
+                              beta2=initial.beta2 * initial.gamma_a / gamma_a, gamma_a=gamma_a)]
+    R = max(float(np.ptp(x[used])) for v, x, used in data)
+    weights = _loop_weights(data)
+    wv = np.concatenate([np.full(used.size, w) for (v, x, used), w in zip(data, weights)])
+    lo, hi = _alpha_bounds(R)
+    lower = np.array([g_bounds[0], *lo, -1e8 / R])
+    upper = np.array([g_bounds[1], *hi, 1e8 / R])
+    n_res = sum(used.size for v, x, used in data)
+
+    def output_error(theta):
+        """Weighted residuals with x0 = 0 (the offset is added by the caller)."""
+        model = _from_theta(theta, form, gamma_a, start)
+        try:
+            sims = simulate_dahl_records(model, [v for v, x, used in data])
+        except NotInvertibleError:
+            return None
+        return np.concatenate([w * (sim.x[used] - x[used])
+                               for sim, (v, x, used), w in zip(sims, data, weights)])
+
+    def residuals(theta):
+        r = output_error(theta)
+        if r is None:
+            return np.full(n_res, 10.0 / math.sqrt(n_res))  # far worse than any loop fit
+        return r + _project_offset(r, wv) * wv if offset else r
+
+    result, initial = None, None
+    def solve(theta0, tol):
+        theta0 = np.clip(theta0, lower + 1e-9 * (upper - lower), upper - 1e-9 * (upper - lower))
+        return opt.least_squares(residuals, theta0, bounds=(lower, upper), x_scale="jac",
+                                 method="trf", xtol=tol, ftol=tol, gtol=tol)
+
+    # every start to a loose tolerance, the best one polished
+    for candidate in candidates:
+        trial = solve(_to_theta(candidate), 1e-4 if len(candidates) > 1 else 1e-10)
+        if result is None or trial.cost < result.cost:
+            result, initial = trial, candidate
+    if len(candidates) > 1:
+        result = solve(result.x, 1e-10)
+    x0 = _project_offset(output_error(result.x), wv) if offset else 0.0
+    model = _from_theta(result.x, form, gamma_a, start, x0)
+    x_model, res, rms, rms_pct, max_pct = [], [], [], [], []
+    for v, x, used in _check_loops(loops, discard, 1):
+        xm = simulate_dahl(model, v).x
+        r = xm[used] - x[used]
+        span = np.ptp(x[used])
+        x_model.append(xm)
+        res.append(r)
+        rms.append(math.sqrt(float(np.mean(r ** 2))))
+        rms_pct.append(100 * rms[-1] / span)
+        max_pct.append(100 * float(np.max(np.abs(r))) / span)
+    return DahlFit(model=model, x_model=x_model, residuals=res, rms=np.array(rms),
+                   rms_percent=np.array(rms_pct), max_percent=np.array(max_pct),
+                   initial=initial, result=result, offset=offset)
+
+
+def choose_fit(fits):
+    """The workbook's selection rule: the fit with the smallest pooled RMS error.
+
+    Parameters
+    ----------
+    fits : dict
+        {key: DahlFit}, all fitted to the same loops.
+
+    Returns
+    -------
+    key
+        The key of the fit with the smallest :attr:`DahlFit.pooled_rms_percent`
+        (the criterion every fit minimises; first key on a tie).
+    """
+    if not fits:
+        raise ValueError("fits must hold at least one DahlFit")
+    return min(fits, key=lambda key: fits[key].pooled_rms_percent)

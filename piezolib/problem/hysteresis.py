@@ -1,0 +1,119 @@
+"""The paper's Dahl model and the workbook's Dahl fit to the virtual stage's Case I loops.
+
+:func:`published_dahl` is the model of Sec. III-C with the printed parameters.
+:data:`CASE_I_CANDIDATES` are the (form, offset, start) fits that notebook 03
+compares, :func:`fit_case_I_loops` fits one of them (cached in-process), and
+:func:`workbook_dahl_fit` is the one feedforward model shared by notebooks 03
+and 06 and :mod:`piezolib.workbook.experiments` (:data:`WORKBOOK_DAHL`, the choice of
+:func:`piezolib.hysteresis.choose_fit`).  Background: ``docs/hysteresis.md``.
+"""
+
+import functools
+from dataclasses import fields
+from pathlib import Path
+
+import numpy as np
+
+from piezolib import paper
+from piezolib._checks import check_integer
+from piezolib.hysteresis.dahl import FORMS, STARTS, DahlModel
+from piezolib.hysteresis.fit import fit_dahl
+
+__all__ = ["published_dahl", "CASE_I_CANDIDATES", "WORKBOOK_DAHL", "fit_case_I_loops",
+           "workbook_dahl_fit", "clear_cache"]
+
+#: Candidate (form, offset, start) fits to the Case I loops.  From rest the
+#: printed form's H is constant (both directions share one steady state), so
+#: that form is fitted from the virgin state only.
+CASE_I_CANDIDATES = tuple((form, offset, start) for form in FORMS for offset in (False, True)
+                          for start in STARTS if not (form == "printed" and start == "rest"))
+#: The candidate that :func:`piezolib.hysteresis.choose_fit` selects on the
+#: virtual stage's Case I loops (checked in notebook 03); the model behind
+#: :func:`workbook_dahl_fit`.
+WORKBOOK_DAHL = ("bliman_sorine", True, "rest")
+
+
+def published_dahl(form="printed", params=paper.DAHL):
+    """The paper's identified Dahl model (Sec. III-C) in the given form.
+
+    Parameters
+    ----------
+    form : {"printed", "bliman_sorine"}, optional
+        Where the sign of the velocity enters (``docs/hysteresis.md``).
+    params : paper.DahlParameters, optional
+        The parameters (default: the published ones, :data:`piezolib.paper.DAHL`).
+
+    Returns
+    -------
+    DahlModel
+        With offset x0 = 0 and a virgin start: eq. 10-13 exactly.
+    """
+    if not isinstance(params, paper.DahlParameters):
+        raise TypeError("params must be a paper.DahlParameters instance")
+    return DahlModel(**{f.name: getattr(params, f.name) for f in fields(params)}, form=form)
+
+
+def fit_case_I_loops(form, offset, start, directory=None, stride=10):
+    """Joint fit of one candidate to the Table 4 Case I loops (cached in-process).
+
+    The four 10 Hz loops of :func:`piezolib.problem.stage_data.load_hysteresis_loops`
+    (v = u_c [V], x = v_y [V]), the first period left out of the residuals
+    (the model still runs through it), every ``stride``-th sample used in the
+    fit, gamma_a held at the published 30.  The result is cached per argument
+    set (:func:`clear_cache` empties the cache): treat it as read-only.
+
+    Parameters
+    ----------
+    form : {"printed", "bliman_sorine"}
+    offset : bool
+        Fit the output offset x0.
+    start : {"virgin", "rest"}
+        The model's initial state.
+    directory : str or Path, optional
+        Where the experiment files are (default: the workbook's ``data/``).
+    stride : int, optional
+
+    Returns
+    -------
+    DahlFit
+    """
+    if form not in FORMS:
+        raise ValueError(f"form must be one of {FORMS}, got {form!r}")
+    if not isinstance(offset, (bool, np.bool_)):
+        raise TypeError(f"offset must be True or False, got {offset!r}")
+    if start not in STARTS:
+        raise ValueError(f"start must be one of {STARTS}, got {start!r}")
+    directory = None if directory is None else str(directory)
+    return _fit_case_I_loops(form, bool(offset), start, directory,
+                             check_integer("stride", stride, minimum=1))
+
+
+@functools.lru_cache(maxsize=None)
+def _fit_case_I_loops(form, offset, start, directory, stride):
+    """:func:`fit_case_I_loops` with normalised arguments (one cache entry per fit)."""
+    from piezolib.problem import stage_data     # lazy: the stage modules are heavier than this one
+    loops = stage_data.load_hysteresis_loops(None if directory is None else Path(directory))
+    period = int(round(paper.SAMPLING_FREQUENCY_HZ / paper.HYSTERESIS_TEST["frequency_Hz"]))
+    return fit_dahl([(rec.u_c_V, rec.v_y_V) for rec in loops.values()],
+                    gamma_a=paper.DAHL.gamma_a, form=form, offset=offset, start=start,
+                    discard=period, stride=stride)
+
+
+def clear_cache():
+    """Forget every cached :func:`fit_case_I_loops` result (the next call refits)."""
+    _fit_case_I_loops.cache_clear()
+
+
+def workbook_dahl_fit(directory=None):
+    """The workbook's feedforward model: :data:`WORKBOOK_DAHL` fitted to the Case I loops.
+
+    One shared, cached fit for notebooks 03 and 06 and :mod:`piezolib.workbook.experiments`,
+    so that they cannot diverge.  Notebook 03 checks that
+    :func:`piezolib.hysteresis.choose_fit` picks :data:`WORKBOOK_DAHL` among
+    :data:`CASE_I_CANDIDATES`.
+
+    Returns
+    -------
+    DahlFit
+    """
+    return fit_case_I_loops(*WORKBOOK_DAHL, directory=directory)

@@ -1,0 +1,337 @@
+"""Lower bounds of mu by power iteration, with a perturbation Delta attaining them.
+
+Complex structures: the power iteration of Packard and Doyle (1993), batched
+over frequency.  Structures with real scalars: the real loops are closed at
+trial real values and the complex blocks get the power iteration.  Method
+notes in ``docs/robust.md``; :func:`piezolib.robust.mu.mussv` is the
+user-facing entry point.
+"""
+
+import numpy as np
+
+from piezolib.robust.blocks import block_slices
+
+__all__ = ["complex_lower_bound", "mixed_lower_bound"]
+
+
+def _unit(x):
+    n = np.linalg.norm(x, axis=-1, keepdims=True)
+    return np.where(n > 0, x / np.where(n > 0, n, 1), 0)
+
+
+def _layout(blocks):
+    """(block, inputs slice, outputs slice) of every block."""
+    return [(b, bi, bo) for b, (bi, bo) in zip(blocks, block_slices(blocks))]
+
+
+def _structured_q(layout, a, w, q_dim, p_dim):
+    """Structured Q (N, q, p), ||Q_i|| <= 1, aligned with a (p-space) and w (q-space)."""
+    N = a.shape[0]
+    Q = np.zeros((N, q_dim, p_dim), complex)
+    for b, bi, bo in layout:
+        ab, wb = a[:, bo], w[:, bi]
+        if b.is_full:
+            Q[:, bi, bo] = np.einsum("ni,nj->nij", _unit(wb), _unit(ab).conj())
+        else:
+            qs = _scalar_phase(np.einsum("ni,ni->n", ab.conj(), wb), b.kind)
+            idx = np.arange(b.size)
+            Q[:, bi.start + idx, bo.start + idx] = qs[:, None]
+    return Q
+
+
+def _power_iteration(M, layout, b, w, iterations, real_only):
+    """Packard-Doyle power iteration from starts b, w (rows of a batch).
+
+    Returns the best (value, Q, lambda) seen at the checkpoints; rows whose
+    value has settled stop iterating.
+    """
+    N, p, q = M.shape
+    MH = np.swapaxes(M, 1, 2).conj()
+    best_val = np.zeros(N)
+    best_Q = np.zeros((N, q, p), complex)
+    best_lam = np.ones(N, complex)
+    b, w = _unit(b), _unit(w)
+    active = np.arange(N)
+    Ma, MHa = M, MH
+    check = 5
+    for it in range(iterations):
+        a, w, b = _power_sweep(Ma, MHa, layout, b, w)
+        if (it + 1) % check and it != iterations - 1:
+            continue
+        Q = _structured_q(layout, a, w, q, p)
+        val, lam = _eigen_gain(Q, Ma, real_only)
+        old = best_val[active]
+        better = val > old
+        rows = active[better]
+        best_val[rows], best_Q[rows], best_lam[rows] = val[better], Q[better], lam[better]
+        keep = np.abs(val - old) > 1e-13 * np.maximum(val, 1e-300)
+        active, b, w = active[keep], b[keep], w[keep]
+        if active.size == 0:
+            break
+        Ma, MHa = M[active], MH[active]
+    return best_val, best_Q, best_lam
+
+
+def _power_sweep(M, MH, layout, b, w):
+    """One sweep b -> a = M b -> z -> w = M^H z -> b, block by block."""
+    a = _unit(np.einsum("npq,nq->np", M, b))
+    w_new = _unit(np.einsum("nqp,np->nq", MH, _align(layout, a, w, "z")))
+    w = np.where(np.linalg.norm(w_new, axis=1, keepdims=True) > 0, w_new, w)
+    bn = _unit(_align(layout, a, w, "b"))
+    b = np.where(np.linalg.norm(bn, axis=1, keepdims=True) > 0, bn, b)
+    return a, w, b
+
+
+def _align(layout, a, w, side):
+    """Block-wise alignment of the power iteration.
+
+    ``side="z"`` gives z (M's output space): |w_i| a_i / |a_i| for a full
+    block, conj(q_i) w_i for a scalar block; ``side="b"`` gives b (M's input
+    space): |a_i| w_i / |w_i|, or q_i a_i, with q_i the scalar's phase (or
+    sign) that aligns a_i with w_i.
+    """
+    to_z = side == "z"
+    out = np.zeros_like(a if to_z else w)
+    for blk, bi, bo in layout:
+        ab, wb = a[:, bo], w[:, bi]
+        dest = bo if to_z else bi
+        if blk.is_full:
+            direction, size = (ab, wb) if to_z else (wb, ab)
+            out[:, dest] = np.linalg.norm(size, axis=1, keepdims=True) * _unit(direction)
+        else:
+            qs = _scalar_phase(np.einsum("ni,ni->n", ab.conj(), wb), blk.kind)
+            out[:, dest] = np.conj(qs)[:, None] * wb if to_z else qs[:, None] * ab
+    return out
+
+
+def _scalar_phase(s, kind):
+    mag = np.abs(s)
+    if kind == "complex":
+        return np.where(mag > 0, s / np.where(mag > 0, mag, 1), 1.0)
+    return np.where(s.real >= 0, 1.0, -1.0)
+
+
+def _eigen_gain(Q, M, real_only):
+    """Largest |lambda| of Q M (real lambda only if real_only), with lambda."""
+    lam = np.linalg.eigvals(Q @ M)
+    mag = np.abs(lam)
+    if real_only:
+        mag = np.where(np.abs(lam.imag) <= 1e-9 * np.maximum(mag, 1e-300), mag, 0.0)
+    k = np.argmax(mag, axis=1)
+    idx = np.arange(len(k))
+    val = mag[idx, k]
+    out = lam[idx, k]
+    if real_only:
+        out = out.real + 0j
+    return val, np.where(val > 0, out, 1.0)
+
+
+def _lower_bound(M, blocks, starts, iterations, rng, n_random, upper):
+    """Best power-iteration lower bound over several starts.
+
+    The deterministic starts run everywhere; the ``n_random`` seeded random
+    starts run only where the bounds still differ by more than 1e-6.
+    """
+    nf, p, q = M.shape
+    real_only = any(b.is_real for b in blocks)
+    layout = _layout(blocks)
+    lower = np.zeros(nf)
+    Delta = np.zeros((nf, q, p), complex)
+
+    def run(rows, start_list):
+        R = len(start_list)
+        b0 = np.concatenate([s[0] for s in start_list])
+        w0 = np.concatenate([s[1] for s in start_list])
+        val, Q, lam = _power_iteration(np.tile(M[rows], (R, 1, 1)), layout, b0, w0,
+                                       iterations, real_only)
+        n = len(rows)
+        val = val.reshape(R, n)
+        k = np.argmax(val, axis=0)
+        pick = k * n + np.arange(n)
+        best = val[k, np.arange(n)]
+        better = best > lower[rows]
+        sel = rows[better]
+        lower[sel] = best[better]
+        Delta[sel] = Q[pick[better]] / lam[pick[better]][:, None, None]
+
+    run(np.arange(nf), starts)
+    todo = np.nonzero(lower < upper * (1 - 1e-6))[0]
+    if todo.size and n_random:
+        shape = (todo.size, q)
+        run(todo, [(rng.standard_normal(shape) + 1j * rng.standard_normal(shape),
+                    rng.standard_normal(shape) + 1j * rng.standard_normal(shape))
+                   for _ in range(n_random)])
+    return lower, Delta
+
+
+def complex_lower_bound(M, blocks, Dl, Dr, upper, *, iterations=60, restarts=3, rng=None):
+    """Lower bound of mu for a structure without real blocks, and a Delta attaining it.
+
+    The power iteration starts from the top singular vectors of the scaled
+    matrix Dl M Dr^-1 and of M itself, then from ``restarts`` seeded random
+    vectors where the bounds still differ.
+
+    Parameters
+    ----------
+    M : ndarray, shape (nf, p, q)
+    blocks : tuple of Block
+        Complex structure fitting M.
+    Dl, Dr : ndarray, shapes (nf, p, p) and (nf, q, q)
+        D-scalings of the upper bound (used for the first start).
+    upper : ndarray, shape (nf,)
+        The upper bound (random starts only where lower < upper).
+    iterations, restarts : int
+        Power-iteration sweeps per start; number of random starts.
+    rng : numpy.random.Generator, optional
+        Source of the random starts (default: seeded with 0).
+
+    Returns
+    -------
+    lower : ndarray, shape (nf,)
+    Delta : ndarray, shape (nf, q, p)
+        Structured, ``det(I - M Delta) = 0``, ``norm(Delta, 2) = 1 / lower``.
+    """
+    rng = np.random.default_rng(0) if rng is None else rng
+    # start from the top singular vectors of the scaled and unscaled M:
+    # with A = Dl M Dr^-1 = sigma u v^H + ..., b = Dr^-1 v and w = Dr^H v
+    # satisfy the power iteration's alignment conditions when D is optimal
+    v = np.linalg.svd(Dl @ M @ np.linalg.inv(Dr))[2][:, 0, :].conj()
+    v0 = np.linalg.svd(M)[2][:, 0, :].conj()
+    starts = [(np.linalg.solve(Dr, v[..., None])[..., 0],
+               np.einsum("nji,nj->ni", Dr.conj(), v)), (v0, v0)]
+    return _lower_bound(M, blocks, starts, iterations, rng, restarts, upper)
+
+
+def mixed_lower_bound(M, blocks, upper, *, iterations=60, restarts=3, rng=None):
+    """Lower bound of mu for structures with real scalars, and a Delta attaining it.
+
+    Closing the real loops at fixed real values delta_r leaves the complex
+    blocks with M_c(delta_r) = M_cc + M_cr D_r (I - M_rr D_r)^-1 M_rc, and
+    det(I - M Delta) = det(I - M_rr D_r) det(I - M_c Delta_c); so any
+    delta_r and a complex Delta_c destabilising M_c give a structured Delta
+    of norm max(|delta_r|, ||Delta_c||).  delta_r is searched on a grid
+    (scaled by 1 / upper) and refined coordinate-wise; the complex part uses
+    the power iteration.  Without complex blocks only a single 1 x 1 real
+    scalar is handled exactly (mu = |m| for real m); other purely real
+    structures get the plain power-iteration bound (often 0).
+
+    Parameters
+    ----------
+    M : ndarray, shape (nf, p, q)
+    blocks : tuple of Block
+        Structure fitting M, with at least one real block.
+    upper : ndarray, shape (nf,)
+        An upper bound of mu (sets the scale of the search).
+    iterations, restarts : int
+        Power-iteration sweeps per start; random starts (pure real case).
+    rng : numpy.random.Generator, optional
+        Source of the random directions and starts (default: seeded with 0).
+
+    Returns
+    -------
+    lower : ndarray, shape (nf,)
+    Delta : ndarray, shape (nf, q, p)
+        Structured, ``det(I - M Delta) = 0``, ``norm(Delta, 2) = 1 / lower``.
+    """
+    rng = np.random.default_rng(0) if rng is None else rng
+    nf, p, q = M.shape
+    layout = list(zip(blocks, block_slices(blocks)))
+    real = [(b, s) for b, s in layout if b.is_real]
+    comp = [(b, s) for b, s in layout if not b.is_real]
+    if not comp:
+        if p == 1 and q == 1:
+            m = M[:, 0, 0]
+            ok = (np.abs(m.imag) <= 1e-12 * np.abs(m)) & (m != 0)
+            lower = np.where(ok, np.abs(m), 0.0)
+            Delta = np.where(ok, 1 / np.where(ok, m.real, 1), 0.0)[:, None, None] + 0j
+            return lower, Delta
+        v = np.linalg.svd(M)[2][:, 0, :].conj()
+        return _lower_bound(M, blocks, [(v, v)], iterations, rng, restarts, upper)
+    IR = np.concatenate([np.arange(q)[bi] for _, (bi, _) in real])
+    OR = np.concatenate([np.arange(p)[bo] for _, (_, bo) in real])
+    IC = np.concatenate([np.arange(q)[bi] for _, (bi, _) in comp])
+    OC = np.concatenate([np.arange(p)[bo] for _, (_, bo) in comp])
+    sub = tuple(b for b, _ in comp)       # the complex blocks, in order on M_c
+    owner = np.concatenate([np.full(b.size, j) for j, (b, _) in enumerate(real)])
+    Mrr, Mrc = M[:, OR][:, :, IR], M[:, OR][:, :, IC]
+    Mcr, Mcc = M[:, OC][:, :, IR], M[:, OC][:, :, IC]
+    nr = len(real)
+
+    def evaluate(rows, delta):
+        """Value and Delta for real values delta (len(rows), nr)."""
+        n = len(rows)
+        Dr = np.zeros((n, len(IR), len(OR)))
+        Dr[:, np.arange(len(IR)), np.arange(len(OR))] = delta[:, owner]
+        X = np.eye(len(OR)) - Mrr[rows] @ Dr
+        det = np.abs(np.linalg.det(X))
+        sing = det < 1e-12
+        X[sing] = np.eye(len(OR))
+        Mc = Mcc[rows] + Mcr[rows] @ Dr @ np.linalg.solve(X, Mrc[rows])
+        v = np.linalg.svd(Mc)[2][:, 0, :].conj()
+        low_c, Dc = _lower_bound(Mc, sub, [(v, v)], iterations, rng, 0, np.zeros(n))
+        dmax = np.abs(delta).max(axis=1)
+        with np.errstate(divide="ignore"):
+            val = np.minimum(np.where(dmax > 0, 1 / np.where(dmax > 0, dmax, 1), np.inf),
+                             np.where(low_c > 0, low_c, 0.0))
+        val = np.where(sing, np.where(dmax > 0, 1 / np.where(dmax > 0, dmax, 1), 0), val)
+        Delta = np.zeros((n, q, p), complex)
+        Delta[:, IR[:, None], OR[None, :]] = Dr
+        Delta[:, IC[:, None], OC[None, :]] = np.where(sing[:, None, None], 0, Dc)
+        return np.where(np.isfinite(val), val, 0.0), Delta, low_c
+
+    lower = np.zeros(nf)
+    Delta = np.zeros((nf, q, p), complex)
+    best_dir = np.zeros((nf, nr))
+
+    def consider(dirs, beta):
+        """Evaluate delta = dirs / beta for dirs (nc, nf, nr), beta (nc, nf)."""
+        nc = len(dirs)
+        rows = np.tile(np.arange(nf), nc)
+        delta = (dirs / beta[:, :, None]).reshape(-1, nr)
+        val, D, low_c = evaluate(rows, delta)
+        val, low_c = val.reshape(nc, nf), low_c.reshape(nc, nf)
+        k = np.argmax(val, axis=0)
+        v = val[k, np.arange(nf)]
+        better = v > lower
+        lower[better] = v[better]
+        Delta[better] = D[(k * nf + np.arange(nf))[better]]
+        best_dir[better] = dirs[k[better], np.nonzero(better)[0]]
+        return low_c
+
+    # directions nu of the real part, delta_r = nu / beta with |nu_j| <= 1:
+    # for each, iterate beta <- mu_c(M_c(nu / beta)) towards the balanced
+    # point where the real and complex parts have the same norm 1 / beta
+    if nr == 1:
+        dirs = np.linspace(-1, 1, 21)[:, None]
+    elif nr == 2:
+        g1 = np.linspace(-1, 1, 5)
+        dirs = np.stack(np.meshgrid(g1, g1), -1).reshape(-1, 2)
+    else:   # vertices (up to 16) and seeded random directions
+        vert = np.array(np.meshgrid(*[[-1.0, 1.0]] * min(nr, 4))).reshape(min(nr, 4), -1).T
+        vert = np.concatenate([vert, np.ones((len(vert), nr - vert.shape[1]))], axis=1)
+        dirs = np.concatenate([vert, rng.uniform(-1, 1, (16, nr))])
+    dirs = np.repeat(dirs[:, None, :], nf, axis=1)
+    beta = np.repeat(np.where(upper > 0, upper, 1.0)[None], len(dirs), axis=0)
+    for _ in range(6):
+        low_c = consider(dirs, beta)
+        beta = np.clip(low_c, 1e-3 * upper, upper)
+        beta = np.where(beta > 0, beta, 1.0)
+    # coordinate refinement of the best direction, each trial direction
+    # with its own short beta iteration
+    step = 0.25
+    for _ in range(8):
+        trial = []
+        for j in range(nr):
+            for sign in (1, -1):
+                c = best_dir.copy()
+                c[:, j] = np.clip(c[:, j] + sign * step, -1, 1)
+                trial.append(c)
+        trial = np.array(trial)
+        beta = np.repeat(np.where(lower > 0, lower, np.where(upper > 0, upper, 1.0))[None],
+                         len(trial), axis=0)
+        for _ in range(3):
+            low_c = consider(trial, beta)
+            beta = np.clip(low_c, 1e-3 * upper, upper)
+            beta = np.where(beta > 0, beta, 1.0)
+        step /= 2
+    return lower, Delta

@@ -1,0 +1,284 @@
+"""Robust-stability margins of a loop against the real coefficient perturbations of its plant.
+
+The exact parametric margin (zero exclusion over the box of spread delta) and
+what the complex, small-gain view certifies for comparison.  The method is
+described in ``docs/uncertainty.md``.
+"""
+
+from collections import namedtuple
+
+import control as ct
+import numpy as np
+import numpy.polynomial.polynomial as npoly
+import scipy.optimize as opt
+
+from piezolib._checks import check_finite_array, check_positive, check_proper, check_siso
+from piezolib import robust
+from piezolib.uncertainty.envelope import (SpreadBracket, largest_covered_spread,
+                                           relative_error_bound)
+from piezolib.uncertainty.polynomials import (check_frequencies, check_plant, loop_polynomials,
+                                              rectangle_half_widths)
+
+__all__ = ["ParametricMargin", "stability_gauge", "parametric_stability_margin",
+           "small_gain_spread", "weight_certified_spread"]
+
+ParametricMargin = namedtuple("ParametricMargin", [
+    "spread", "omega", "offsets", "nominal_stable", "bounded", "spread_max"])
+ParametricMargin.__doc__ = """Result of :func:`parametric_stability_margin`.
+
+spread : float
+    delta*: every member of the box with spread < delta* is stable, and the
+    member ``offsets`` at spread delta* has a pole at +-j ``omega``
+    (``spread_max`` when ``bounded`` is False; 0 when the nominal loop is
+    unstable).
+omega : float
+    Critical frequency [rad/s] (nan when not bounded or nominal unstable).
+offsets : ndarray
+    Normalised offsets q (in [-1, 1]) of a critical member.
+nominal_stable : bool
+bounded : bool
+    False when delta* exceeds ``spread_max`` (the search stops there).
+spread_max : float
+"""
+
+
+def stability_gauge(G, K, omega):
+    """Smallest spread at which the value set of the closed loop contains 0, at each frequency.
+
+    With h = a + b K the gauge is max(|Re h|/R, |Im h|/I), R and I the
+    half-widths of the perturbation rectangle (derivation in
+    ``docs/uncertainty.md``).
+
+    Parameters
+    ----------
+    G : control.LTI
+        SISO proper plant.
+    K : control.LTI or None
+        SISO proper controller; ``None`` for the open loop (K = 0).
+    omega : array_like
+        Frequencies [rad/s] (>= 0).
+
+    Returns
+    -------
+    ndarray
+        Gauge [-] on the grid.
+    """
+    polys = loop_polynomials(G, K)
+    omega = check_finite_array("omega", omega, ndim=1, min_length=1)
+    if np.any(omega < 0):
+        raise ValueError("omega must be non-negative")
+    return _gauge(polys, omega / polys.ws)
+
+
+def parametric_stability_margin(G, K=None, spread_max=1.0, omega=None):
+    """Exact largest spread for which every member of the box is stable.
+
+    Zero exclusion: delta* is the minimum over omega >= 0 of
+    :func:`stability_gauge`, located exactly among the real roots of four
+    polynomials and a dense grid, then polished (``docs/uncertainty.md``).
+    A critical member (q on the boundary of the box) is returned; its closed
+    loop has poles at +-j omega*.
+
+    Parameters
+    ----------
+    G : control.LTI
+        SISO proper plant.
+    K : control.LTI or None
+        SISO proper controller; ``None`` gives the open-loop margin (the
+        largest spread with every member of the box stable).
+    spread_max : float
+        Upper end of the search; the result is reported as unbounded beyond it.
+    omega : array_like, optional
+        Extra grid [rad/s] for the polishing step; default 1e-4 ... 1e4 times
+        the plant's frequency scale, 4000 points.
+
+    Returns
+    -------
+    ParametricMargin
+    """
+    polys = loop_polynomials(G, K)
+    spread_max = check_positive("spread_max", spread_max)
+    n = len(polys.a) - 1
+    if not np.all(npoly.polyroots(polys.c0).real < 0):
+        return ParametricMargin(0.0, float("nan"), np.zeros(n), False, True, spread_max)
+    if omega is None:
+        w_grid = np.r_[0.0, np.logspace(-4, 4, 4000)]
+    else:
+        w_grid = np.r_[0.0, check_finite_array("omega", omega, ndim=1) / polys.ws]
+    candidates = np.r_[w_grid, _critical_frequencies(polys)]
+    values = _gauge(polys, candidates)
+    order = np.argsort(values)[:12]
+    best_w, best = candidates[order[0]], values[order[0]]
+    for w0 in candidates[order]:
+        if w0 <= 0:
+            continue
+        res = opt.minimize_scalar(lambda lw: _gauge(polys, np.array([np.exp(lw)]))[0],
+                                  bounds=(np.log(w0) - 5e-3, np.log(w0) + 5e-3),
+                                  method="bounded", options={"xatol": 1e-12})
+        if res.fun < best:
+            best, best_w = float(res.fun), float(np.exp(res.x))
+    if best > spread_max:
+        return ParametricMargin(spread_max, float("nan"), np.zeros(n), True, False, spread_max)
+    return ParametricMargin(float(best), float(best_w * polys.ws),
+                            _critical_offsets(polys, best_w, best), True, True, spread_max)
+
+
+def small_gain_spread(G, K, omega, rtol=1e-4):
+    """Largest spread certified by the complex (small-gain) view, with no rational weight.
+
+    The box is treated as multiplicative complex uncertainty bounded pointwise
+    by its exact envelope (:func:`~piezolib.uncertainty.envelope.relative_error_bound`);
+    a spread is certified when max_omega E(omega) |T(j omega)| < 1 and every
+    member is open-loop stable.  Bisection on [0, open-loop margin].
+
+    Parameters
+    ----------
+    G : control.LTI
+        SISO proper plant.
+    K : control.LTI
+        SISO proper controller (required: the certificate is about a closed loop).
+    omega : array_like
+        Grid [rad/s]; the peak of E |T| is refined off the grid near its
+        grid maximum.
+    rtol : float, optional
+        Relative width of the final bracket.
+
+    Returns
+    -------
+    SpreadBracket
+        ``upper`` is the first spread found to fail (or the open-loop margin).
+    """
+    G = check_plant(G)
+    _check_controller(K)
+    omega = check_frequencies(omega)
+    if not robust.is_stable(G, K):
+        return SpreadBracket(0.0, 0.0, 0.0, True)
+    T = robust.loop_functions(G, K).T
+    t_mag = np.abs(np.ravel(T(1j * omega)))
+    open_loop = parametric_stability_margin(G, None)
+
+    def certified(spread):
+        E_T = relative_error_bound(G, spread, omega) * t_mag
+        k = int(np.argmax(E_T))
+        peak = E_T[k]
+        if np.isfinite(peak) and 0 < k < omega.size - 1:
+            res = opt.minimize_scalar(
+                lambda lw: -(relative_error_bound(G, spread, np.exp([lw]))[0]
+                             * np.abs(np.ravel(T(1j * np.exp(lw))))[0]),
+                bounds=(np.log(omega[k - 1]), np.log(omega[k + 1])), method="bounded")
+            peak = max(peak, -res.fun)
+        return bool(peak < 1.0)
+
+    hi = open_loop.spread if open_loop.bounded else open_loop.spread_max
+    lo = 0.0
+    if certified(hi * (1 - 1e-9)):
+        return SpreadBracket(hi, hi, hi, open_loop.bounded)
+    while hi - lo > rtol * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if certified(mid) else (lo, mid)
+    return SpreadBracket(lo, lo, hi, True)
+
+
+def weight_certified_spread(weight, G, K, omega, rtol=1e-3):
+    """Spread certified by a rational weight W with the small-gain test.
+
+    W certifies the box of spread delta when ||W T||_inf < 1 and |W| covers
+    the exact box envelope (which implies every member is open-loop stable).
+
+    Parameters
+    ----------
+    weight : control.LTI
+        SISO proper multiplicative weight.
+    G, K : control.LTI
+        Plant and controller (both required).
+    omega : array_like
+        Grid [rad/s] of the coverage test.
+    rtol : float, optional
+        Relative width of the final bracket.
+
+    Returns
+    -------
+    norm_WT : float
+        ||W T||_inf.
+    bracket : SpreadBracket
+        Largest spread covered (spread 0 when ||W T||_inf >= 1).
+    """
+    check_siso("weight", weight)
+    check_proper("weight", weight)
+    G = check_plant(G)
+    _check_controller(K)
+    T = robust.loop_functions(G, K).T
+    norm, _ = robust.hinf_norm(ct.ss(weight) * T)
+    if norm >= 1:
+        return float(norm), SpreadBracket(0.0, 0.0, 0.0, True)
+    return float(norm), largest_covered_spread(weight, G, omega, levels=None, rtol=rtol,
+                                               spread_max=0.99)
+
+
+# --- internals -----------------------------------------------------------------
+def _check_controller(K):
+    if K is None:
+        raise TypeError("K is required: the certificate is about a closed loop")
+    check_siso("K", K)
+    check_proper("K", K)
+
+
+def _jw_parts(c):
+    """Real polynomials (low first) with c(j w) = re(w) + j im(w)."""
+    k = np.arange(len(c))
+    unit = 1j ** k
+    return c * np.round(unit.real), c * np.round(unit.imag)
+
+
+def _gauge_polynomials(polys):
+    cr, ci = _jw_parts(polys.c0)
+    dr, di = _jw_parts(polys.d)
+    U = npoly.polyadd(npoly.polymul(cr, dr), npoly.polymul(ci, di))
+    V = npoly.polysub(npoly.polymul(ci, dr), npoly.polymul(cr, di))
+    D2 = npoly.polyadd(npoly.polymul(dr, dr), npoly.polymul(di, di))
+    absa = np.abs(polys.a[:-1])
+    R = absa * (np.arange(len(absa)) % 2 == 0)
+    I = absa * (np.arange(len(absa)) % 2 == 1)
+    return U, V, npoly.polymul(R, D2), npoly.polymul(I, D2)
+
+
+def _gauge(polys, w):
+    U, V, rho, iota = (npoly.polyval(w, p) for p in _gauge_polynomials(polys))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        f_re = np.where(rho > 0, np.abs(U) / rho, np.where(np.abs(U) > 0, np.inf, 0.0))
+        f_im = np.where(iota > 0, np.abs(V) / iota, np.where(np.abs(V) > 0, np.inf, 0.0))
+    return np.maximum(f_re, f_im)
+
+
+def _critical_frequencies(polys):
+    """Real positive roots of the polynomials whose roots hold the gauge's minimum."""
+    U, V, rho, iota = _gauge_polynomials(polys)
+    der = npoly.polyder
+    candidates = [
+        npoly.polysub(npoly.polymul(der(U), rho), npoly.polymul(U, der(rho))),
+        npoly.polysub(npoly.polymul(der(V), iota), npoly.polymul(V, der(iota))),
+        npoly.polysub(npoly.polymul(U, iota), npoly.polymul(V, rho)),
+        npoly.polyadd(npoly.polymul(U, iota), npoly.polymul(V, rho)),
+    ]
+    roots = []
+    for p in candidates:
+        p = np.trim_zeros(p, "b")
+        if p.size > 1:
+            r = npoly.polyroots(p / np.abs(p).max())
+            keep = (np.abs(r.imag) <= 1e-3 * np.maximum(np.abs(r), 1e-12)) & (r.real > 0)
+            roots.append(r.real[keep])
+    return np.concatenate(roots) if roots else np.array([])
+
+
+def _critical_offsets(polys, w, spread):
+    """Offsets q in the box putting a root of c at j w for the given spread."""
+    h = npoly.polyval(1j * w, polys.c0) / npoly.polyval(1j * w, polys.d)
+    R, I = rectangle_half_widths(polys.a[:-1], np.array([w]))
+    x = -h.real / (spread * R[0]) if R[0] > 0 else 0.0
+    y = -h.imag / (spread * I[0]) if I[0] > 0 else 0.0
+    k = np.arange(len(polys.a) - 1)
+    unit = 1j ** k
+    # sum_i q_i a_i (j w)^i = spread^-1 * (-h): even terms real, odd imaginary
+    sign = np.sign(polys.a[:-1]) * np.where(k % 2 == 0, np.round(unit.real), np.round(unit.imag))
+    q = np.where(k % 2 == 0, np.clip(x, -1, 1), np.clip(y, -1, 1)) * sign
+    return q

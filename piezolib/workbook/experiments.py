@@ -1,0 +1,361 @@
+"""Cases I–III of Sec. V: the Table 4 hysteresis test and the Table 5 tracking test.
+
+:func:`table4_reference` is the 10 Hz triangle of the Table 4 test and
+:func:`table4_measure` how every Table 4 loop is measured (shared by Cases
+I–III; the cases themselves are run by :func:`run_case` on the loop of
+:mod:`piezolib.workbook.loop`).  :func:`hysteresis_test` and
+:func:`tracking_test` run the three cases on references built once and give
+the tables in the paper's layout.  What each case applies and why:
+``docs/design.md``.
+"""
+
+import functools
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from piezolib import paper, signals
+from piezolib._checks import check_finite_array, check_integer, check_positive, check_same_length
+from piezolib.hysteresis.dahl import DahlModel
+from piezolib.hysteresis.measure import hysteresis_measure
+from piezolib.metrics import improvement_percent
+from piezolib.problem.hysteresis import workbook_dahl_fit
+from piezolib.workbook.loop import DISCARD_PERIODS, discrete_controller, run_loop
+
+__all__ = ["table4_reference", "table4_measure",
+           "CASES", "MIN_MEASURED_S", "run_case", "case_table", "ExperimentResult",
+           "hysteresis_test", "tracking_periods", "tracking_reference", "tracking_test"]
+
+
+def table4_reference(amplitude_V, periods=3, frequency_hz=None, fs=paper.SAMPLING_FREQUENCY_HZ):
+    """Reference of the Table 4 experiments for one actuator amplitude.
+
+    A triangle from 0 to ``amplitude_V / AMPLIFIER_GAIN`` [V] at 10 Hz: the
+    amplifier-input voltage that Case I applies directly (actuator voltage
+    0 ... amplitude_V) and, read as x_r = v_r in sensor volts, the desired
+    displacement of Cases II and III (0 ... 0.3 um/V x amplitude_V).
+
+    Parameters
+    ----------
+    amplitude_V : float
+        Actuator amplitude A [V] (Table 4: 10, 20, 30, 40 V).
+    periods : int, optional
+        Number of periods.
+    frequency_hz, fs : float, optional
+        Triangle frequency (default 10 Hz) and sampling rate [Hz].
+
+    Returns
+    -------
+    t : ndarray
+        Time [s].
+    v_r : ndarray
+        Reference [V].
+    """
+    amplitude_V = check_positive("amplitude_V", amplitude_V)
+    f = paper.HYSTERESIS_TEST["frequency_Hz"] if frequency_hz is None else frequency_hz
+    return signals.triangle(amplitude_V / paper.AMPLIFIER_GAIN, f, periods=periods, fs=fs)
+
+
+def table4_measure(reference_V, v_y_V, discard_periods=1, frequency_hz=None,
+                   fs=paper.SAMPLING_FREQUENCY_HZ):
+    """Hysteresis of one Table 4 loop, measured the same way in every case.
+
+    The loop is the measured displacement x = 3 um/V * v_y [um] against the
+    reference expressed as actuator voltage, AMPLIFIER_GAIN * reference [V]
+    (Case I: the reference is the applied u_c, so the input axis is the
+    actuator voltage v_a itself; Cases II-III: the reference v_r that the
+    feedforward / closed loop receives).  The first ``discard_periods``
+    periods (compensator and loop start-up) are left out, and eq. 25-26 are
+    applied to the rest (:func:`piezolib.hysteresis.hysteresis_measure`).
+
+    Parameters
+    ----------
+    reference_V : array_like
+        u_c (Case I) or v_r (Cases II, III) [V] at the DAQ rate.
+    v_y_V : array_like
+        Measured sensor output [V], same length.
+    discard_periods : int, optional
+    frequency_hz, fs : float, optional
+        Triangle frequency (default 10 Hz) and sampling rate [Hz].
+
+    Returns
+    -------
+    HysteresisMeasure
+        In actuator volts and micrometres.
+    """
+    reference_V = check_finite_array("reference_V", reference_V, ndim=1, min_length=8)
+    v_y_V = check_finite_array("v_y_V", v_y_V, ndim=1, min_length=8)
+    check_same_length(reference_V=reference_V, v_y_V=v_y_V)
+    discard_periods = check_integer("discard_periods", discard_periods, minimum=0)
+    f = paper.HYSTERESIS_TEST["frequency_Hz"] if frequency_hz is None else frequency_hz
+    start = int(round(discard_periods * check_positive("fs", fs) / check_positive("frequency_hz", f)))
+    if start >= reference_V.size - 8:
+        raise ValueError(f"discarding {discard_periods} period(s) leaves no record "
+                         f"({reference_V.size} samples)")
+    return hysteresis_measure(paper.AMPLIFIER_GAIN * reference_V[start:],
+                              paper.UM_PER_VOLT * v_y_V[start:])
+
+
+# --------------------------------------------------------------------------- the cases
+#: The cases of Sec. V (Tables 4-5, Fig. 14-15).
+CASES = {
+    "I": "open loop without compensator",
+    "II": "open loop with Dahl feedforward",
+    "III": "Dahl feedforward + feedback controller",
+}
+
+#: Shortest steady-state record of the tracking test [s] (whole periods).
+MIN_MEASURED_S = 0.1
+
+
+def run_case(case, stage, v_r, dahl, controller=None, case_I_gain=None):
+    """Run Case I, II or III of Sec. V on one reference.
+
+    Parameters
+    ----------
+    case : {"I", "II", "III"}
+    stage : piezolib.problem.stage.VirtualStage
+    v_r : array_like
+        Reference [V].
+    dahl : DahlModel or None
+        The feedforward model (Cases II, III) whose g_a and x0 also map the
+        reference in Case I.  None: the workbook's shared model,
+        :func:`piezolib.problem.hysteresis.workbook_dahl_fit`.
+    controller : see :func:`piezolib.workbook.loop.discrete_controller`
+        Required for Case III, ignored otherwise.
+    case_I_gain : float, optional
+        g of Case I, applied without offset (u_c = v_r / g); default: the
+        static part of the Dahl model, u_c = (v_r - x0) / g_a.
+
+    Returns
+    -------
+    piezolib.workbook.loop.LoopResult
+    """
+    if case not in CASES:
+        raise ValueError(f"case must be one of {sorted(CASES)}, got {case!r}")
+    if dahl is None:
+        dahl = workbook_dahl_fit().model
+    if not isinstance(dahl, DahlModel):
+        raise TypeError(f"dahl must be a hysteresis.DahlModel, got {type(dahl).__name__}")
+    if case == "I":
+        static = ((dahl.g_a, dahl.x0) if case_I_gain is None
+                  else check_positive("case_I_gain", case_I_gain))
+        return run_loop(stage, v_r, feedforward=static)
+    if case == "II":
+        return run_loop(stage, v_r, feedforward=dahl)
+    if controller is None:
+        raise ValueError("case III needs a controller")
+    return run_loop(stage, v_r, feedforward=dahl, controller=controller)
+
+
+def case_table(case_values, columns):
+    """Table 4/5 layout: the three case rows and the three improvement rows.
+
+    Parameters
+    ----------
+    case_values : dict
+        {"I": values, "II": values, "III": values}, one value per column.
+    columns : pandas.Index
+        Column index (amplitudes [V] or frequencies [Hz]).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Rows as in :func:`piezolib.paper.table4` (its row index).
+    """
+    I, II, III = (np.asarray(case_values[c], dtype=float) for c in ("I", "II", "III"))
+    data = [I, II, III, improvement_percent(I, II), improvement_percent(I, III),
+            improvement_percent(II, III)]
+    return pd.DataFrame(data, index=paper.case_rows_index(), columns=columns)
+
+
+@dataclass(frozen=True, eq=False)
+class ExperimentResult:
+    """A Table 4 or Table 5 experiment.
+
+    Attributes
+    ----------
+    table : pandas.DataFrame
+        Same layout as :func:`piezolib.paper.table4` / :func:`~piezolib.paper.table5`.
+    runs : dict
+        {(case, column value): LoopResult}.
+    saturation : pandas.DataFrame
+        Limited samples per case (rows) and column: DAC/amplifier input +
+        amplifier output + ADC.
+    """
+
+    table: pd.DataFrame
+    runs: dict = field(repr=False)
+    saturation: pd.DataFrame
+
+
+# --------------------------------------------------------------------------- references
+def _read_only(t, v_r):
+    t.flags.writeable = False
+    v_r.flags.writeable = False
+    return t, v_r
+
+
+@functools.lru_cache(maxsize=64)
+def _table4_triangle(amplitude_V, periods, fs):
+    return _read_only(*table4_reference(amplitude_V, periods=periods, fs=fs))
+
+
+@functools.lru_cache(maxsize=64)
+def _table5_triangle(frequency_hz, periods, amplitude_um, fs):
+    return _read_only(*signals.triangle(amplitude_um / paper.UM_PER_VOLT, frequency_hz,
+                                        periods=periods, fs=fs))
+
+
+def tracking_periods(frequency_hz, discard_periods=DISCARD_PERIODS,
+                     min_measured_s=MIN_MEASURED_S):
+    """Periods to simulate: ``discard_periods`` plus whole periods covering
+    at least ``min_measured_s`` [s] (one period at least)."""
+    frequency_hz = check_positive("frequency_hz", frequency_hz)
+    discard_periods = check_integer("discard_periods", discard_periods, minimum=0)
+    min_measured_s = check_positive("min_measured_s", min_measured_s)
+    return discard_periods + max(1, math.ceil(min_measured_s * frequency_hz - 1e-9))
+
+
+def tracking_reference(frequency_hz, periods, amplitude_um=None, fs=paper.SAMPLING_FREQUENCY_HZ):
+    """v_r [V] of the tracking test: a triangle from 0 to amplitude_um / (3 um/V).
+
+    Built once per argument set and shared (the arrays are read-only).
+
+    Parameters
+    ----------
+    frequency_hz : float
+        Triangle frequency [Hz].
+    periods : int
+        Number of periods.
+    amplitude_um : float, optional
+        Peak displacement [um]; default the paper's 12 um.
+    fs : float
+        Sampling rate [Hz].
+
+    Returns
+    -------
+    t : ndarray
+        Time [s].
+    v_r : ndarray
+        Reference [V].
+    """
+    amplitude_um = paper.TRACKING_TEST["amplitude_um"] if amplitude_um is None else amplitude_um
+    return _table5_triangle(check_positive("frequency_hz", frequency_hz),
+                            check_integer("periods", periods, minimum=1),
+                            check_positive("amplitude_um", amplitude_um),
+                            check_positive("fs", fs))
+
+
+# --------------------------------------------------------------------------- the tests
+def _positive_values(name, values, default):
+    return [check_positive(name, v) for v in (default if values is None else values)]
+
+
+def _case_III_controller(controller, stage):
+    if controller is None:
+        raise ValueError("controller must be given (Case III)")
+    return discrete_controller(controller, stage.fs)
+
+
+def _experiment(columns, run, measure):
+    values, runs, sat = {c: [] for c in CASES}, {}, {c: [] for c in CASES}
+    for col in columns:
+        for case in CASES:
+            result = run(case, col)
+            runs[(case, float(col))] = result
+            values[case].append(measure(result, col))
+            sat[case].append(result.saturation_count)
+    table = case_table(values, columns)
+    saturation = pd.DataFrame([sat[c] for c in CASES], index=pd.Index(
+        [f"case_{c}" for c in CASES], name="row"), columns=columns)
+    return ExperimentResult(table, runs, saturation)
+
+
+def hysteresis_test(stage, dahl, controller, amplitudes_V=None, periods=4,
+                    discard_periods=DISCARD_PERIODS):
+    """Table 4: hysteresis % of 10 Hz triangles, Cases I-III.
+
+    The reference of each amplitude A is :func:`table4_reference` (0 ...
+    A/10 V, built once); Case I applies it directly (g = 1, the actuator
+    voltage triangle of the paper), Cases II-III read it as x_r = v_r.  Each
+    loop is measured by :func:`table4_measure` (x = 3 um/V v_y against
+    10 v_r, first ``discard_periods`` left out).
+
+    Parameters
+    ----------
+    stage : piezolib.problem.stage.VirtualStage
+    dahl : DahlModel or None
+        None: the workbook's shared model (:func:`run_case`).
+    controller : see :func:`piezolib.workbook.loop.discrete_controller`
+        Case III's feedback (not None).
+    amplitudes_V : sequence of float, optional
+        Actuator amplitudes [V]; default 10, 20, 30, 40 V.
+    periods, discard_periods : int
+
+    Returns
+    -------
+    ExperimentResult
+    """
+    amplitudes_V = _positive_values("amplitudes_V", amplitudes_V,
+                                    paper.HYSTERESIS_TEST["actuator_amplitudes_V"])
+    periods = check_integer("periods", periods, minimum=discard_periods + 1)
+    Kd = _case_III_controller(controller, stage)
+
+    def run(case, A):
+        v_r = _table4_triangle(A, periods, stage.fs)[1]
+        return run_case(case, stage, v_r, dahl, Kd, case_I_gain=1.0)
+
+    def measure(result, A):
+        return table4_measure(result.v_r_V, result.v_y_V, discard_periods=discard_periods,
+                              fs=stage.fs).percent
+
+    return _experiment(pd.Index(amplitudes_V, name="amplitude_V"), run, measure)
+
+
+def tracking_test(stage, dahl, controller, frequencies_Hz=None, amplitude_um=None,
+                  discard_periods=DISCARD_PERIODS, min_measured_s=MIN_MEASURED_S):
+    """Table 5: tracking error % of 12 um triangles, Cases I-III.
+
+    Each frequency runs :func:`tracking_periods` periods of
+    :func:`tracking_reference`; the first ``discard_periods`` (start-up from
+    rest) are left out and the tracking error %
+    (:func:`piezolib.metrics.tracking_error_percent`, range = the commanded
+    amplitude) is taken over the rest.
+
+    Parameters
+    ----------
+    stage : piezolib.problem.stage.VirtualStage
+    dahl : DahlModel or None
+        None: the workbook's shared model (:func:`run_case`).
+    controller : see :func:`piezolib.workbook.loop.discrete_controller`
+        Case III's feedback (not None).
+    frequencies_Hz : sequence of float, optional
+        Default 1, 10, 20, 30, 40, 50 Hz.
+    amplitude_um : float, optional
+        Default 12 um.
+    discard_periods : int
+    min_measured_s : float
+        [s]
+
+    Returns
+    -------
+    ExperimentResult
+    """
+    frequencies_Hz = _positive_values("frequencies_Hz", frequencies_Hz,
+                                      paper.TRACKING_TEST["frequencies_Hz"])
+    amplitude_um = check_positive("amplitude_um", paper.TRACKING_TEST["amplitude_um"]
+                                  if amplitude_um is None else amplitude_um)
+    Kd = _case_III_controller(controller, stage)
+
+    def run(case, f):
+        periods = tracking_periods(f, discard_periods, min_measured_s)
+        v_r = tracking_reference(f, periods, amplitude_um, stage.fs)[1]
+        return run_case(case, stage, v_r, dahl, Kd)
+
+    def measure(result, f):
+        return result.tracking_error_percent(f, discard_periods, range_um=amplitude_um)
+
+    return _experiment(pd.Index(frequencies_Hz, name="frequency_Hz"), run, measure)

@@ -1,0 +1,110 @@
+"""Figures of notebook 00 (the published design at a glance): Fig. 1, 10 and 11."""
+
+import control as ct
+import numpy as np
+
+from piezolib.robust.lti import frequency_grid
+from piezolib.workbook import plotting
+
+__all__ = ["fig01_control_loop", "fig10_step_responses", "fig11_sensitivity_templates",
+           "STEP_TITLES"]
+
+#: Panel titles of the step responses of Fig. 10, in the order of LoopFunctions (S, T, KS, GS).
+STEP_TITLES = {"S": "(a) S: v_r -> v_e", "T": "(b) T: v_r -> v_y",
+               "KS": "(c) KS: v_r -> u_b", "GS": "(d) GS: input disturbance -> v_y"}
+
+
+def fig01_control_loop():
+    """Fig. 1: the loop with its signals and units, saved as ``fig01_control_loop.png``.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig, ax = plotting.new_figure(figsize=(9.5, 3.4))
+    blocks = {
+        "ref": (1.0, 0.0, "1/3 V/um"),
+        "sum_e": (2.9, 0.0, "o"),
+        "K": (4.4, 0.0, "K(s)\neq. 24"),
+        "ff": (4.4, 1.5, "Dahl FF\neq. 14"),
+        "sum_u": (6.2, 0.0, "o"),
+        "G": (9.4, 0.0, "DAQ, amplifier x10,\npiezo stage, sensor:\nG(s) of eq. 4 + hysteresis"),
+    }
+    wires = [
+        ((-0.6, 0.0), "ref", "x_r [um]"),
+        ("ref", "sum_e", "v_r [V]"),
+        ("sum_e", "K", "v_e [V]"),
+        ("K", "sum_u", "u_b [V]"),
+        ((-0.2, 0.0), (-0.2, 1.5), ""),
+        ((-0.2, 1.5), "ff", "x_r [um]"),
+        ("ff", (6.2, 1.5), "u_f [V]"),
+        ((6.2, 1.5), "sum_u", ""),
+        ("sum_u", "G", "u_c [V]"),
+        ("G", (13.2, 0.0), "v_y [V]"),
+        ((12.7, 0.0), (12.7, -1.2), ""),
+        ((12.7, -1.2), (2.9, -1.2), "v_y [V]  (x = 3 um/V * v_y)"),
+        ((2.9, -1.2), "sum_e", "-"),
+    ]
+    plotting.block_diagram(ax, blocks, wires)
+    plotting.save_figure(fig, 1, "control_loop")
+    return fig
+
+
+def fig10_step_responses(loop, t=None):
+    """Fig. 10: step responses of S, T, KS and GS of one loop.
+
+    Parameters
+    ----------
+    loop : piezolib.robust.lti.LoopFunctions
+        The loop functions, e.g. ``robust.loop_functions(G, K)``.
+    t : array_like, optional
+        Time grid [s]; default 0 ... 10 ms, 2001 points.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Saved as ``fig10_step_responses.png``.
+    """
+    t = np.linspace(0, 0.01, 2001) if t is None else t
+    fig, axes = plotting.new_figure(2, 2, figsize=(8, 5), sharex=True)
+    for ax, title, sys in zip(axes.flat, STEP_TITLES.values(), loop):
+        resp = ct.step_response(sys, T=t)
+        ax.plot(1e3 * resp.time, np.ravel(resp.outputs))
+        ax.set_title(title)
+        ax.set_ylabel("amplitude [V/V]")
+    for ax in axes[1]:
+        ax.set_xlabel("time [ms]")
+    plotting.save_figure(fig, 10, "step_responses")
+    return fig
+
+
+def fig11_sensitivity_templates(loop, H_e, H_y, omega=None):
+    """Fig. 11: |S| and |T| of one loop under their templates 1/|H_e| and 1/|H_y|.
+
+    Parameters
+    ----------
+    loop : piezolib.robust.lti.LoopFunctions
+    H_e, H_y : control.LTI
+        Error and output weights (eq. 15).
+    omega : array_like, optional
+        Frequency grid [rad/s]; default 1 ... 1e7 rad/s, 3000 points.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Saved as ``fig11_sensitivity_templates.png``.
+    """
+    omega = frequency_grid(1e0, 1e7, 3000) if omega is None else omega
+    s = 1j * omega
+    fig, (ax_s, ax_t) = plotting.new_figure(1, 2, figsize=(9, 3.6), sharey=True)
+    plotting.plot_magnitude(ax_s, omega, loop.S(s).ravel(), label="|S|")
+    plotting.plot_magnitude(ax_s, omega, 1 / H_e(s).ravel(), label="1/|H_e|", ls=":")
+    plotting.plot_magnitude(ax_t, omega, loop.T(s).ravel(), label="|T|")
+    plotting.plot_magnitude(ax_t, omega, 1 / H_y(s).ravel(), label="1/|H_y|", ls=":")
+    ax_s.set_title("(a) output sensitivity S and its template")
+    ax_t.set_title("(b) complementary sensitivity T and its template")
+    ax_s.set_ylim(-80, 30)
+    for ax in (ax_s, ax_t):
+        ax.legend(loc="lower right")
+    plotting.save_figure(fig, 11, "sensitivity_templates")
+    return fig

@@ -1,0 +1,218 @@
+"""Figures of notebook 03 (Dahl hysteresis): Fig. 7, Fig. 8 and the audit and Case II figures.
+
+Axes are in the paper's units: actuator volts (10 x amplifier input) and
+micrometres (3 um/V x sensor volts).
+"""
+
+import numpy as np
+
+from piezolib import paper
+from piezolib.hysteresis import dahl_hysteresis, feedforward, hysteresis_percent
+from piezolib.workbook import plotting
+from piezolib.workbook.experiments import table4_reference
+
+__all__ = ["extra_dahl_published_audit", "fig07_dahl_fit", "fig08_feedforward_on_model",
+           "extra_case2_loops", "extra_case2_residual"]
+
+GAIN, UM = paper.AMPLIFIER_GAIN, paper.UM_PER_VOLT
+#: Samples per period of the 10 Hz Table 4 triangle at the DAQ rate.
+PERIOD = int(paper.SAMPLING_FREQUENCY_HZ / paper.HYSTERESIS_TEST["frequency_Hz"])
+_FORM_COLORS = {"printed": "#1f4e79", "bliman_sorine": "#c0504d"}
+
+
+def _loop_width(v, x):
+    """Hysteresis % of a (v, x) record, NaN when v never sweeps through V_M both ways."""
+    try:
+        return hysteresis_percent(v, x)
+    except ValueError:
+        return np.nan
+
+
+def extra_dahl_published_audit(published, record, x_ranges):
+    """The published Dahl parameters driven as printed: H, the 40 V stroke, loop width vs stroke.
+
+    Parameters
+    ----------
+    published : dict
+        {form: DahlModel} with the published parameters, both forms.
+    record : StageRecord
+        The 40 V Case I loop of the virtual stage (``u_c_V``, ``v_y_V``).
+    x_ranges : dict
+        {"x [um]": ..., "v_y (sensor) [V]": ..., ...}: the 40 V stroke of x in
+        each unit convention (x-units).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Saved as ``extra_dahl_published_audit.png``.
+    """
+    fig, axes = plotting.new_figure(1, 3, figsize=(10.5, 3.3))
+    t, x_path = table4_reference(40.0, periods=2)
+    x_um = x_path * x_ranges["x [um]"] / x_path.max()
+    for form, style, width in (("bliman_sorine", "--", 1.3), ("printed", "-", 2.6)):
+        H = dahl_hysteresis(published[form], x_um)
+        axes[0].plot(x_um, H, style, lw=width, color=_FORM_COLORS[form],
+                     label=form.replace("_", "-"), zorder=3 - width)
+    axes[0].set(xlabel="x [um] (driven, 2 periods)", ylabel="H [um]",
+                title="(a) H of the published model, um convention")
+    axes[0].legend()
+    axes[1].plot(GAIN * record.u_c_V, UM * record.v_y_V, color="0.5", lw=0.8,
+                 label="virtual stage, 40 V")
+    for form, style in (("printed", "-"), ("bliman_sorine", "--")):
+        x_v = x_path * x_ranges["v_y (sensor) [V]"] / x_path.max()
+        v = feedforward(published[form], x_v)
+        axes[1].plot(GAIN * v, UM * x_v, style, label=f"published, {form.replace('_', '-')}")
+    axes[1].set(xlabel="actuator voltage 10 u_c [V]", ylabel="x = 3 v_y [um]",
+                title="(b) 40 V stroke, v = u_c, x = v_y convention")
+    axes[1].legend(fontsize=7)
+    spans = np.logspace(-6, 5, 45)
+    for form, style in (("printed", "-"), ("bliman_sorine", "--")):
+        pct = []
+        for span in spans:
+            xs = x_path * span / x_path.max()
+            pct.append(_loop_width(feedforward(published[form], xs)[PERIOD:], xs[PERIOD:]))
+        axes[2].loglog(spans, np.maximum(pct, 1e-6), style, label=form.replace("_", "-"))
+    for unit, span in x_ranges.items():
+        axes[2].axvline(span, color="0.6", lw=0.7)
+        axes[2].text(span, 2e3, unit.split()[-1], rotation=90, fontsize=7, va="top")
+    axes[2].axhspan(6, 13, color="#4f8f3a", alpha=0.2, label="Table 4, Case I")
+    axes[2].set(xlabel="stroke of x [x-units]", ylabel="hysteresis % (eq. 26)",
+                title="(c) loop width vs stroke length", ylim=(1e-6, 1e4))
+    axes[2].legend(fontsize=7, loc="lower left")
+    plotting.save_figure(fig, None, "dahl_published_audit")
+    return fig
+
+
+def fig07_dahl_fit(loops, workbook, paper_form, amplitudes):
+    """Fig. 7: the joint Dahl fits against the four Case I loops (periods 2-3).
+
+    Parameters
+    ----------
+    loops : list of (u_c, v_y)
+        The Case I loops [V], in the order of ``amplitudes``.
+    workbook, paper_form : DahlFit
+        The workbook model's fit and the fit of eq. 10-13 as printed, both to
+        ``loops``.
+    amplitudes : sequence of float
+        Actuator amplitudes [V] (four: one panel each).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Saved as ``fig07_dahl_fit.png``.
+    """
+    fig, axes = plotting.new_figure(2, 2, figsize=(8.5, 6.4))
+    for ax, (k, A) in zip(axes.flat, enumerate(amplitudes)):
+        u, v_y = loops[k]
+        late = slice(PERIOD, None)
+        ax.plot(GAIN * u[late], UM * v_y[late], color="0.55", lw=1.8,
+                label="virtual stage (measured)")
+        ax.plot(GAIN * u[late], UM * workbook.x_model[k][late], "-", lw=1.0, color="#c0504d",
+                label=f"workbook model (RMS {workbook.rms_percent[k]:.1f} %)")
+        ax.plot(GAIN * u[late], UM * paper_form.x_model[k][late], "--", lw=1.0,
+                color="#1f4e79",
+                label=f"eq. 10-13 as printed (RMS {paper_form.rms_percent[k]:.1f} %)")
+        ax.set(title=f"({'abcd'[k]}) {A:.0f} V", xlabel="actuator voltage [V]",
+               ylabel="displacement [um]")
+        ax.legend(fontsize=7, loc="upper left")
+    fig.suptitle("Fig. 7: joint fit to the four Case I loops (periods 2-3); workbook model = "
+                 "Bliman-Sorine, offset x0, from rest", fontsize=9)
+    plotting.save_figure(fig, 7, "dahl_fit")
+    return fig
+
+
+def fig08_feedforward_on_model(t, x_r, x_plain, x_comp):
+    """Fig. 8: the Dahl model without and with the feedforward of eq. 14.
+
+    Parameters
+    ----------
+    t : ndarray
+        Time [s].
+    x_r : ndarray
+        Desired displacement [V].
+    x_plain, x_comp : ndarray
+        Model displacement [V] for u = (x_r - x0)/g_a and for u = u_f.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Saved as ``fig08_feedforward_on_model.png``.
+    """
+    fig, axes = plotting.new_figure(1, 2, figsize=(8.5, 3.4))
+    axes[0].plot(UM * x_r, UM * x_plain, label="u = (x_r - x0) / g_a (no compensation)")
+    axes[0].plot(UM * x_r, UM * x_comp, "--", label="u = u_f (eq. 14)")
+    axes[0].set(xlabel="desired displacement x_r [um]", ylabel="model displacement x [um]",
+                title="(a) workbook Dahl model, 12 um, 10 Hz")
+    axes[0].legend()
+    axes[1].plot(t, UM * (x_comp - x_r) * 1e3)
+    axes[1].set(xlabel="time [s]", ylabel="x - x_r [nm]", title="(b) compensation error")
+    plotting.save_figure(fig, 8, "feedforward_on_model")
+    return fig
+
+
+def extra_case2_loops(loops, case_I, runs, case_II):
+    """Case I loops (top) and Case II loops of several feedforward models (bottom).
+
+    Parameters
+    ----------
+    loops : dict
+        {amplitude [V]: Case I StageRecord}.
+    case_I : dict
+        {amplitude: Case I hysteresis %}.
+    runs : dict
+        {model name: {amplitude: Case II LoopResult}}; the first two are drawn.
+    case_II : dict
+        {model name: {amplitude: Case II hysteresis %}}.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Saved as ``extra_case2_loops.png``.
+    """
+    amplitudes = list(loops)
+    fig, axes = plotting.new_figure(2, len(amplitudes), figsize=(11, 5.2), sharex="col")
+    for k, A in enumerate(amplitudes):
+        rec = loops[A]
+        axes[0, k].plot(GAIN * rec.u_c_V[PERIOD:], UM * rec.v_y_V[PERIOD:], color="0.5", lw=0.8)
+        axes[0, k].set_title(f"Case I, {A:.0f} V: {case_I[A]:.2f} %")
+        for (name, by_amplitude), style in zip(runs.items(), ("-", "--")):
+            run = by_amplitude[A]
+            axes[1, k].plot(GAIN * run.v_r_V[PERIOD:], UM * run.v_y_V[PERIOD:], style,
+                            lw=0.8, label=f"{name}: {case_II[name][A]:.2f} %")
+        axes[1, k].legend(fontsize=6, loc="upper left", title="Case II", title_fontsize=7)
+        axes[1, k].set_xlabel("10 x reference [V]")
+    axes[0, 0].set_ylabel("x = 3 v_y [um]")
+    axes[1, 0].set_ylabel("x = 3 v_y [um]")
+    plotting.save_figure(fig, None, "case2_loops")
+    return fig
+
+
+def extra_case2_residual(runs, percents):
+    """Case II residual x - x_r against the reference, one panel per amplitude.
+
+    Parameters
+    ----------
+    runs : dict
+        {amplitude [V]: Case II LoopResult} of one feedforward model.
+    percents : dict
+        {amplitude: Case II hysteresis %}.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Saved as ``extra_case2_residual.png``; eq. 26 reads the gap at the
+        grey line (mid-input).
+    """
+    amplitudes = list(runs)
+    fig, axes = plotting.new_figure(1, len(amplitudes), figsize=(11, 2.8))
+    for k, A in enumerate(amplitudes):
+        run = runs[A]
+        late = slice(PERIOD, None)
+        axes[k].plot(GAIN * run.v_r_V[late], UM * (run.v_y_V[late] - run.v_r_V[late]), lw=0.8)
+        axes[k].axvline(A / 2, color="0.6", lw=0.7)
+        axes[k].set(title=f"{A:.0f} V: {percents[A]:.2f} %", xlabel="10 x reference [V]")
+    axes[0].set_ylabel("x - x_r [um]")
+    fig.suptitle("Case II, workbook model: residual x - x_r against the reference "
+                 "(eq. 26 reads the gap at the grey line)", fontsize=9)
+    plotting.save_figure(fig, None, "case2_residual")
+    return fig

@@ -1,0 +1,127 @@
+"""Figures of notebook 05 (mu-synthesis): D-scaling fit, Hankel values, Fig. 10 and Fig. 12."""
+
+import control as ct
+import numpy as np
+
+from piezolib.robust.lti import loop_functions
+from piezolib.workbook import plotting
+from piezolib.workbook.figures.audit import STEP_TITLES
+
+__all__ = ["extra_d_scaling_fit", "extra_hankel_singular_values",
+           "fig10_step_responses_designs", "fig12_mu_bounds"]
+
+
+def extra_d_scaling_fit(mu_run):
+    """The optimal D-scaling of the final controller against the fit used to get it.
+
+    Parameters
+    ----------
+    mu_run : piezolib.robust.dk.MusynResult
+        A DK-iteration result (its grid ``omega`` [rad/s], ``d_scalings`` and ``mu``).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Saved as ``extra_d_scaling_fit.png``.
+    """
+    omega = mu_run.omega
+    s = 1j * omega
+    fig, ax = plotting.new_figure(figsize=(6.5, 3.4))
+    plotting.plot_magnitude(ax, omega, mu_run.mu.d[:, 0], label="optimal d(omega) for the final K")
+    plotting.plot_magnitude(ax, omega, np.ravel(mu_run.d_scalings[0](s)),
+                            label="4th-order fit used in the last K-step", ls="--")
+    ax.set_ylabel("|d| [dB]")
+    ax.legend()
+    plotting.save_figure(fig, None, "d_scaling_fit")
+    return fig
+
+
+def extra_hankel_singular_values(hsv, order=6):
+    """G S-weighted Hankel singular values of the full controller, cut after ``order``.
+
+    Parameters
+    ----------
+    hsv : array_like
+        Hankel singular values, largest first.
+    order : int
+        Order of the reduced controller (a dotted line after it).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Saved as ``extra_hankel_singular_values.png``.
+    """
+    hsv = np.asarray(hsv)
+    fig, ax = plotting.new_figure(figsize=(6.5, 3.2))
+    ax.semilogy(np.arange(1, hsv.size + 1), hsv, "o-")
+    ax.axvline(order + 0.5, color="k", ls=":", lw=1)
+    ax.set_xlabel("state (balanced)")
+    ax.set_ylabel("G S-weighted Hankel singular value")
+    plotting.save_figure(fig, None, "hankel_singular_values")
+    return fig
+
+
+def fig10_step_responses_designs(G, controllers, t=None):
+    """Fig. 10 for several controllers: step responses of S, T, KS and GS.
+
+    Parameters
+    ----------
+    G : control.LTI
+        Plant, u_c [V] -> v_y [V].
+    controllers : dict
+        ``{label: K}``, continuous-time SISO controllers.
+    t : array_like, optional
+        Time grid [s]; default 0 ... 10 ms, 2001 points.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Saved as ``fig10_step_responses_designs.png``; KS is clipped to -5 ... 25.
+    """
+    t = np.linspace(0, 0.01, 2001) if t is None else t
+    fig, axes = plotting.new_figure(2, 2, figsize=(9, 5.5), sharex=True)
+    for name, K in controllers.items():
+        loop = loop_functions(G, K)
+        for ax, title, sys in zip(axes.flat, STEP_TITLES.values(), loop):
+            resp = ct.step_response(sys, T=t)
+            ax.plot(1e3 * resp.time, np.ravel(resp.outputs), label=name)
+            ax.set_title(title)
+    for ax in axes.flat:
+        ax.set_ylabel("amplitude [V/V]")
+    axes[1, 0].set_ylim(-5, 25)
+    for ax in axes[1]:
+        ax.set_xlabel("time [ms]")
+    axes[0, 1].legend(loc="lower right")
+    plotting.save_figure(fig, 10, "step_responses_designs")
+    return fig
+
+
+def fig12_mu_bounds(results):
+    """Fig. 12: mu for robust stability and robust performance of several controllers.
+
+    Parameters
+    ----------
+    results : dict
+        ``{label: RobustnessAnalysis}`` (:func:`piezolib.problem.analysis.analyze`).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Saved as ``fig12_mu_bounds.png``.
+    """
+    fig, (ax_rs, ax_rp) = plotting.new_figure(1, 2, figsize=(10, 3.8), sharey=True)
+    for name, a in results.items():
+        line, = ax_rs.semilogx(a.omega, a.mu_RS_curve, label=name)
+        ax_rp.semilogx(a.omega, a.mu_RP_upper, color=line.get_color(), label=f"{name}, upper")
+        ax_rp.semilogx(a.omega, a.mu_RP_lower_curve, color=line.get_color(), ls=":",
+                       label=f"{name}, lower")
+    for ax, title in ((ax_rs, "(a) robust stability: mu(M11) = |H_m T|"),
+                      (ax_rp, "(b) robust performance: mu(M), upper and lower bounds")):
+        ax.axhline(1.0, color="k", lw=0.8, ls="--")
+        ax.set_xlim(1e0, 1e7)
+        ax.set_xlabel("frequency [rad/s]")
+        ax.set_title(title)
+    ax_rs.set_ylabel("mu")
+    ax_rp.legend(fontsize=7, loc="upper left")
+    plotting.save_figure(fig, 12, "mu_bounds")
+    return fig

@@ -1,0 +1,128 @@
+"""Least-squares fit of the Dahl model (fit_dahl) and the selection rule (choose_fit)."""
+
+import numpy as np
+import pytest
+
+from piezolib import hysteresis as hy
+from piezolib import signals
+
+FS = 10_000.0
+GAMMA_A = 30.0
+PARAMS = dict(alpha1=3.0, alpha2=4.0, beta1=0.0, beta2=0.2 * 4.0 / 30.0, gamma_a=GAMMA_A, g_a=0.95)
+
+
+def model(form="bliman_sorine", **overrides):
+    return hy.DahlModel(**{**PARAMS, **overrides}, form=form)
+
+
+def triangle(peak, periods=2):
+    return signals.triangle(peak, 10.0, fs=FS, periods=periods)
+
+
+@pytest.mark.parametrize("form", hy.FORMS)
+def test_fit_recovers_known_parameters(form):
+    true = model(form, alpha1=2.0, alpha2=2.5, beta2=0.3 * 2.5 / 30.0, g_a=0.9)
+    loops = []
+    for amplitude in (1.0, 2.0, 3.0, 4.0):
+        t, v = triangle(amplitude)
+        loops.append((v, hy.simulate_dahl(true, v).x))
+    fit = hy.fit_dahl(loops, gamma_a=GAMMA_A, form=form, stride=5)
+    for name in ("alpha1", "alpha2", "beta2", "g_a"):
+        assert getattr(fit.model, name) == pytest.approx(getattr(true, name), rel=1e-6), name
+    assert fit.model.gamma_a == GAMMA_A and fit.model.beta1 == 0.0
+    assert np.all(fit.rms_percent < 1e-6)
+    assert len(fit.x_model) == 4 and fit.residuals[0].shape == loops[0][0].shape
+
+
+def test_gamma_a_is_held_fixed():
+    """Only beta2*gamma_a enters H: another gamma_a gives the same loops, beta2 rescaled."""
+    true = model("bliman_sorine", alpha1=2.0, alpha2=2.5, beta2=0.3 * 2.5 / 30.0, g_a=0.9)
+    loops = [(v, hy.simulate_dahl(true, v).x) for v in (triangle(A)[1] for A in (1.0, 3.0))]
+    fit = hy.fit_dahl(loops, gamma_a=1.0, stride=5)
+    assert fit.model.gamma_a == 1.0
+    assert fit.model.beta2 == pytest.approx(true.beta2 * true.gamma_a, rel=1e-6)
+    with pytest.raises(ValueError, match="gamma_a must be positive"):
+        hy.fit_dahl(loops, gamma_a=0.0)
+
+
+@pytest.mark.parametrize("form, start", [("bliman_sorine", "virgin"), ("bliman_sorine", "rest"),
+                                         ("printed", "virgin")])
+def test_fit_recovers_known_parameters_including_offset(form, start):
+    true = model(form, alpha1=2.0, alpha2=2.5, beta2=0.3 * 2.5 / 30.0, g_a=0.9, x0=-0.15,
+                 start=start)
+    loops = []
+    for amplitude in (1.0, 2.0, 3.0, 4.0):
+        t, v = triangle(amplitude)
+        loops.append((v, hy.simulate_dahl(true, v).x))
+    fit = hy.fit_dahl(loops, gamma_a=GAMMA_A, form=form, offset=True, start=start, stride=5)
+    for name in ("alpha1", "alpha2", "beta2", "g_a", "x0"):
+        assert getattr(fit.model, name) == pytest.approx(getattr(true, name), rel=1e-6), name
+    assert fit.offset and fit.model.start == start
+    assert fit.pooled_rms_percent < 1e-6
+    # the paper's form (no offset) cannot represent the shifted loops
+    paper_form = hy.fit_dahl(loops, gamma_a=GAMMA_A, form=form, start=start, stride=5)
+    assert paper_form.model.x0 == 0.0 and paper_form.worst_rms_percent > 0.1
+
+
+def test_fit_reaches_the_first_order_limit():
+    """A first-order-like model (alpha1 >> 2 sqrt(alpha2)) is recovered inside the bounds."""
+    true = model("bliman_sorine", alpha1=300.0, alpha2=420.0, beta2=0.25 * 420.0 / 30.0,
+                 g_a=1.25, x0=-0.15, start="rest")
+    loops = [(v, hy.simulate_dahl(true, v).x) for v in
+             (triangle(A)[1] for A in (1.0, 2.0, 3.0, 4.0))]
+    fit = hy.fit_dahl(loops, gamma_a=GAMMA_A, offset=True, start="rest", discard=1000, stride=5)
+    assert not np.any(fit.result.active_mask)                 # no parameter on a bound
+    assert fit.pooled_rms_percent < 1e-4
+    for name in ("g_a", "x0"):
+        assert getattr(fit.model, name) == pytest.approx(getattr(true, name), rel=1e-4), name
+    # the first-order quantities: rate alpha2/alpha1 and steady state b2 gamma_a / alpha2
+    assert fit.model.alpha2 / fit.model.alpha1 == pytest.approx(1.4, rel=1e-3)
+    assert fit.model.steady_state(1) == pytest.approx(0.25, rel=1e-4)
+
+
+def test_fit_from_a_single_starting_point():
+    true = model("bliman_sorine", alpha1=2.0, alpha2=2.5, beta2=0.3 * 2.5 / 30.0, g_a=0.9)
+    loops = [(v, hy.simulate_dahl(true, v).x) for v in (triangle(A)[1] for A in (1.0, 3.0))]
+    fit = hy.fit_dahl(loops, gamma_a=GAMMA_A, stride=5, initial=model("bliman_sorine"))
+    assert fit.initial.alpha1 == PARAMS["alpha1"]
+    assert fit.model.alpha1 == pytest.approx(true.alpha1, rel=1e-6)
+    with pytest.raises(TypeError, match="initial must be a DahlModel"):
+        hy.fit_dahl(loops, gamma_a=GAMMA_A, initial=PARAMS)
+
+
+def test_choose_fit_takes_the_smallest_pooled_rms():
+    fake = {key: type("Fit", (), {"pooled_rms_percent": value})()
+            for key, value in (("a", 2.0), ("b", 0.5), ("c", 0.5), ("d", 3.0))}
+    assert hy.choose_fit(fake) == "b"
+    with pytest.raises(ValueError, match="at least one"):
+        hy.choose_fit({})
+
+
+def test_fit_single_loop_and_discard():
+    true = model("bliman_sorine")
+    t, v = triangle(3.0)
+    x = hy.simulate_dahl(true, v).x
+    fit = hy.fit_dahl((v, x), gamma_a=GAMMA_A, discard=1000)
+    assert fit.residuals[0].size == v.size - 1000
+    assert fit.model.g_a == pytest.approx(true.g_a, rel=1e-6)
+
+
+def test_fit_rejects_records_without_a_full_cycle():
+    ramp = np.linspace(0, 4, 500)
+    with pytest.raises(ValueError, match="no full cycle"):
+        hy.fit_dahl([(ramp, 0.9 * ramp)], gamma_a=GAMMA_A)
+    t, v = triangle(4.0, periods=1)
+    with pytest.raises(ValueError, match="no full cycle"):
+        hy.fit_dahl([(v, 0.9 * v)], gamma_a=GAMMA_A, discard=600)
+    with pytest.raises(ValueError, match="equal lengths"):
+        hy.fit_dahl([(v, v[:-1])], gamma_a=GAMMA_A)
+    with pytest.raises(ValueError, match="contains 1 non-finite"):
+        hy.fit_dahl([(v, np.r_[np.nan, v[1:]])], gamma_a=GAMMA_A)
+    with pytest.raises(TypeError, match=r"loops\[0\] must be a \(v, x\) pair"):
+        hy.fit_dahl({10.0: (v, v)}, gamma_a=GAMMA_A)
+    with pytest.raises(ValueError, match="starts must be >= 1"):
+        hy.fit_dahl([(v, 0.9 * v)], gamma_a=GAMMA_A, starts=0)
+    with pytest.raises(TypeError, match="offset must be True or False"):
+        hy.fit_dahl([(v, 0.9 * v)], gamma_a=GAMMA_A, offset="yes")
+    with pytest.raises(ValueError, match="start must be one of"):
+        hy.fit_dahl([(v, 0.9 * v)], gamma_a=GAMMA_A, start="lowered")

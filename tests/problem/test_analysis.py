@@ -1,0 +1,85 @@
+"""Table 3 for any controller: NS, NP, RS and RP (piezolib.problem.analysis)."""
+
+import control as ct
+import numpy as np
+import pytest
+
+from piezolib import paper, robust
+from piezolib.problem import analysis
+
+
+@pytest.fixture(scope="module")
+def models():
+    return paper.problem()
+
+
+@pytest.fixture(scope="module")
+def published(models):
+    G, H_m, H_e, H_y, K = models
+    return analysis.analyze(K, G, H_m, H_e, H_y)
+
+
+def test_analysis_of_published_controller(models, published):
+    G, H_m, _, _, K = models
+    a = published
+    assert a.nominal_stability and a.name == "K"
+    # values recomputed from the printed models (DESIGN.md); paper prints 0.81 / 0.92 / 0.48
+    assert a.norm_He_S == pytest.approx(0.808, abs=0.002)
+    assert a.norm_Hy_T == pytest.approx(0.982, abs=0.002)
+    assert a.mu_RS == pytest.approx(0.819, abs=0.002)
+    assert a.mu_RP == pytest.approx(1.448, abs=0.005)
+    assert 6.0e3 < a.omega_RP < 7.0e3
+    assert a.mu_RP_lower <= a.mu_RP * (1 + 1e-9) and a.mu_RP_lower > 0.999 * a.mu_RP
+    # mu of a 1x1 complex block is |M11| = |H_m T|; the refined peak tops the grid
+    s = 1j * a.omega
+    HmT = np.ravel(H_m(s)) * np.ravel(robust.loop_functions(G, K).T(s))
+    np.testing.assert_allclose(a.mu_RS_curve, np.abs(HmT), rtol=1e-7)
+    assert a.mu_RS_curve.max() <= a.mu_RS <= a.mu_RS_curve.max() * 1.005
+    assert a.mu_RP_upper.max() <= a.mu_RP
+    assert np.all(a.closed_loop_poles.real < 0)
+    frame = a.frame()
+    assert list(frame.condition) == ["NS", "NP", "NP", "RS", "RP", "RP"]
+    assert frame.met.tolist() == [True, True, True, True, False, False]
+
+
+def test_analysis_of_destabilising_controller(models):
+    G, H_m, H_e, H_y, K = models
+    a = analysis.analyze(-K, G, H_m, H_e, H_y, name="minus K")
+    assert not a.nominal_stability
+    assert a.mu_RP == np.inf and a.norm_He_S == np.inf and np.isnan(a.omega_RP)
+    assert np.all(np.isnan(a.mu_RP_upper)) and a.omega.shape == a.mu_RP_upper.shape
+    table = analysis.table3(a, paper_values=paper.FIGURES_OF_MERIT)
+    assert list(table.columns) == ["paper", "minus K"]
+    assert not table.loc["NS: S, T, KS, GS stable", "minus K"]
+    assert analysis.robust_performance_peak(-K, G, H_m, H_e, H_y)[0] == np.inf
+
+
+def test_robust_performance_peak_is_the_analysis_peak(models, published):
+    G, H_m, H_e, H_y, K = models
+    peak, omega_peak = analysis.robust_performance_peak(K, G, H_m, H_e, H_y)
+    assert peak == pytest.approx(published.mu_RP, rel=1e-3)
+    assert omega_peak == pytest.approx(published.omega_RP, rel=1e-2)
+
+
+def test_table3_side_by_side(models, published):
+    G, H_m, H_e, H_y, _ = models
+    other = analysis.analyze(ct.tf([0.5], [1e-4, 1.0]), G, H_m, H_e, H_y, name="lag",
+                             omega=np.logspace(-2, 8, 200))
+    table = analysis.table3(published, other)
+    assert list(table.columns) == ["K", "lag"]
+    assert table.loc["RP: peak mu(M)", "K"] == published.mu_RP
+    with pytest.raises(TypeError, match="RobustnessAnalysis"):
+        analysis.table3(published, "K")
+
+
+@pytest.mark.parametrize("change, error, match", [
+    (dict(K=ct.tf([[[1.0]], [[1.0]]], [[[1.0, 1.0]], [[1.0, 2.0]]])), ValueError, "K"),
+    (dict(H_m="H_m"), TypeError, "H_m"),
+    (dict(omega=np.logspace(0, 1, 5)), ValueError, "omega"),
+])
+def test_analyze_rejects_bad_arguments(models, change, error, match):
+    G, H_m, H_e, H_y, K = models
+    args = dict(K=K, G=G, H_m=H_m, H_e=H_e, H_y=H_y)
+    args.update(change)
+    with pytest.raises(error, match=match):
+        analysis.analyze(**args)

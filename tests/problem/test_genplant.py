@@ -1,0 +1,114 @@
+"""Generalized plant P of eq. 16, the synthesis plant and M = F_l(P, K) of eq. 17-18."""
+
+import control as ct
+import numpy as np
+import pytest
+
+from piezolib import paper, robust
+from piezolib.problem import genplant
+
+OMEGA = np.logspace(0, 6, 300)
+
+
+@pytest.fixture(scope="module")
+def models():
+    return paper.problem()
+
+
+def response(sys, omega=OMEGA):
+    return np.moveaxis(sys(1j * omega, squeeze=False), -1, 0)
+
+
+def test_generalized_plant_entries_are_eq16(models):
+    G, H_m, H_e, H_y, _ = models
+    P = genplant.generalized_plant(G, H_m, H_e, H_y)
+    assert P.input_labels == ["u_Delta", "v_r", "u_b"] == list(genplant.PLANT_INPUTS)
+    assert P.output_labels == ["y_Delta", "y1", "y2", "v_e"] == list(genplant.PLANT_OUTPUTS)
+    assert P.nstates == 14 and P.name == "P" and P.isctime(strict=True)
+    s = 1j * OMEGA
+    g, hm, he, hy = (np.ravel(f(s)) for f in (G, H_m, H_e, H_y))
+    zero = np.zeros_like(g)
+    expected = np.stack([np.stack([zero, zero, hm], -1),
+                         np.stack([-he * g, he, -he * g], -1),
+                         np.stack([hy * g, zero, hy * g], -1),
+                         np.stack([-g, np.ones_like(g), -g], -1)], 1)
+    got = response(P)
+    scale = np.maximum(np.abs(expected), 1e-300)
+    nonzero = np.abs(expected) > 0
+    assert np.max(np.abs(got - expected)[nonzero] / scale[nonzero]) < 1e-8
+    assert np.max(np.abs(got[~nonzero])) < 1e-9
+
+
+def test_time_scale_only_conditions_the_realisation(models):
+    G, H_m, H_e, H_y, _ = models
+    default = response(genplant.generalized_plant(G, H_m, H_e, H_y))
+    for omega_s in (3e3, 1e4, 1e5):
+        other = response(genplant.generalized_plant(G, H_m, H_e, H_y, omega_s=omega_s))
+        np.testing.assert_allclose(other, default, rtol=1e-7, atol=1e-12)
+
+
+def test_effort_output_and_design_plant(models):
+    G, H_m, H_e, H_y, _ = models
+    P = genplant.design_plant(G, H_m, H_e, H_y)
+    assert P.output_labels == ["y_Delta", "y1", "y2", "y_u", "v_e"]
+    resp = response(P)
+    np.testing.assert_allclose(resp[:, 3, 2], genplant.DESIGN_EFFORT_WEIGHT, rtol=1e-12)
+    np.testing.assert_allclose(resp[:, 3, :2], 0, atol=1e-14)
+    assert genplant.DESIGN_BLOCK_STRUCTURE == ((1, 1), (1, 3))
+    assert genplant.BLOCK_STRUCTURE == ((1, 1), (1, 2))
+    # the other entries are those of the exact P
+    exact = response(genplant.generalized_plant(G, H_m, H_e, H_y))
+    np.testing.assert_allclose(resp[:, [0, 1, 2, 4], :], exact, rtol=1e-7, atol=1e-12)
+    rho = genplant.design_plant(G, H_m, H_e, H_y, effort_weight=0.1)
+    np.testing.assert_allclose(response(rho)[:, 3, 2], 0.1, rtol=1e-12)
+
+
+def test_lower_lft_is_eq18(models):
+    G, H_m, H_e, H_y, K = models
+    M = genplant.closed_loop_matrix(K, G, H_m, H_e, H_y)
+    assert M.input_labels == ["u_Delta", "v_r"]
+    assert M.output_labels == ["y_Delta", "y1", "y2"]
+    lf = robust.loop_functions(G, K)
+    s = 1j * OMEGA
+    S, T, KS, GS = (np.ravel(f(s)) for f in lf)
+    hm, he, hy = (np.ravel(f(s)) for f in (H_m, H_e, H_y))
+    expected = np.stack([np.stack([-hm * T, hm * KS], -1),
+                         np.stack([-he * GS, he * S], -1),
+                         np.stack([hy * GS, hy * T], -1)], 1)
+    P = genplant.generalized_plant(G, H_m, H_e, H_y)
+    for got in (response(M), robust.lft_response(P, K, OMEGA)):
+        np.testing.assert_allclose(got, expected, rtol=1e-7, atol=1e-12)
+
+
+def test_other_weights_enter_where_eq16_says(models):
+    G, H_m, _, _, _ = models
+    H_e, H_y = paper.error_weight(omega_e=2e3), paper.output_weight(M_y=2.0)
+    P = genplant.generalized_plant(G, H_m, H_e, H_y)
+    s = 1j * OMEGA
+    got = response(P)
+    np.testing.assert_allclose(got[:, 1, 1], np.ravel(H_e(s)), rtol=1e-8)
+    np.testing.assert_allclose(got[:, 2, 2], np.ravel(H_y(s)) * np.ravel(G(s)), rtol=1e-8)
+
+
+@pytest.mark.parametrize("change, error, match", [
+    (dict(G=None), TypeError, "G"),
+    (dict(H_e=ct.tf([[[1.0]], [[1.0]]], [[[1.0, 1.0]], [[1.0, 2.0]]])), ValueError, "H_e"),
+    (dict(effort_weight=-1.0), ValueError, "effort_weight"),
+    (dict(omega_s=0.0), ValueError, "omega_s"),
+])
+def test_generalized_plant_rejects_bad_arguments(models, change, error, match):
+    G, H_m, H_e, H_y, _ = models
+    args = dict(G=G, H_m=H_m, H_e=H_e, H_y=H_y)
+    args.update(change)
+    with pytest.raises(error, match=match):
+        genplant.generalized_plant(**args)
+
+
+def test_improper_output_weight_is_refused(models):
+    G, H_m, H_e, _, _ = models
+    improper = ct.tf([1.0, 1.0, 1.0, 1.0, 1.0], [1.0])       # 4 excess zeros > G's 3
+    with pytest.raises(ValueError, match="proper"):
+        genplant.generalized_plant(G, H_m, H_e, improper)
+    with pytest.raises(ValueError, match="H_y G is improper"):
+        genplant.generalized_plant(G, H_m, H_e, improper, omega_s=1e4)
+

@@ -1,0 +1,72 @@
+"""The paper's Dahl model (published parameters) and the workbook's fit to the Case I loops."""
+
+import numpy as np
+import pytest
+
+from piezolib import hysteresis as hy
+from piezolib import paper, signals
+from piezolib.problem import hysteresis as ph
+
+FS = paper.SAMPLING_FREQUENCY_HZ
+
+
+@pytest.mark.parametrize("form", hy.FORMS)
+def test_published_model_is_the_printed_parameters(form):
+    m = ph.published_dahl(form)
+    assert (m.alpha1, m.alpha2, m.beta1, m.beta2, m.gamma_a, m.g_a) == (
+        paper.DAHL.alpha1, paper.DAHL.alpha2, paper.DAHL.beta1, paper.DAHL.beta2,
+        paper.DAHL.gamma_a, paper.DAHL.g_a)
+    assert m.form == form and m.x0 == 0.0 and m.start == "virgin"     # eq. 13 exactly
+    assert ph.published_dahl().form == "printed"
+    with pytest.raises(TypeError, match="paper.DahlParameters"):
+        ph.published_dahl(form, params=dict(alpha1=1.0))
+
+
+@pytest.mark.parametrize("direction", [1, -1])
+def test_printed_form_settles_to_same_H_both_ways(direction):
+    m = ph.published_dahl("printed")
+    expected = paper.DAHL.beta2 * paper.DAHL.gamma_a / paper.DAHL.alpha2
+    assert m.steady_state(direction) == pytest.approx(expected, rel=1e-12)
+    # a long stroke either way after a long stroke the other way: H stays at the steady state
+    x = np.r_[np.linspace(0, 1, 101), np.linspace(1, -1, 201)[1:]] * direction
+    H = hy.dahl_hysteresis(m, x)
+    np.testing.assert_allclose(H[50:], expected, rtol=1e-9)
+
+
+def test_feedforward_of_published_model_is_offset_only():
+    """Printed form, published numbers: after the first transient u_f = (x_r + 26.97)/g_a."""
+    m = ph.published_dahl("printed")
+    t, x_r = signals.triangle(3.6, 10.0, fs=FS, periods=2)
+    u_f = hy.feedforward(m, x_r)
+    np.testing.assert_allclose(u_f[100:], (x_r[100:] + m.steady_state(1)) / m.g_a, rtol=1e-9)
+
+
+def test_strongly_underdamped_model_is_not_invertible():
+    m = ph.published_dahl("bliman_sorine")   # H overshoots: x + H(x) not monotone
+    t, v = signals.triangle(4.0, 10.0, fs=FS, periods=1)
+    with pytest.raises(hy.NotInvertibleError, match="not increasing"):
+        hy.simulate_dahl(m, v)
+
+
+def test_candidates_and_workbook_choice():
+    assert len(ph.CASE_I_CANDIDATES) == 6 and ph.WORKBOOK_DAHL in ph.CASE_I_CANDIDATES
+    assert ("printed", False, "rest") not in ph.CASE_I_CANDIDATES
+
+
+def test_workbook_fit_is_shared_and_deterministic():
+    first = ph.workbook_dahl_fit()
+    assert ph.workbook_dahl_fit() is first                    # cached: one model everywhere
+    assert ph.fit_case_I_loops(*ph.WORKBOOK_DAHL) is first
+    form, offset, start = ph.WORKBOOK_DAHL
+    assert (first.model.form, first.offset, first.model.start) == (form, offset, start)
+    assert first.model.gamma_a == paper.DAHL.gamma_a          # held at the published value
+    ph.clear_cache()
+    again = ph.workbook_dahl_fit()
+    assert again is not first and again.model == first.model  # refitted: bit-identical
+    np.testing.assert_array_equal(again.rms_percent, first.rms_percent)
+    with pytest.raises(TypeError, match="offset must be True or False"):
+        ph.fit_case_I_loops("bliman_sorine", 1, "rest")
+    with pytest.raises(ValueError, match="start must be one of"):
+        ph.fit_case_I_loops("bliman_sorine", True, "lowered")
+    with pytest.raises(ValueError, match="form must be one of"):
+        ph.fit_case_I_loops("first_order", True, "rest")

@@ -1,0 +1,58 @@
+"""Lower LFT F_l(P, K) and its frequency response."""
+
+import control as ct
+import numpy as np
+import pytest
+
+from piezolib import paper, robust
+from piezolib.problem import genplant
+
+OMEGA = np.logspace(0, 6, 300)
+
+
+def response(sys, omega=OMEGA):
+    return np.moveaxis(sys(1j * omega, squeeze=False), -1, 0)
+
+
+def test_lower_lft_is_the_closed_loop_formula():
+    rng = np.random.default_rng(0)
+    A = rng.standard_normal((4, 4)) - 4 * np.eye(4)
+    P = ct.ss(A, rng.standard_normal((4, 3)), rng.standard_normal((3, 4)),
+              rng.standard_normal((3, 3)), inputs=["w1", "w2", "u"], outputs=["z1", "z2", "y"])
+    K = ct.ss(ct.tf([2.0, 1.0], [1.0, 5.0]), inputs="y", outputs="u")
+    w = np.logspace(-2, 2, 40)
+    R, k = response(P, w), np.ravel(K(1j * w))
+    expected = R[:, :2, :2] + (R[:, :2, 2:] * (k / (1 - R[:, 2, 2] * k))[:, None, None]
+                               * R[:, 2:, :2])
+    for omega_s in (None, 1.0, 37.0):
+        M = robust.lower_lft(P, K, omega_s)
+        assert M.input_labels == ["w1", "w2"] and M.output_labels == ["z1", "z2"]
+        assert M.name == "M"
+        np.testing.assert_allclose(response(M, w), expected, rtol=1e-9)
+        np.testing.assert_allclose(robust.lft_response(P, K, w, omega_s), expected, rtol=1e-9)
+
+
+def test_lower_lft_is_eq18():
+    G, H_m, H_e, H_y, K = paper.problem()
+    P = genplant.generalized_plant(G, H_m, H_e, H_y)
+    M = robust.lower_lft(P, K)
+    assert M.input_labels == ["u_Delta", "v_r"]
+    assert M.output_labels == ["y_Delta", "y1", "y2"]
+    s = 1j * OMEGA
+    S, T, KS, GS = (np.ravel(f(s)) for f in robust.loop_functions(G, K))
+    hm, he, hy = (np.ravel(h(s)) for h in (H_m, H_e, H_y))
+    expected = np.stack([np.stack([-hm * T, hm * KS], -1),
+                         np.stack([-he * GS, he * S], -1),
+                         np.stack([hy * GS, hy * T], -1)], 1)
+    for got in (response(M), robust.lft_response(P, K, OMEGA)):
+        np.testing.assert_allclose(got, expected, rtol=1e-7, atol=1e-12)
+
+
+def test_lower_lft_rejects_mismatched_sizes():
+    G, K = paper.plant(), paper.controller()
+    with pytest.raises(ValueError, match="too small"):
+        robust.lower_lft(G, K)
+    with pytest.raises(ValueError, match="too small"):
+        robust.lft_response(G, K, OMEGA)
+    with pytest.raises(ValueError, match="omega_s must be positive"):
+        robust.lower_lft(ct.rss(2, 2, 2), ct.ss([], [], [], [[1.0]]), omega_s=-1.0)

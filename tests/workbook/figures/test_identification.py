@@ -1,0 +1,47 @@
+"""Figures of notebook 01: drawn, saved under their names, returned."""
+
+import control as ct
+import numpy as np
+import pytest
+
+from piezolib import identification, paper
+from piezolib.workbook.figures import identification as F
+
+FS = paper.SAMPLING_FREQUENCY_HZ
+
+
+@pytest.fixture
+def figures_dir(tmp_path, monkeypatch):
+    monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
+    return tmp_path / "figures"
+
+
+def test_bode_overlay_draws_continuous_discrete_and_measured():
+    G = paper.plant()
+    omega = np.logspace(2, 4.5, 50)
+    sampled = ct.c2d(ct.ss(G), 1 / FS, "zoh")
+    fig, (ax_mag, ax_phase) = F.bode_overlay({"G": G, "G sampled": sampled}, omega,
+                                             measured=(omega, G(1j * omega)))
+    assert len(ax_mag.lines) == 3 and len(ax_phase.lines) == 3
+    assert ax_mag.lines[1].get_label() == "G" and ax_mag.lines[2].get_linestyle() == "--"
+    # the dB magnitude of the continuous model at the grid
+    assert np.allclose(ax_mag.lines[1].get_ydata(), 20 * np.log10(np.abs(G(1j * omega))))
+    with pytest.raises(ValueError, match="omega"):
+        F.bode_overlay({"G": G}, [1.0])
+
+
+def test_fig04_is_saved_under_the_paper_number(figures_dir):
+    u = np.random.default_rng(0).standard_normal(8000) * 0.05
+    y = identification.zoh_simulate(paper.plant(), u, FS)
+    y_sim = y + 1e-4 * np.random.default_rng(1).standard_normal(len(y))
+    fig = F.fig04_chirp_validation(y, y_sim, 1000, FS, zoom_s=(0.2, 0.22))
+    assert (figures_dir / "fig04_chirp_validation.png").is_file()
+    fit = identification.fit_percent(y[1000:], y_sim[1000:])
+    assert fig.axes[0].get_title() == f"validation chirp: fit {fit:.1f} %"
+
+
+def test_residual_whiteness_figure(figures_dir):
+    white = identification.whiteness(np.random.default_rng(2).standard_normal(5000))
+    fig = F.extra_residual_whiteness(white)
+    assert (figures_dir / "extra_residual_whiteness.png").is_file()
+    assert f"p = {white.p_value:.2f}" in fig.axes[0].get_title()

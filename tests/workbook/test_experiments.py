@@ -1,0 +1,174 @@
+"""The experiments of Sec. V: the Table 4 triangle and its measurement, Cases I-III and the
+Table 4 / Table 5 experiments on the virtual stage."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from piezolib import hysteresis as hy
+from piezolib import paper, signals
+from piezolib.problem.hysteresis import workbook_dahl_fit
+from piezolib.problem.stage import VirtualStage
+from piezolib.workbook import experiments as ex
+from piezolib.workbook import loop
+
+PARAMS = dict(alpha1=3.0, alpha2=4.0, beta1=0.0, beta2=0.2 * 4.0 / 30.0, gamma_a=30.0, g_a=0.95)
+
+
+class DahlStage:
+    """A 'stage' that is the Dahl model itself: v_y = x of the voltage-driven model."""
+
+    def __init__(self, model):
+        self.model = model
+
+    def run(self, u_c):
+        return type("Record", (), {"v_y_V": hy.simulate_dahl(self.model, u_c).x,
+                                   "u_c_V": np.asarray(u_c)})
+
+
+def test_table4_reference_is_case_I_triangle():
+    t, v_r = ex.table4_reference(40.0)
+    assert v_r.max() == pytest.approx(40.0 / paper.AMPLIFIER_GAIN) and v_r.min() == 0.0
+    assert t[-1] == pytest.approx(3 / paper.HYSTERESIS_TEST["frequency_Hz"])
+
+
+def test_table4_measure_scales_axes_and_discards_start():
+    t, v_r = ex.table4_reference(20.0)
+    v_y = 0.9 * v_r - 0.05 * np.sign(np.gradient(v_r))       # branches 0.1 V apart
+    v_y[:1000] += 0.3 * np.sin(np.linspace(0, 30, 1000))     # start-up junk, discarded
+    m = ex.table4_measure(v_r, v_y)
+    assert m.v_mid == pytest.approx(10.0)                    # actuator volts
+    assert m.x_lo - m.x_up == pytest.approx(paper.UM_PER_VOLT * 0.1, rel=1e-9)   # um
+    assert m.percent == pytest.approx(hy.hysteresis_percent(v_r[1000:], v_y[1000:]), rel=1e-12)
+    with pytest.raises(ValueError, match="equal lengths"):
+        ex.table4_measure(v_r, v_y[:-1])
+    with pytest.raises(ValueError, match="leaves no record"):
+        ex.table4_measure(v_r, v_y, discard_periods=3)
+
+
+@pytest.mark.parametrize("m", [
+    hy.DahlModel(**PARAMS, form="bliman_sorine"),
+    hy.DahlModel(0.1, 0.3, 0.0, -0.01, 30.0, 0.93, form="printed"),   # long transients
+])
+def test_case_II_on_the_model_itself_removes_the_loop(m):
+    plain = DahlStage(m).run(ex.table4_reference(30.0)[1])
+    assert ex.table4_measure(plain.u_c_V, plain.v_y_V).percent > 1.0
+    for A in (10.0, 30.0):
+        t, v_r = ex.table4_reference(A)
+        run = DahlStage(m).run(hy.feedforward(m, v_r))        # Case II: u_c = u_f (eq. 14)
+        np.testing.assert_allclose(run.v_y_V, v_r, atol=1e-9)
+        assert ex.table4_measure(v_r, run.v_y_V).percent < 1e-6
+
+
+# --- Cases I-III and the Table 4 / Table 5 experiments on the virtual stage ----------
+#: A Dahl model in the workbook convention (u_c -> v_y, volts), well damped.
+DAHL = hy.DahlModel(alpha1=200.0, alpha2=600.0, beta1=0.0, beta2=1.9, gamma_a=30.0,
+                    g_a=1.12, form="bliman_sorine")
+FS = paper.SAMPLING_FREQUENCY_HZ
+
+
+@pytest.fixture(scope="module")
+def stage():
+    return VirtualStage(seed=3)
+
+
+def reference(peak=3.0, frequency_hz=20.0, periods=2):
+    return signals.triangle(peak, frequency_hz, FS, periods=periods)[1]
+
+
+def test_default_feedforward_is_the_workbook_model(stage):
+    v = reference()
+    shared = workbook_dahl_fit().model
+    assert np.array_equal(ex.run_case("II", stage, v, None).u_f_V, hy.feedforward(shared, v))
+
+
+def test_cases_apply_what_the_module_says(stage):
+    v = reference()
+    I = ex.run_case("I", stage, v, DAHL)
+    assert np.array_equal(I.u_f_V, v / DAHL.g_a) and np.all(I.u_b_V == 0)
+    # with an offset model, Case I is its static part and Case II adds exactly H / g_a
+    shifted = DAHL.with_offset(-0.15)
+    I, II = (ex.run_case(c, stage, v, shifted) for c in ("I", "II"))
+    np.testing.assert_allclose(I.u_f_V, (v + 0.15) / DAHL.g_a, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(II.u_f_V - I.u_f_V,
+                               hy.dahl_hysteresis(shifted, v) / DAHL.g_a,
+                               rtol=0, atol=1e-14)
+    assert np.array_equal(ex.run_case("I", stage, v, shifted, case_I_gain=1.0).u_f_V, v)
+    assert np.array_equal(ex.run_case("I", stage, v, DAHL, case_I_gain=1.0).u_f_V, v)
+    II = ex.run_case("II", stage, v, DAHL)
+    assert np.array_equal(II.u_f_V, hy.feedforward(DAHL, v))
+    III = ex.run_case("III", stage, v, DAHL, controller=paper.controller())
+    assert np.array_equal(III.u_f_V, II.u_f_V) and np.any(III.u_b_V != 0)
+    # the stage receives u_f + u_b (quantised by the DAC)
+    lsb = stage.dac.lsb
+    assert np.max(np.abs(III.record.u_c_V - III.u_c_requested_V)) <= lsb / 2 + 1e-15
+
+
+def test_tracking_periods_and_reference():
+    assert ex.tracking_periods(1.0, discard_periods=2) == 3
+    assert ex.tracking_periods(50.0, discard_periods=2) == 2 + 5
+    assert ex.tracking_periods(10.0, discard_periods=0) == 1
+    assert ex.tracking_periods(10.0) == loop.DISCARD_PERIODS + 1          # 0.1 s = one period
+    t, v = ex.tracking_reference(10.0, 2)
+    assert v.max() == pytest.approx(paper.TRACKING_TEST["amplitude_um"] / paper.UM_PER_VOLT)
+    assert v.min() == 0.0 and t.size == 2001
+
+
+def test_references_are_built_once_and_read_only():
+    t, v = ex.tracking_reference(10.0, 2)
+    again = ex.tracking_reference(10.0, 2, amplitude_um=paper.TRACKING_TEST["amplitude_um"])
+    assert again[1] is v and again[0] is t
+    assert not v.flags.writeable and not t.flags.writeable
+    with pytest.raises(ValueError):
+        v[0] = 1.0
+    np.testing.assert_array_equal(v, signals.triangle(4.0, 10.0, FS, periods=2)[1])
+    with pytest.raises(ValueError, match="amplitude_um"):
+        ex.tracking_reference(10.0, 2, amplitude_um=-1.0)
+
+
+def test_small_experiments_have_the_table_layout(stage):
+    K = paper.controller()
+    h = ex.hysteresis_test(stage, DAHL, K, amplitudes_V=[20.0])
+    tr = ex.tracking_test(stage, DAHL, K, frequencies_Hz=[25.0])
+    for res, col in ((h, 20.0), (tr, 25.0)):
+        assert list(res.table.index) == list(paper.table4().index)
+        assert list(res.table.columns) == [col]
+        I, II, III = (res.table.loc[f"case_{c}", col] for c in ("I", "II", "III"))
+        assert res.table.loc["improvement_III_vs_II", col] == pytest.approx(100 * (II - III) / II)
+        assert set(res.runs) == {(c, col) for c in ex.CASES}
+        assert (res.saturation.values == 0).all()
+    # Case III tracks a 25 Hz triangle on the linear-in-the-small loop better than open loop
+    assert tr.table.loc["case_III", 25.0] < tr.table.loc["case_I", 25.0]
+    # the tracking error is the metric over whole periods after the discarded ones
+    run = tr.runs[("III", 25.0)]
+    s = run.steady_state(25.0, loop.DISCARD_PERIODS)
+    assert s.start == 2 * 400 and len(run) == 400 * ex.tracking_periods(25.0) + 1
+    # the Table 4 loops are measured on the shared triangle, the same in every case
+    for case in ex.CASES:
+        np.testing.assert_array_equal(h.runs[(case, 20.0)].v_r_V,
+                                      ex.table4_reference(20.0, periods=4)[1])
+        assert h.table.loc[f"case_{case}", 20.0] == pytest.approx(ex.table4_measure(
+            h.runs[(case, 20.0)].v_r_V, h.runs[(case, 20.0)].v_y_V, discard_periods=2).percent)
+
+
+def test_case_table_layout():
+    cols = pd.Index([1.0, 2.0], name="frequency_Hz")
+    table = ex.case_table({"I": [10.0, 8.0], "II": [5.0, 4.0], "III": [1.0, 2.0]}, cols)
+    assert table.index.equals(paper.case_rows_index()) and table.columns.equals(cols)
+    np.testing.assert_allclose(table.loc["improvement_II_vs_I"], [50.0, 50.0])
+    np.testing.assert_allclose(table.loc["improvement_III_vs_I"], [90.0, 75.0])
+    np.testing.assert_allclose(table.loc["improvement_III_vs_II"], [80.0, 50.0])
+
+
+def test_bad_case_and_missing_controller(stage):
+    v = reference()
+    with pytest.raises(ValueError, match="case must be one of"):
+        ex.run_case("IV", stage, v, DAHL)
+    with pytest.raises(ValueError, match="case III needs a controller"):
+        ex.run_case("III", stage, v, DAHL)
+    with pytest.raises(TypeError, match="dahl must be"):
+        ex.run_case("II", stage, v, paper.DAHL)
+    with pytest.raises(ValueError, match="controller must be given"):
+        ex.tracking_test(stage, DAHL, None)
+    with pytest.raises(ValueError, match="controller must be given"):
+        ex.hysteresis_test(stage, DAHL, None)
