@@ -1,4 +1,4 @@
-"""Dahl hysteresis model (eq. 10-13): strokes, exact integration, simulation, feedforward (eq. 14).
+"""Dahl hysteresis model (eq. 10-13): strokes, exact integration, simulation.
 
 Two forms: ``"printed"`` (eq. 10-12 as printed) and ``"bliman_sorine"`` (the
 sign of the velocity on the state term), both with an optional output offset
@@ -6,7 +6,7 @@ x0 (x = g_a v - H + x0; 0 is eq. 13) and an initial state ("virgin" or
 "rest").  Along each monotone stroke the model is linear in the path length
 and is integrated exactly (closed-form 2x2 matrix exponential); the implicit
 relation of the voltage-driven model is solved exactly too.  The model is
-unit agnostic.  Equations, the workbook's unit convention and why the
+unit agnostic.  Its feedforward (eq. 14): :mod:`piezolib.hysteresis.compensator`.  Equations, the workbook's unit convention and why the
 published parameters give no loop: ``docs/hysteresis.md``.
 """
 
@@ -20,7 +20,7 @@ from piezolib._checks import check_finite_array, check_positive, check_same_leng
 __all__ = [
     "FORMS", "STARTS", "DahlModel", "DahlResponse", "NotInvertibleError", "strokes",
     "dahl_hysteresis", "simulate_dahl", "simulate_dahl_records", "min_stroke_slope",
-    "feedforward", "DahlFeedforward",
+    "StrokeDynamics", "initial_state_of", "check_dahl_model",
 ]
 
 #: The two model forms: eq. 10 as printed, and the Bliman-Sorine placement.
@@ -96,7 +96,7 @@ class DahlModel:
         ``direction * beta2 gamma_a / alpha2`` in the Bliman-Sorine form.
         """
         s = _direction(direction)
-        dyn = _Dynamics(self)
+        dyn = StrokeDynamics(self)
         return float(dyn.C[s] @ dyn.z_ss[s])
 
     @property
@@ -122,7 +122,7 @@ class DahlModel:
         """
         if self.start == "virgin":
             return np.zeros(2), 1
-        return _Dynamics(self).z_ss[-1].copy(), -1
+        return StrokeDynamics(self).z_ss[-1].copy(), -1
 
     def with_offset(self, x0):
         """The same model with output offset ``x0`` [x-unit] (0: the paper's eq. 13)."""
@@ -135,8 +135,23 @@ def _direction(direction):
     return int(direction)
 
 
-class _Dynamics:
-    """Per-direction constants of the stroke dynamics dz/dsigma = N_s z + s B."""
+class StrokeDynamics:
+    """Per-direction constants of the stroke dynamics dz/dsigma = N_s z + s B.
+
+    Parameters
+    ----------
+    model : DahlModel
+
+    Attributes
+    ----------
+    m : float
+        Real part of the eigenvalues of N_s, -alpha1 / 2.
+    disc : float
+        alpha1^2 / 4 - alpha2: > 0 overdamped, < 0 oscillatory.
+    N, P, z_ss, C : dict
+        For s = +1 and -1: N_s, N_s - m I, the steady state -s N_s^-1 B and
+        the output row of eq. 12 (H = C_s z).
+    """
 
     def __init__(self, model):
         a1, a2 = model.alpha1, model.alpha2
@@ -214,14 +229,23 @@ def strokes(u, direction0=1):
     return [(int(a), int(b), int(s[a])) for a, b in zip(starts, stops)]
 
 
-def _initial_state(model, z0, direction0):
-    """(z0, direction0) given, or the model's start (:meth:`DahlModel.initial_state`)."""
+def initial_state_of(model, z0=None, direction0=None):
+    """(z0, direction0) given, or the model's start (:meth:`DahlModel.initial_state`).
+
+    Returns
+    -------
+    z : ndarray, shape (2,)
+        Initial state.
+    direction : {1, -1}
+        Direction of motion assumed until the input first changes.
+    """
     z_start, s_start = model.initial_state()
     z = z_start if z0 is None else check_finite_array("z0", z0, shape=(2,))
     return z, s_start if direction0 is None else _direction(direction0)
 
 
-def _check_model(model):
+def check_dahl_model(model):
+    """Return ``model`` if it is a :class:`DahlModel`; raise TypeError otherwise."""
     if not isinstance(model, DahlModel):
         raise TypeError(f"model must be a DahlModel, got {type(model).__name__}")
     return model
@@ -257,15 +281,15 @@ def dahl_hysteresis(model, x, z0=None, direction0=None, return_state=False, dire
     H : ndarray
         H at every sample [x-unit]; ``(H, z)`` with ``return_state``.
     """
-    _check_model(model)
+    check_dahl_model(model)
     x = check_finite_array("x", x, ndim=1, min_length=2)
     if directions is None:
         directions = x
     else:
         directions = check_finite_array("directions", directions, ndim=1)
         check_same_length(x=x, directions=directions)
-    z_init, s0 = _initial_state(model, z0, direction0)
-    dyn = _Dynamics(model)
+    z_init, s0 = initial_state_of(model, z0, direction0)
+    dyn = StrokeDynamics(model)
     z = np.empty((x.size, 2))
     z[0] = z_init
     H = np.empty(x.size)
@@ -275,126 +299,6 @@ def dahl_hysteresis(model, x, z0=None, direction0=None, return_state=False, dire
         z[start + 1:stop + 1] = dyn.propagate(s, sigma, z[start])
         H[start + 1:stop + 1] = z[start + 1:stop + 1] @ dyn.C[s]
     return (H, z) if return_state else H
-
-
-def feedforward(model, x_r, z0=None, direction0=None):
-    """Inverse-free Dahl feedforward of eq. 14 on a whole record.
-
-    u_f = (x_r - x0 + H(x_r)) / g_a, with H driven by the desired
-    displacement (x0 = ``model.x0``, 0 for the paper's model: eq. 14 as
-    printed).  Fed to the voltage-driven model, it gives x = x_r exactly.
-
-    Parameters
-    ----------
-    model : DahlModel
-    x_r : array_like
-        Desired displacement [x-unit] (workbook: reference v_r [V]).
-    z0, direction0
-        Initial state and direction, as in :func:`dahl_hysteresis`.
-
-    Returns
-    -------
-    ndarray
-        Feedforward input u_f [v-unit] (workbook: amplifier input [V]).
-    """
-    _check_model(model)
-    x_r = check_finite_array("x_r", x_r, ndim=1, min_length=2)
-    H = dahl_hysteresis(model, x_r, z0=z0, direction0=direction0)
-    return (x_r - model.x0 + H) / model.g_a
-
-
-class DahlFeedforward:
-    """Stateful, sample-by-sample Dahl feedforward (eq. 14) for a 10 kHz loop.
-
-    Each :meth:`step` costs a few dozen floating-point operations on Python
-    floats (closed-form 2x2 matrix exponential), and the sequence of steps
-    equals :func:`feedforward` on the whole record to rounding.
-
-    Parameters
-    ----------
-    model : DahlModel
-    z0 : array_like of shape (2,), optional
-        Initial state (default: the model's ``start``).
-    direction0 : {1, -1}, optional
-        Direction assumed until the reference first moves (default: the
-        model's ``start``).
-
-    Examples
-    --------
-    >>> ff = DahlFeedforward(DahlModel(2.0, 1.0, 0.0, 0.1, 1.0, 0.9))
-    >>> u = [ff.step(r) for r in (0.0, 0.1, 0.2)]
-    """
-
-    def __init__(self, model, z0=None, direction0=None):
-        self.model = _check_model(model)
-        z_init, self._s_init = _initial_state(model, z0, direction0)
-        self._z_init = tuple(float(v) for v in z_init)
-        dyn = _Dynamics(model)
-        self._m = dyn.m
-        self._disc = dyn.disc
-        self._root = math.sqrt(abs(dyn.disc))
-        # per direction: P = N - mI (4 floats), z_ss (2), C (2)
-        self._P = {s: tuple(float(v) for v in dyn.P[s].ravel()) for s in (1, -1)}
-        self._zss = {s: tuple(float(v) for v in dyn.z_ss[s]) for s in (1, -1)}
-        self._C = {s: tuple(float(v) for v in dyn.C[s]) for s in (1, -1)}
-        self._inv_g = 1.0 / model.g_a
-        self._x0 = model.x0
-        self.reset()
-
-    def reset(self):
-        """Return to the initial state (before the first sample)."""
-        self._z1, self._z2 = self._z_init
-        self._s = self._s_init
-        self._x = None
-
-    @property
-    def state(self):
-        """Current (z1, z2)."""
-        return (self._z1, self._z2)
-
-    @property
-    def H(self):
-        """Current hysteretic term H [x-unit]."""
-        c1, c2 = self._C[self._s]
-        return c1 * self._z1 + c2 * self._z2
-
-    def step(self, x_r):
-        """Advance to the desired displacement ``x_r`` and return u_f [v-unit]."""
-        x_r = float(x_r)
-        if not math.isfinite(x_r):
-            raise ValueError(f"x_r must be finite, got {x_r!r}")
-        if self._x is not None and x_r != self._x:
-            dx = x_r - self._x
-            s = 1 if dx > 0 else -1
-            sigma = abs(dx)
-            ec, es = self._parts(sigma)
-            zs1, zs2 = self._zss[s]
-            p11, p12, p21, p22 = self._P[s]
-            w1, w2 = self._z1 - zs1, self._z2 - zs2
-            self._z1 = zs1 + ec * w1 + es * (p11 * w1 + p12 * w2)
-            self._z2 = zs2 + ec * w2 + es * (p21 * w1 + p22 * w2)
-            self._s = s
-        self._x = x_r
-        c1, c2 = self._C[self._s]
-        return (x_r - self._x0 + c1 * self._z1 + c2 * self._z2) * self._inv_g
-
-    def _parts(self, sigma):
-        """Scalar version of :meth:`_Dynamics.parts`."""
-        m, q = self._m, self._root
-        if self._disc < 0:
-            em = math.exp(m * sigma)
-            y = q * sigma
-            return em * math.cos(y), em * (math.sin(y) / q if y > 1e-8 else sigma)
-        y = q * sigma
-        ep, en = math.exp((m + q) * sigma), math.exp((m - q) * sigma)
-        if y < 1e-3:
-            return 0.5 * (ep + en), math.exp(m * sigma) * sigma * (1 + y * y / 6 + y ** 4 / 120)
-        return 0.5 * (ep + en), (ep - en) / (2 * q)
-
-    def run(self, x_r):
-        """Feed a whole record sample by sample (continuing from the current state)."""
-        x_r = check_finite_array("x_r", x_r, ndim=1)
-        return np.array([self.step(v) for v in x_r])
 
 
 # --------------------------------------------------------------------------- driven by v
@@ -449,10 +353,10 @@ def simulate_dahl(model, v, z0=None, direction0=None):
         When x + H(x) decreases somewhere along a stroke (a strongly
         underdamped model), so that x(v) is not unique.
     """
-    _check_model(model)
+    check_dahl_model(model)
     v = check_finite_array("v", v, ndim=1, min_length=2)
     _check_beta1(model)
-    x, H, z = _simulate_records(model, [v], *_initial_state(model, z0, direction0))[0]
+    x, H, z = _simulate_records(model, [v], *initial_state_of(model, z0, direction0))[0]
     return DahlResponse(v=v, x=x, H=H, z=z)
 
 
@@ -464,7 +368,7 @@ def simulate_dahl_records(model, records):
     :func:`simulate_dahl`.  Returns a list of :class:`DahlResponse`; raises
     as :func:`simulate_dahl`.
     """
-    _check_model(model)
+    check_dahl_model(model)
     _check_beta1(model)
     records = [check_finite_array(f"records[{i}]", v, ndim=1, min_length=2)
                for i, v in enumerate(records)]
@@ -490,7 +394,7 @@ def _simulate_records(model, records, z0=None, s0=None):
     so fitting several loops costs little more than one.  ``model.beta1`` must
     be 0 (checked by the public callers).
     """
-    dyn = _Dynamics(model)
+    dyn = StrokeDynamics(model)
     z_start, s_start = model.initial_state()
     z0 = z_start if z0 is None else z0
     s0 = s_start if s0 is None else s0
@@ -584,11 +488,11 @@ def min_stroke_slope(model, z0, direction, length):
     float
         min over 0 <= sigma <= ``length`` of d(x + H)/dx (dimensionless).
     """
-    _check_model(model)
+    check_dahl_model(model)
     s = _direction(direction)
     z0 = check_finite_array("z0", z0, shape=(2,))
     length = check_positive("length", length)
-    dyn = _Dynamics(model)
+    dyn = StrokeDynamics(model)
     cw, cpw, cnw, cnpw, C = _stroke_constants(dyn, np.array([s]), (z0 - dyn.z_ss[s])[None])
     return float(_min_slopes(dyn, s * cnw, s * cnpw, np.array([length]))[0])
 

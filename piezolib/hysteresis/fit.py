@@ -17,7 +17,8 @@ from piezolib.hysteresis.dahl import (FORMS, STARTS, DahlModel, NotInvertibleErr
                                       dahl_hysteresis, simulate_dahl, simulate_dahl_records,
                                       strokes)
 
-__all__ = ["DahlFit", "fit_dahl", "choose_fit", "ALPHA1_BOUNDS", "ALPHA2_BOUNDS", "G_A_BOUNDS"]
+__all__ = ["DahlFit", "fit_dahl", "choose_fit", "check_fit_options", "ALPHA1_BOUNDS",
+           "ALPHA2_BOUNDS", "G_A_BOUNDS"]
 
 
 @dataclass(frozen=True)
@@ -233,8 +234,17 @@ def _project_offset(r, wv):
     return -float(wv @ r) / float(wv @ wv)
 
 
-def _check_fit_options(form, offset, start):
-    """Validated (form, offset, start) of a fit, offset as a plain bool."""
+def check_fit_options(form, offset, start):
+    """Validated (form, offset, start) of a fit, offset as a plain bool.
+
+    Raises
+    ------
+    ValueError
+        ``form`` not in :data:`~piezolib.hysteresis.dahl.FORMS` or ``start``
+        not in :data:`~piezolib.hysteresis.dahl.STARTS`.
+    TypeError
+        ``offset`` not a bool.
+    """
     if form not in FORMS:
         raise ValueError(f"form must be one of {FORMS}, got {form!r}")
     if not isinstance(offset, (bool, np.bool_)):
@@ -300,7 +310,7 @@ def fit_dahl(loops, gamma_a, form="bliman_sorine", offset=False, start="virgin",
     -------
     DahlFit
     """
-    form, offset, start = _check_fit_options(form, offset, start)
+    form, offset, start = check_fit_options(form, offset, start)
     gamma_a = check_positive("gamma_a", gamma_a)
     data = _check_loops(loops, discard, stride)
     slope = _mean_slope(data)

@@ -12,12 +12,11 @@ import functools
 from dataclasses import fields
 from pathlib import Path
 
-import numpy as np
 
 from piezolib import paper
 from piezolib._checks import check_integer
 from piezolib.hysteresis.dahl import FORMS, STARTS, DahlModel
-from piezolib.hysteresis.fit import fit_dahl
+from piezolib.hysteresis.fit import check_fit_options, fit_dahl
 
 __all__ = ["published_dahl", "CASE_I_CANDIDATES", "WORKBOOK_DAHL", "fit_case_I_loops",
            "workbook_dahl_fit", "clear_cache"]
@@ -77,14 +76,9 @@ def fit_case_I_loops(form, offset, start, directory=None, stride=10):
     -------
     DahlFit
     """
-    if form not in FORMS:
-        raise ValueError(f"form must be one of {FORMS}, got {form!r}")
-    if not isinstance(offset, (bool, np.bool_)):
-        raise TypeError(f"offset must be True or False, got {offset!r}")
-    if start not in STARTS:
-        raise ValueError(f"start must be one of {STARTS}, got {start!r}")
+    form, offset, start = check_fit_options(form, offset, start)
     directory = None if directory is None else str(directory)
-    return _fit_case_I_loops(form, bool(offset), start, directory,
+    return _fit_case_I_loops(form, offset, start, directory,
                              check_integer("stride", stride, minimum=1))
 
 

@@ -12,8 +12,8 @@ import numpy as np
 import scipy.optimize as opt
 
 from piezolib._checks import check_integer, check_proper, check_siso
-from piezolib.uncertainty.modelset import (check_model_set, member_poles, model_set,
-                                           unstable_members)
+from piezolib.uncertainty.modelset import (check_model_set, frequency_basis, member_poles,
+                                           model_set, unstable_members)
 from piezolib.uncertainty.polynomials import (
     check_frequencies, check_plant, check_spread, coefficient_scale, jw_powers,
     plant_polynomials, rectangle_half_widths, scale_coefficients)
@@ -40,11 +40,8 @@ def relative_errors(mset, omega):
     omega : array_like
         Frequencies [rad/s], positive.
     """
-    check_model_set(mset)
-    omega = check_frequencies(omega)
-    a, _ = plant_polynomials(mset.plant)
-    ws = coefficient_scale(a)
-    V = jw_powers(omega / ws, len(a))
+    a, _, ws, V = frequency_basis(mset, omega)
+    V = V[:, :len(a)]
     diff = mset.spread * mset.offsets * scale_coefficients(a, ws, len(a) - 1)[:-1]
     members = mset.scaled_coefficients(ws)
     # real matrix products: (j w)^k is real or imaginary, and real BLAS is faster

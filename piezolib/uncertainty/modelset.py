@@ -19,6 +19,7 @@ from piezolib.uncertainty.polynomials import (
 __all__ = [
     "MAX_MEMBERS", "ModelSet", "model_set", "level_offsets", "perturbed_plant", "set_response",
     "member_poles", "member_closed_loop_poles", "unstable_members", "check_model_set",
+    "frequency_basis",
 ]
 
 #: Largest number of models :func:`model_set` and :func:`level_offsets` build.
@@ -195,6 +196,31 @@ def model_set(G, spread, levels=3):
                     offsets=level_offsets(levels, len(a) - 1))
 
 
+def frequency_basis(mset, omega):
+    """Check a model set and a frequency grid; the scaled basis of its frequency responses.
+
+    Parameters
+    ----------
+    mset : ModelSet
+    omega : array_like
+        Frequencies [rad/s], positive.
+
+    Returns
+    -------
+    a, b : ndarray
+        Denominator and numerator of the nominal plant, lowest power first.
+    ws : float
+        Coefficient scale omega_s [rad/s].
+    V : ndarray, shape (len(omega), max(len(a), len(b)))
+        Powers (j omega / omega_s)^k.
+    """
+    check_model_set(mset)
+    omega = check_frequencies(omega)
+    a, b = plant_polynomials(mset.plant)
+    ws = coefficient_scale(a)
+    return a, b, ws, jw_powers(omega / ws, max(len(a), len(b)))
+
+
 def set_response(mset, omega):
     """Frequency responses of every member, shape (M, len(omega)), complex.
 
@@ -207,11 +233,7 @@ def set_response(mset, omega):
     omega : array_like
         Frequencies [rad/s], positive.
     """
-    check_model_set(mset)
-    omega = check_frequencies(omega)
-    a, b = plant_polynomials(mset.plant)
-    ws = coefficient_scale(a)
-    V = jw_powers(omega / ws, max(len(a), len(b)))
+    a, b, ws, V = frequency_basis(mset, omega)
     num = scale_coefficients(b, ws, len(a) - 1) @ V[:, :len(b)].T
     return num[None, :] / (mset.scaled_coefficients(ws) @ V[:, :len(a)].T)
 

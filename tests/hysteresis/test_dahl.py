@@ -1,4 +1,4 @@
-"""Dahl model (eq. 10-13), its exact integration and the feedforward of eq. 14."""
+"""Dahl model (eq. 10-13) and its exact integration."""
 
 import math
 
@@ -165,39 +165,6 @@ def test_printed_form_has_no_loop_after_long_strokes():
     assert hy.hysteresis_percent(v[1000:], x[1000:]) == pytest.approx(0.0, abs=1e-9)
 
 
-# --- feedforward (eq. 14) ------------------------------------------------------
-@pytest.mark.parametrize("form", hy.FORMS)
-@pytest.mark.parametrize("alpha1", [3.0, 4.0, 10.0])   # oscillatory, critical, overdamped
-def test_feedforward_inverts_the_model(form, alpha1):
-    m = model(form, alpha1=alpha1)
-    x_r = minor_loop_reference()
-    u_f = hy.feedforward(m, x_r)
-    x = hy.simulate_dahl(m, u_f).x
-    np.testing.assert_allclose(x, x_r, rtol=0, atol=1e-9)
-
-
-@pytest.mark.parametrize("form", hy.FORMS)
-@pytest.mark.parametrize("alpha1", [3.0, 4.0, 10.0])
-def test_stateful_feedforward_equals_array_version(form, alpha1):
-    m = model(form, alpha1=alpha1, beta1=0.02)
-    x_r = minor_loop_reference()
-    ff = hy.DahlFeedforward(m)
-    u_steps = np.array([ff.step(r) for r in x_r[:3000]] + list(ff.run(x_r[3000:])))
-    np.testing.assert_allclose(u_steps, hy.feedforward(m, x_r), rtol=0, atol=1e-11)
-    assert ff.H == pytest.approx(hy.dahl_hysteresis(m, x_r)[-1], abs=1e-11)
-    ff.reset()
-    assert ff.state == (0.0, 0.0)
-    assert ff.step(x_r[0]) == pytest.approx(x_r[0] / m.g_a)
-
-
-def test_feedforward_of_printed_model_is_offset_only():
-    """Printed form, long strokes: after the first transient u_f = (x_r + H_ss)/g_a."""
-    m = model("printed", alpha1=200.0, alpha2=1e4)
-    t, x_r = triangle(3.6, 10.0, periods=2)
-    u_f = hy.feedforward(m, x_r)
-    np.testing.assert_allclose(u_f[100:], (x_r[100:] + m.steady_state(1)) / m.g_a, rtol=1e-9)
-
-
 # --- output offset x0 and initial state (workbook extensions) --------------------
 @pytest.mark.parametrize("form", hy.FORMS)
 def test_offset_only_shifts_the_output(form):
@@ -208,20 +175,6 @@ def test_offset_only_shifts_the_output(form):
     np.testing.assert_allclose(shifted.H, plain.H, rtol=0, atol=1e-12)
     np.testing.assert_allclose(shifted.x + shifted.H, m.g_a * v - 0.15, rtol=0, atol=1e-12)
     assert model(form).x0 == 0.0                                          # eq. 13
-
-
-@pytest.mark.parametrize("form", hy.FORMS)
-@pytest.mark.parametrize("start", hy.STARTS)
-@pytest.mark.parametrize("alpha1", [3.0, 10.0, 400.0])   # oscillatory, overdamped, first-order-like
-def test_feedforward_inverts_the_model_with_offset(form, start, alpha1):
-    m = model(form, alpha1=alpha1, x0=-0.153, start=start)
-    x_r = minor_loop_reference()
-    u_f = hy.feedforward(m, x_r)
-    np.testing.assert_allclose(hy.simulate_dahl(m, u_f).x, x_r, rtol=0, atol=1e-9)
-    np.testing.assert_allclose(hy.DahlFeedforward(m).run(x_r), u_f, rtol=0, atol=1e-11)
-    # u_f = (x_r - x0 + H(x_r)) / g_a, H from the model's start state
-    H = hy.dahl_hysteresis(m, x_r)
-    np.testing.assert_allclose(u_f, (x_r - m.x0 + H) / m.g_a, rtol=0, atol=1e-15)
 
 
 def test_rest_start_is_the_state_after_a_long_descending_stroke():
@@ -315,11 +268,5 @@ def test_bad_records_raise():
         hy.dahl_hysteresis(m, [0.0, np.nan, 1.0])
     with pytest.raises(ValueError, match="v contains 1 non-finite"):
         hy.simulate_dahl(m, [0.0, 1.0, np.nan])
-    with pytest.raises(ValueError, match="x_r contains"):
-        hy.feedforward(m, [0.0, np.inf])
-    with pytest.raises(ValueError, match="x_r must be finite"):
-        hy.DahlFeedforward(m).step(float("nan"))
-    with pytest.raises(TypeError, match="model must be a DahlModel"):
-        hy.feedforward(PARAMS, [0.0, 1.0])              # the parameters, not a model
     with pytest.raises(ValueError, match="beta1 = 0"):
         hy.simulate_dahl(model(beta1=0.1), [0.0, 1.0])

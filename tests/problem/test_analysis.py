@@ -9,11 +9,6 @@ from piezolib.problem import analysis
 
 
 @pytest.fixture(scope="module")
-def models():
-    return paper.problem()
-
-
-@pytest.fixture(scope="module")
 def published(models):
     G, H_m, H_e, H_y, K = models
     return analysis.analyze(K, G, H_m, H_e, H_y)

@@ -11,11 +11,6 @@ from piezolib.problem import analysis, design, genplant
 
 
 @pytest.fixture(scope="module")
-def models():
-    return paper.problem()
-
-
-@pytest.fixture(scope="module")
 def result(models):
     G, H_m, H_e, H_y, _ = models
     return design.design_controller(G, H_m, H_e, H_y)

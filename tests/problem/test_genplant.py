@@ -10,11 +10,6 @@ from piezolib.problem import genplant
 OMEGA = np.logspace(0, 6, 300)
 
 
-@pytest.fixture(scope="module")
-def models():
-    return paper.problem()
-
-
 def response(sys, omega=OMEGA):
     return np.moveaxis(sys(1j * omega, squeeze=False), -1, 0)
 

@@ -7,7 +7,7 @@ from piezolib.robust.lti import frequency_grid
 from piezolib.workbook import plotting
 
 __all__ = ["fig01_control_loop", "fig10_step_responses", "fig11_sensitivity_templates",
-           "STEP_TITLES"]
+           "sensitivity_templates_figure", "STEP_TITLES"]
 
 #: Panel titles of the step responses of Fig. 10, in the order of LoopFunctions (S, T, KS, GS).
 STEP_TITLES = {"S": "(a) S: v_r -> v_e", "T": "(b) T: v_r -> v_y",
@@ -94,17 +94,43 @@ def fig11_sensitivity_templates(loop, H_e, H_y, omega=None):
     matplotlib.figure.Figure
         Saved as ``fig11_sensitivity_templates.png``.
     """
+    fig = sensitivity_templates_figure({None: loop}, H_e, H_y, omega)
+    plotting.save_figure(fig, 11, "sensitivity_templates")
+    return fig
+
+
+def sensitivity_templates_figure(loops, H_e, H_y, omega=None, template_color=None):
+    """The two panels of Fig. 11, drawn but not saved: |S| and |T| of each loop
+    under their templates 1/|H_e| and 1/|H_y| (dotted).
+
+    Parameters
+    ----------
+    loops : dict
+        ``{label: LoopFunctions}``; the label ``None`` draws plain ``|S|``, ``|T|``.
+    H_e, H_y : control.LTI
+        Error and output weights (eq. 15).
+    omega : array_like, optional
+        Frequency grid [rad/s]; default 1 ... 1e7 rad/s, 3000 points.
+    template_color : matplotlib color, optional
+        Colour of the templates; default the next colour of the cycle.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     omega = frequency_grid(1e0, 1e7, 3000) if omega is None else omega
     s = 1j * omega
     fig, (ax_s, ax_t) = plotting.new_figure(1, 2, figsize=(9, 3.6), sharey=True)
-    plotting.plot_magnitude(ax_s, omega, loop.S(s).ravel(), label="|S|")
-    plotting.plot_magnitude(ax_s, omega, 1 / H_e(s).ravel(), label="1/|H_e|", ls=":")
-    plotting.plot_magnitude(ax_t, omega, loop.T(s).ravel(), label="|T|")
-    plotting.plot_magnitude(ax_t, omega, 1 / H_y(s).ravel(), label="1/|H_y|", ls=":")
+    style = {"ls": ":"} if template_color is None else {"ls": ":", "color": template_color}
+    for name, loop in loops.items():
+        suffix = "" if name is None else f", {name}"
+        plotting.plot_magnitude(ax_s, omega, np.ravel(loop.S(s)), label=f"|S|{suffix}")
+        plotting.plot_magnitude(ax_t, omega, np.ravel(loop.T(s)), label=f"|T|{suffix}")
+    plotting.plot_magnitude(ax_s, omega, 1 / np.ravel(H_e(s)), label="1/|H_e|", **style)
+    plotting.plot_magnitude(ax_t, omega, 1 / np.ravel(H_y(s)), label="1/|H_y|", **style)
     ax_s.set_title("(a) output sensitivity S and its template")
     ax_t.set_title("(b) complementary sensitivity T and its template")
     ax_s.set_ylim(-80, 30)
     for ax in (ax_s, ax_t):
         ax.legend(loc="lower right")
-    plotting.save_figure(fig, 11, "sensitivity_templates")
     return fig

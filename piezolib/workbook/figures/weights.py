@@ -5,6 +5,7 @@ import numpy as np
 from piezolib import paper
 from piezolib.robust.lti import frequency_grid
 from piezolib.workbook import plotting
+from piezolib.workbook.figures.audit import sensitivity_templates_figure
 
 __all__ = ["extra_weight_templates", "fig11_sensitivity_templates_designs"]
 
@@ -64,18 +65,6 @@ def fig11_sensitivity_templates_designs(loops, H_e, H_y, omega=None):
     matplotlib.figure.Figure
         Saved as ``fig11_sensitivity_templates_designs.png``.
     """
-    omega = frequency_grid(1e0, 1e7, 3000) if omega is None else omega
-    s = 1j * omega
-    fig, (ax_s, ax_t) = plotting.new_figure(1, 2, figsize=(9, 3.6), sharey=True)
-    for name, loop in loops.items():
-        plotting.plot_magnitude(ax_s, omega, np.ravel(loop.S(s)), label=f"|S|, {name}")
-        plotting.plot_magnitude(ax_t, omega, np.ravel(loop.T(s)), label=f"|T|, {name}")
-    plotting.plot_magnitude(ax_s, omega, 1 / np.ravel(H_e(s)), label="1/|H_e|", ls=":", color="k")
-    plotting.plot_magnitude(ax_t, omega, 1 / np.ravel(H_y(s)), label="1/|H_y|", ls=":", color="k")
-    ax_s.set_title("(a) output sensitivity S and its template")
-    ax_t.set_title("(b) complementary sensitivity T and its template")
-    ax_s.set_ylim(-80, 30)
-    for ax in (ax_s, ax_t):
-        ax.legend(loc="lower right")
+    fig = sensitivity_templates_figure(loops, H_e, H_y, omega, template_color="k")
     plotting.save_figure(fig, 11, "sensitivity_templates_designs")
     return fig

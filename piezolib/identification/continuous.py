@@ -1,0 +1,330 @@
+"""Continuous-time models from sampled data: exact ZOH inverse, 3-zero refit, :func:`identify`.
+
+Steps II-III of the paper's Fig. 3 end to end (:func:`identify`), the exact
+inverse of the ZOH discretisation (:func:`d2c`) and its forward direction
+(:func:`zoh_coefficients`, :func:`zoh_simulate`), the numerator refit with
+the poles fixed (:func:`refit_numerator`), and the coefficients and pole pairs
+of the result.  Time in seconds, frequencies in rad/s.
+
+Why the numerator is refitted: ``docs/stage.md``.
+"""
+
+from dataclasses import dataclass
+
+import control as ct
+import numpy as np
+import scipy.linalg as la
+import scipy.signal as sg
+
+from piezolib._checks import (check_finite_array, check_integer, check_lti, check_positive,
+                              check_siso)
+from piezolib.identification.oe import OutputErrorModel, fit_output_error
+from piezolib.identification.arx import DEFAULT_INITIAL_GAIN, check_io, least_squares
+from piezolib.robust.lti import balance, scale_time, time_scale_of, to_scaled
+
+__all__ = [
+    "d2c", "zoh_coefficients", "zoh_simulate", "refit_numerator", "IdentifiedModel",
+    "identify", "pole_pairs", "monic_coefficients",
+]
+
+
+# --- continuous <-> discrete ----------------------------------------------------------
+def d2c(sysd, method="zoh"):
+    """Continuous-time model whose ZOH discretisation is ``sysd``.
+
+    With M = [[A, B], [0, 0]], exp(M T) = [[Ad, Bd], [0, I]], so the
+    continuous model is the principal matrix logarithm of [[Ad, Bd], [0, I]]
+    divided by T.  (python-control has ``c2d`` but no inverse.)
+
+    Parameters
+    ----------
+    sysd : control.LTI
+        Discrete-time model with a numeric sample time.
+    method : {"zoh"}
+        Only the zero-order-hold inverse is provided.
+
+    Returns
+    -------
+    control.StateSpace
+        Continuous model (same signal names), states balanced.
+
+    Raises
+    ------
+    ValueError
+        For a continuous or unspecified-dt model, or a pole at z = 0 or on
+        the negative real axis, where no real ZOH-equivalent model exists.
+    """
+    check_lti("sysd", sysd)
+    if method != "zoh":
+        raise ValueError(f"method must be 'zoh', got {method!r}")
+    dt = sysd.dt
+    if dt is None or dt is True or dt == 0 or isinstance(dt, bool):
+        raise ValueError("sysd must be discrete-time with a numeric sample time, "
+                         f"got dt={dt!r}")
+    dt = check_positive("sysd.dt", float(dt))
+    ss = ct.ss(sysd)
+    A, B, C, D = (np.asarray(m, dtype=float) for m in (ss.A, ss.B, ss.C, ss.D))
+    n, m = B.shape
+    if n == 0:
+        return ct.ss([], [], [], D, inputs=sysd.input_labels, outputs=sysd.output_labels)
+    poles = la.eigvals(A)
+    scale = max(1.0, float(np.max(np.abs(poles))))
+    bad = poles[(np.abs(poles) < 1e-12 * scale)
+                | ((poles.real <= 0) & (np.abs(poles.imag) < 1e-9 * scale))]
+    if bad.size:
+        raise ValueError("sysd has pole(s) at z = 0 or on the negative real axis "
+                         f"({np.round(bad, 6)}): no real ZOH-equivalent continuous model")
+    # balance A (diagonal similarity) before the logarithm
+    bal = balance(ss)
+    A, B, C = bal.A, bal.B, bal.C
+    M = np.zeros((n + m, n + m))
+    M[:n, :n], M[:n, n:], M[n:, n:] = A, B, np.eye(m)
+    L = la.logm(M)
+    if np.iscomplexobj(L):
+        if np.max(np.abs(L.imag)) > 1e-8 * max(1.0, np.max(np.abs(L.real))):
+            raise ValueError("the matrix logarithm of the ZOH model is not real: "
+                             "no real ZOH-equivalent continuous model")
+        L = L.real
+    L = L / dt
+    return ct.ss(L[:n, :n], L[:n, n:], C, D, inputs=sysd.input_labels,
+                 outputs=sysd.output_labels, name=f"{sysd.name}_c" if sysd.name else None)
+
+
+def zoh_coefficients(sys, dt):
+    """Direct-form coefficients of the exact ZOH discretisation of a SISO model.
+
+    Computed from a balanced realisation in scaled time
+    (:func:`piezolib.robust.lti.to_scaled` at
+    :func:`~piezolib.robust.lti.time_scale_of` the model), so that models with
+    coefficients up to 1e23 give accurate coefficients.
+
+    Parameters
+    ----------
+    sys : control.LTI
+        SISO continuous-time model.
+    dt : float
+        Sample time [s].
+
+    Returns
+    -------
+    b, a : ndarray
+        Numerator and denominator in powers of z^-1 (highest power of z
+        first, a[0] = 1; b[0] = 0 exactly without direct feedthrough), for
+        ``scipy.signal.lfilter``.
+    """
+    check_siso("sys", sys)
+    if not sys.isctime(strict=True):
+        raise ValueError("sys must be a continuous-time model")
+    dt = check_positive("dt", dt)
+    w = time_scale_of(sys)
+    ss = to_scaled(sys, w)
+    n = ss.nstates
+    D = np.asarray(ss.D, dtype=float).reshape(1, 1)
+    if n == 0:
+        return D.ravel().copy(), np.array([1.0])
+    M = np.zeros((n + 1, n + 1))
+    M[:n, :n], M[:n, n:] = ss.A * (w * dt), ss.B * (w * dt)    # the sample time in scaled time
+    E = la.expm(M)
+    b, a = sg.ss2tf(E[:n, :n], E[:n, n:], ss.C, D)
+    b = np.asarray(b, dtype=float).ravel() / a[0]
+    a = np.asarray(a, dtype=float) / a[0]
+    if D[0, 0] == 0:
+        b[0] = 0.0                   # exactly: no direct feedthrough
+    return b, a
+
+
+def zoh_simulate(sys, u, fs):
+    """Response of a continuous SISO model to a sampled input held by a ZOH,
+    from rest, at the sampling instants."""
+    fs = check_positive("fs", fs)
+    u = check_finite_array("u", u, ndim=1, min_length=1)
+    b, a = zoh_coefficients(sys, 1.0 / fs)
+    return sg.lfilter(b, a, u)
+
+
+# --- 3-zero structure ------------------------------------------------------------------
+def refit_numerator(poles, u, y, fs, n_zeros=3, time_scale=None):
+    """Output-error least-squares fit of b0 ... b_nz with the poles fixed.
+
+    The simulated response of b(s)/a(s) to the ZOH input is linear in the
+    numerator coefficients: y_hat = sum_j b_j y_j with y_j the response of
+    s^j/a(s).  The basis responses are computed in scaled time
+    (s = time_scale * p) and the fit is ordinary least squares.
+
+    Parameters
+    ----------
+    poles : array_like
+        Continuous poles [rad/s], closed under conjugation, all stable.
+    u, y : array_like
+        Input and output deviations [V], from rest.
+    fs : float
+        Sampling frequency [Hz].
+    n_zeros : int, optional
+        Numerator degree (3 in eq. 4).
+    time_scale : float, optional
+        Internal scaling [rad/s]; default the geometric mean of the smallest
+        and the largest pole magnitude (the rule of
+        :func:`piezolib.robust.lti.time_scale_of`).
+
+    Returns
+    -------
+    control.TransferFunction
+        b(s)/a(s) with a monic of degree len(poles), time in seconds,
+        ``u`` -> ``y``.
+    """
+    u, y = check_io(u, y)
+    fs = check_positive("fs", fs)
+    poles = check_finite_array("poles", poles, ndim=1, min_length=1)
+    n = len(poles)
+    n_zeros = check_integer("n_zeros", n_zeros, minimum=0)
+    if n_zeros >= n:
+        raise ValueError(f"n_zeros ({n_zeros}) must be below the number of poles ({n})")
+    if np.any(poles.real >= 0):
+        raise ValueError(f"poles must be stable, got {poles[poles.real >= 0]}")
+    if time_scale is None:
+        magnitudes = np.abs(poles)
+        time_scale = float(np.sqrt(magnitudes.min() * magnitudes.max()))
+    time_scale = check_positive("time_scale", time_scale)
+    den_p = np.real(np.poly(poles / time_scale))         # monic in p
+    basis = []
+    for j in range(n_zeros + 1):
+        num_p = np.zeros(j + 1)
+        num_p[0] = 1.0                                    # p^j
+        basis.append(zoh_simulate(ct.tf(num_p, den_p), u, fs / time_scale))  # T in p-time
+    basis = np.column_stack(basis)
+    coef_p = least_squares(basis, y)
+    # G(s) = sum_j c_j p^j / a_p(p), p = s / ws  ->  b_j = c_j ws^(n-j), a_k = a_p,k ws^(n-k)
+    powers = np.arange(n_zeros + 1)
+    b = coef_p * time_scale ** (n - powers)               # b_0 ... b_nz
+    a = den_p[::-1] * time_scale ** (n - np.arange(n + 1))  # a_0 ... a_n (a_n = 1)
+    return ct.tf(b[::-1], a[::-1], inputs="u", outputs="y", name="identified")
+
+
+@dataclass(frozen=True)
+class IdentifiedModel:
+    """Everything :func:`identify` estimated.
+
+    Attributes
+    ----------
+    discrete : OutputErrorModel
+        Discrete model from RLS (Steiglitz-McBride passes, parameter
+        histories in each pass).
+    continuous_full : control.StateSpace
+        d2c of the discrete model (6 poles, up to 5 zeros).
+    model : control.TransferFunction
+        The 6-pole / 3-zero model of eq. 4 (``u`` -> ``y``, seconds).
+    dropped_share : float
+        Largest ratio, up to the Nyquist frequency, of the numerator terms
+        above s^3 of ``continuous_full`` to its terms up to s^3 (zero for an
+        exact ZOH model of eq. 4's structure): how much the 3-zero
+        structure leaves out.
+    """
+
+    discrete: OutputErrorModel
+    continuous_full: ct.StateSpace
+    model: ct.TransferFunction
+    dropped_share: float
+
+
+def identify(u, y, fs, n_poles=6, n_zeros=3, initial_gain=DEFAULT_INITIAL_GAIN):
+    """Steps II-III of Fig. 3: discrete output-error model by RLS, d2c,
+    3-zero refit.
+
+    Parameters
+    ----------
+    u, y : array_like
+        Input and output deviations from the operating point [V], starting
+        at rest.
+    fs : float
+        Sampling frequency [Hz].
+    n_poles, n_zeros : int, optional
+        Continuous structure (eq. 4: 6 and 3).
+    initial_gain : float, optional
+        RLS W(0) = initial_gain * I.
+
+    Returns
+    -------
+    IdentifiedModel
+    """
+    n_poles = check_integer("n_poles", n_poles, minimum=1)
+    discrete = fit_output_error(u, y, fs, na=n_poles, nb=n_poles, nk=1,
+                                initial_gain=initial_gain)
+    full = d2c(discrete.system)
+    poles = la.eigvals(full.A)
+    if np.any(poles.real >= 0):
+        raise ValueError(f"the identified model is unstable (poles {poles[poles.real >= 0]})")
+    model = refit_numerator(poles, u, y, fs, n_zeros=n_zeros)
+    num = monic_coefficients(full, n_poles, n_poles - 1)[1][::-1]   # s^(n-1) ... s^0
+    s_grid = 1j * np.linspace(0.0, np.pi * fs, 512)[1:]
+    high = np.polyval(np.concatenate((num[:n_poles - 1 - n_zeros], np.zeros(n_zeros + 1))),
+                      s_grid)
+    low = np.polyval(num[n_poles - 1 - n_zeros:], s_grid)
+    return IdentifiedModel(discrete, full, model, float(np.max(np.abs(high / low))))
+
+
+def pole_pairs(sys):
+    """Natural frequencies and damping ratios of a model's complex pole pairs.
+
+    Parameters
+    ----------
+    sys : control.LTI
+        SISO continuous-time model.
+
+    Returns
+    -------
+    wn : ndarray
+        Natural frequencies [rad/s], ascending.
+    zeta : ndarray
+        Damping ratios, in the same order.
+    """
+    check_siso("sys", sys)
+    w = time_scale_of(sys)
+    poles = la.eigvals(to_scaled(sys, w).A) * w          # computed in scaled time
+    upper = poles[poles.imag > 0]
+    wn = np.abs(upper)
+    order = np.argsort(wn)
+    return wn[order], (-upper.real / wn)[order]
+
+
+def monic_coefficients(sys, n_poles=6, n_zeros=3, time_scale=None):
+    """Coefficients of b(s)/a(s) with a monic, lowest power first.
+
+    Parameters
+    ----------
+    sys : control.LTI
+        SISO continuous-time model with ``n_poles`` poles and at most
+        ``n_zeros`` zeros.
+    n_poles, n_zeros : int, optional
+        The structure (eq. 4: 6 and 3).
+    time_scale : float, optional
+        Internal scaling [rad/s] for accuracy; default
+        :func:`piezolib.robust.lti.time_scale_of` of ``sys``.
+
+    Returns
+    -------
+    a : ndarray
+        a0 ... a_{n-1} (time in seconds; a_n = 1 is left out).
+    b : ndarray
+        b0 ... b_m, m = ``n_zeros``.
+
+    Raises
+    ------
+    ValueError
+        When ``sys`` has another number of poles or more zeros.
+    """
+    check_siso("sys", sys)
+    time_scale = time_scale_of(sys) if time_scale is None else check_positive(
+        "time_scale", time_scale)
+    tf = ct.tf(scale_time(sys, time_scale))
+    den = np.atleast_1d(tf.den[0][0]).astype(float)
+    num = np.atleast_1d(tf.num[0][0]).astype(float) / den[0]
+    den = den / den[0]
+    if len(den) != n_poles + 1:
+        raise ValueError(f"sys has {len(den) - 1} poles, expected {n_poles}")
+    num = np.trim_zeros(num, "f")
+    if len(num) > n_zeros + 1:
+        raise ValueError(f"sys has {len(num) - 1} zeros, expected at most {n_zeros}")
+    num = np.concatenate((np.zeros(n_zeros + 1 - len(num)), num))
+    a = den[::-1][:-1] * time_scale ** (n_poles - np.arange(n_poles))
+    b = num[::-1] * time_scale ** (n_poles - np.arange(n_zeros + 1))
+    return a, b

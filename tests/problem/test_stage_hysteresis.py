@@ -1,0 +1,50 @@
+"""Hysteresis truth of the virtual stage: play operator, law, calibration on Table 4 Case I."""
+
+import numpy as np
+import pytest
+
+from piezolib import paper, signals
+from piezolib.problem import stage as S
+from piezolib.problem import stage_hysteresis as H
+
+FS = paper.SAMPLING_FREQUENCY_HZ
+
+
+def test_play_operator_matches_its_definition():
+    h = H.CALIBRATED_HYSTERESIS.operator()
+    rng = np.random.default_rng(3)
+    v = np.cumsum(rng.normal(0, 2.0, 3000))
+    v[100:120] = v[99]                                 # repeated samples
+    out, state = h.apply(v)
+    y = np.array(h.initial_state(0.0))
+    r, w = np.array(h.thresholds_V), np.array(h.weights)
+    ref = []
+    for vk in v:
+        y = np.minimum(np.maximum(y, vk - r), vk + r)
+        ref.append(vk + w @ (y - r))
+    assert np.allclose(out, ref, rtol=0, atol=1e-12)
+    assert np.allclose(state, y)
+
+
+def test_chord_gain_and_return_to_zero():
+    h = H.CALIBRATED_HYSTERESIS.operator()
+    _, v = signals.triangle(40.0, 10.0, FS, periods=2)
+    out, _ = h.apply(v)
+    assert out[0] == pytest.approx(0.0, abs=1e-12) and out[-1] == pytest.approx(0.0, abs=1e-12)
+    assert out.max() / 40.0 == pytest.approx(h.chord_gain(40.0), rel=1e-12)
+    assert h.chord_gain(0.5) == h.linear_weight == 1.0
+
+
+def test_calibration_targets_hold_on_the_default_stage():
+    got = S.case_I_hysteresis(S.run_case_I(S.VirtualStage(seed=0)))
+    target = paper.table4().loc["case_I"]
+    for A, value in got.items():
+        assert abs(value - target[A]) <= 0.5, (A, value)
+
+
+def test_calibration_rederives_the_stored_parameters():
+    law, achieved = H.calibrate_hysteresis()
+    assert law.density_per_V == pytest.approx(H.CALIBRATED_HYSTERESIS.density_per_V, rel=1e-3)
+    assert law.decay_V == pytest.approx(H.CALIBRATED_HYSTERESIS.decay_V, rel=1e-3)
+    target = paper.table4().loc["case_I"]
+    assert all(abs(achieved[A] - target[A]) <= 0.5 for A in achieved)
