@@ -5,7 +5,14 @@
 Goals: one feedforward step well under the 100 us sample period of the 10 kHz
 loop; a voltage-driven simulation of a 3000-sample loop in a few ms; the joint
 fit of the four Table 4 loops (with or without the offset x0) under a second.
+Fit time of each model (Dahl, Prandtl-Ishlinskii) on a raw 10 s record of the
+virtual stage (5x its sensor noise, from rest) at 5 kHz and 10 kHz, full rate.
+
+    python benchmarks/bench_hysteresis.py --fits     # only the 10 s record fits
 """
+
+import sys
+import warnings
 
 import time
 
@@ -68,5 +75,29 @@ def main():
           f"{best_of(ph.workbook_dahl_fit) * 1e6:.1f} us")
 
 
+def fit_times():
+    """Fit time of each model on a raw, noisy 10 s record at 5 and 10 kHz (one run each)."""
+    from piezolib.problem.stage import VirtualStage
+    for fs in (5_000.0, 10_000.0):
+        stage = VirtualStage(seed=3, sample_rate_Hz=fs, noise_rms_V=5 * 0.5e-3)
+        t = np.arange(int(10 * fs)) / fs
+        u = 1.5 - 1.5 * np.cos(2 * np.pi * 2 * t) * (0.6 + 0.4 * np.cos(2 * np.pi * 0.1 * t))
+        rec = stage.run(u - u[0])
+        loop = (rec.u_c_V, rec.v_y_V)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", hy.FitWarning)
+            start = time.perf_counter()
+            dahl = hy.fit_dahl([loop], gamma_a=30.0, offset=True, start="rest", discard=int(fs))
+            t_dahl = time.perf_counter() - start
+        start = time.perf_counter()
+        pi = hy.fit_pi([loop], n_plays=10, discard=int(fs))
+        t_pi = time.perf_counter() - start
+        print(f"10 s record at {fs / 1e3:g} kHz ({t.size} samples): fit_dahl (Bliman-Sorine, "
+              f"offset, rest) {t_dahl:.2f} s, RMS {dahl.rms_percent[0]:.3f} %; fit_pi (10 plays) "
+              f"{t_pi:.2f} s, RMS {pi.rms_percent[0]:.3f} %")
+
+
 if __name__ == "__main__":
-    main()
+    if "--fits" not in sys.argv:
+        main()
+    fit_times()

@@ -11,12 +11,12 @@ logarithmic grid of 1000 frequencies.  Prints, in one run:
   largest relative difference of the upper bounds.
 
 dkpy is not a project dependency: run this in the benchmark environment
-(see benchmarks/README.md).  Without dkpy the comparison is skipped with a
+(``sh benchmarks/setup_dkpy.sh``, see benchmarks/README.md).  Without dkpy the comparison is skipped with a
 message.
 
 Usage::
 
-    /work/bench-venv/bin/python benchmarks/bench_mussv.py [--n 1000] [--dkpy-jobs 1]
+    benchmarks/.dkpy-venv/bin/python benchmarks/bench_mussv.py [--n 1000] [--dkpy-jobs 1]
 """
 
 import argparse

@@ -13,7 +13,7 @@ import numpy as np
 __all__ = [
     "check_positive", "check_nonnegative", "check_finite_array", "check_siso",
     "check_lti", "check_stable", "check_proper", "check_same_length",
-    "check_integer",
+    "check_integer", "check_continuous", "check_finite_lti",
 ]
 
 
@@ -43,7 +43,7 @@ def check_integer(name, value, minimum=None):
     return value
 
 
-def check_finite_array(name, x, ndim=None, min_length=None, shape=None):
+def check_finite_array(name, x, ndim=None, min_length=None, shape=None, real=False):
     """Return ``x`` as a float (or complex) array after checking its form.
 
     Parameters
@@ -58,6 +58,9 @@ def check_finite_array(name, x, ndim=None, min_length=None, shape=None):
         Required minimum length of the first axis.
     shape : tuple, optional
         Required shape; ``None`` entries match any size.
+    real : bool, optional
+        Reject complex input (signals, states): a later ``astype(float)``
+        would otherwise drop the imaginary part with only a warning.
     """
     try:
         arr = np.asarray(x)
@@ -65,7 +68,10 @@ def check_finite_array(name, x, ndim=None, min_length=None, shape=None):
         raise TypeError(f"{name} must be array-like: {exc}") from None
     if arr.dtype == object or not np.issubdtype(arr.dtype, np.number):
         raise TypeError(f"{name} must be numeric, got dtype {arr.dtype}")
-    if not np.issubdtype(arr.dtype, np.complexfloating):
+    if np.issubdtype(arr.dtype, np.complexfloating):
+        if real:
+            raise TypeError(f"{name} must be real-valued, got complex dtype {arr.dtype}")
+    else:
         arr = arr.astype(float)
     if ndim is not None and arr.ndim != ndim:
         raise ValueError(f"{name} must be {ndim}-dimensional, got shape {arr.shape}")
@@ -97,6 +103,40 @@ def check_lti(name, sys):
         raise TypeError(
             f"{name} must be a control.TransferFunction or control.StateSpace, "
             f"got {type(sys).__name__}")
+    return sys
+
+
+def check_finite_lti(name, sys):
+    """Check that every coefficient / matrix entry of LTI ``sys`` is finite.
+
+    A NaN coefficient otherwise surfaces far away (python-control reports an
+    "algebraic loop", SLICOT a bare error code).
+    """
+    check_lti(name, sys)
+    if isinstance(sys, ct.TransferFunction):
+        parts = [(f"{kind}[{i}][{j}]", c) for kind, poly in (("num", sys.num), ("den", sys.den))
+                 for i, row in enumerate(poly) for j, c in enumerate(row)]
+    else:
+        parts = [(m, getattr(sys, m)) for m in ("A", "B", "C", "D")]
+    for part, values in parts:
+        values = np.asarray(values)
+        if not np.all(np.isfinite(values)):
+            kind = "NaN" if np.any(np.isnan(values)) else "inf"
+            raise ValueError(f"{name} has a {kind} coefficient (in {name}.{part})")
+    return sys
+
+
+def check_continuous(name, sys):
+    """Check that ``sys`` is a continuous-time LTI system (dt = 0 or None).
+
+    Discrete-time models otherwise silently lose their sample time when
+    realised in scaled time.
+    """
+    check_lti(name, sys)
+    if sys.isdtime(strict=True):
+        raise ValueError(f"{name} must be continuous-time, got a discrete-time model "
+                         f"(dt={sys.dt}); pass the continuous-time model (discretise results "
+                         "afterwards, e.g. with piezolib.robust.discrete)")
     return sys
 
 

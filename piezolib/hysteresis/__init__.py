@@ -1,8 +1,12 @@
-"""Hysteresis models: Dahl (as printed and the workbook's variant), simulation, fit, feedforward.
+"""Hysteresis models: Dahl (as printed and the workbook's variant), Prandtl-Ishlinskii, fits,
+feedforwards and model choice by validation.
 
-dahl         the model (eq. 10-13): exact stroke integration, simulation
-compensator  the inverse-free feedforward of eq. 14 (:func:`feedforward`, :class:`DahlFeedforward`)
-fit          least-squares fit to measured loops, and the rule that picks among fits
+dahl         the Dahl model (eq. 10-13): exact stroke integration, simulation
+compensator  the inverse-free Dahl feedforward of eq. 14 (:func:`feedforward`, :class:`DahlFeedforward`)
+fit          least-squares Dahl fit to measured loops, and the rule that picks among fits
+pi           Prandtl-Ishlinskii model: play operators, NNLS fit, exact inverse feedforward
+common       the shared model protocol, parameter tables with confidence intervals, loop checks
+select       validation on records not fitted, and the feedforward cross-check
 measure      the hysteresis measure of eq. 25-26
 
 Equations and design notes: ``docs/hysteresis.md``.  The paper's parameters
@@ -12,8 +16,12 @@ and the workbook's fit to the virtual stage are in
 
 from piezolib.hysteresis.dahl import *          # noqa: F401,F403
 from piezolib.hysteresis.compensator import *   # noqa: F401,F403
+from piezolib.hysteresis.common import *        # noqa: F401,F403
 from piezolib.hysteresis.fit import *           # noqa: F401,F403
+from piezolib.hysteresis.pi import *            # noqa: F401,F403
 from piezolib.hysteresis.measure import *       # noqa: F401,F403
-from piezolib.hysteresis import compensator, dahl, fit, measure
+from piezolib.hysteresis.select import *        # noqa: F401,F403
+from piezolib.hysteresis import common, compensator, dahl, fit, measure, pi, select
 
-__all__ = [*dahl.__all__, *compensator.__all__, *fit.__all__, *measure.__all__]
+__all__ = list(dict.fromkeys([*dahl.__all__, *compensator.__all__, *common.__all__,
+                              *fit.__all__, *pi.__all__, *measure.__all__, *select.__all__]))

@@ -72,7 +72,8 @@ class DahlFeedforward:
         dyn = StrokeDynamics(model)
         self._m = dyn.m
         self._disc = dyn.disc
-        self._root = math.sqrt(abs(dyn.disc))
+        self._root = dyn.q
+        self._slow, self._fast = dyn.slow, dyn.fast
         # per direction: P = N - mI (4 floats), z_ss (2), C (2)
         self._P = {s: tuple(float(v) for v in dyn.P[s].ravel()) for s in (1, -1)}
         self._zss = {s: tuple(float(v) for v in dyn.z_ss[s]) for s in (1, -1)}
@@ -126,7 +127,7 @@ class DahlFeedforward:
             y = q * sigma
             return em * math.cos(y), em * (math.sin(y) / q if y > 1e-8 else sigma)
         y = q * sigma
-        ep, en = math.exp((m + q) * sigma), math.exp((m - q) * sigma)
+        ep, en = math.exp(self._slow * sigma), math.exp(self._fast * sigma)
         if y < 1e-3:
             return 0.5 * (ep + en), math.exp(m * sigma) * sigma * (1 + y * y / 6 + y ** 4 / 120)
         return 0.5 * (ep + en), (ep - en) / (2 * q)

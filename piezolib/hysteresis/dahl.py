@@ -128,6 +128,18 @@ class DahlModel:
         """The same model with output offset ``x0`` [x-unit] (0: the paper's eq. 13)."""
         return replace(self, x0=x0)
 
+    def simulate(self, v):
+        """Displacement [x-unit] for the input record ``v`` [v-unit] (:func:`simulate_dahl`)."""
+        return simulate_dahl(self, v).x
+
+    def feedforward(self, x_r):
+        """Input [v-unit] for the desired displacement ``x_r`` [x-unit] (eq. 14).
+
+        :func:`piezolib.hysteresis.compensator.feedforward` from the model's start.
+        """
+        from piezolib.hysteresis.compensator import feedforward    # it imports this module
+        return feedforward(self, x_r)
+
 
 def _direction(direction):
     if direction not in (1, -1):
@@ -147,7 +159,15 @@ class StrokeDynamics:
     m : float
         Real part of the eigenvalues of N_s, -alpha1 / 2.
     disc : float
-        alpha1^2 / 4 - alpha2: > 0 overdamped, < 0 oscillatory.
+        alpha1^2 / 4 - alpha2: > 0 overdamped, < 0 oscillatory (its sign
+        is exact; its value may overflow to inf for alpha1 > 1e154).
+    q : float
+        sqrt(|disc|), evaluated without overflow.
+    slow, fast : float
+        For disc >= 0 the two real eigenvalues m + q and m - q, the slow one
+        evaluated without cancellation (-alpha2 / (alpha1/2 + q)), so that
+        the first-order limit alpha1^2 >> alpha2 (even alpha1 = 1e30) keeps
+        its rate alpha2 / alpha1; NaN for disc < 0.
     N, P, z_ss, C : dict
         For s = +1 and -1: N_s, N_s - m I, the steady state -s N_s^-1 B and
         the output row of eq. 12 (H = C_s z).
@@ -157,8 +177,14 @@ class StrokeDynamics:
         a1, a2 = model.alpha1, model.alpha2
         B = np.array([0.0, model.gamma_a])
         A0 = np.array([[0.0, 1.0], [-a2, -a1]])
-        self.m = -a1 / 2.0                 # real part of the eigenvalues
-        self.disc = a1 * a1 / 4.0 - a2     # > 0 overdamped, < 0 oscillatory
+        half, root = a1 / 2.0, math.sqrt(a2)
+        self.m = -half                     # real part of the eigenvalues
+        self.disc = (half - root) * (half + root)   # > 0 overdamped, < 0 oscillatory
+        self.q = math.sqrt(abs(half - root)) * math.sqrt(half + root)
+        if self.disc >= 0:                 # m + q without cancellation: (m+q)(m-q) = a2
+            self.slow, self.fast = -a2 / (half + self.q), -(half + self.q)
+        else:
+            self.slow = self.fast = math.nan
         self.N, self.P, self.z_ss, self.C = {}, {}, {}, {}
         for s in (1, -1):
             if model.form == "printed" and s == -1:
@@ -177,14 +203,12 @@ class StrokeDynamics:
         cancellation for any sign of the discriminant.
         """
         sigma = np.asarray(sigma, dtype=float)
-        m, disc = self.m, self.disc
-        if disc < 0:
-            w = math.sqrt(-disc)
+        m, q = self.m, self.q
+        if self.disc < 0:
             em = np.exp(m * sigma)
-            return em * np.cos(w * sigma), em * sigma * np.sinc(w * sigma / np.pi)
-        q = math.sqrt(disc)
+            return em * np.cos(q * sigma), em * sigma * np.sinc(q * sigma / np.pi)
         y = q * sigma
-        ep, en = np.exp((m + q) * sigma), np.exp((m - q) * sigma)
+        ep, en = np.exp(self.slow * sigma), np.exp(self.fast * sigma)
         ec = 0.5 * (ep + en)
         small = y < 1e-3
         series = np.exp(m * sigma) * sigma * (1.0 + y * y / 6.0 + y ** 4 / 120.0)
@@ -274,7 +298,10 @@ def dahl_hysteresis(model, x, z0=None, direction0=None, return_state=False, dire
     directions : array_like, optional
         Record whose direction of motion gives sgn(x'), same length as ``x``
         (default: ``x`` itself).  For a noisy measured x, the input v that
-        produced it gives clean stroke directions.
+        produced it gives clean stroke directions.  The state depends only
+        on x[k] - x[stroke start]; where noise carries x back behind the
+        stroke's start, the path length is taken as 0, so the closed-form
+        integration never runs backwards (it would overflow).
 
     Returns
     -------
@@ -282,8 +309,9 @@ def dahl_hysteresis(model, x, z0=None, direction0=None, return_state=False, dire
         H at every sample [x-unit]; ``(H, z)`` with ``return_state``.
     """
     check_dahl_model(model)
-    x = check_finite_array("x", x, ndim=1, min_length=2)
-    if directions is None:
+    x = check_finite_array("x", x, ndim=1, min_length=2, real=True)
+    guided = directions is not None
+    if not guided:
         directions = x
     else:
         directions = check_finite_array("directions", directions, ndim=1)
@@ -296,6 +324,8 @@ def dahl_hysteresis(model, x, z0=None, direction0=None, return_state=False, dire
     H[0] = dyn.C[s0] @ z[0]
     for start, stop, s in strokes(directions, s0):
         sigma = s * (x[start + 1:stop + 1] - x[start])
+        if guided:          # noise may carry x back behind the stroke's start
+            sigma = np.maximum(sigma, 0.0)
         z[start + 1:stop + 1] = dyn.propagate(s, sigma, z[start])
         H[start + 1:stop + 1] = z[start + 1:stop + 1] @ dyn.C[s]
     return (H, z) if return_state else H
@@ -354,7 +384,7 @@ def simulate_dahl(model, v, z0=None, direction0=None):
         underdamped model), so that x(v) is not unique.
     """
     check_dahl_model(model)
-    v = check_finite_array("v", v, ndim=1, min_length=2)
+    v = check_finite_array("v", v, ndim=1, min_length=2, real=True)
     _check_beta1(model)
     x, H, z = _simulate_records(model, [v], *initial_state_of(model, z0, direction0))[0]
     return DahlResponse(v=v, x=x, H=H, z=z)
@@ -370,7 +400,7 @@ def simulate_dahl_records(model, records):
     """
     check_dahl_model(model)
     _check_beta1(model)
-    records = [check_finite_array(f"records[{i}]", v, ndim=1, min_length=2)
+    records = [check_finite_array(f"records[{i}]", v, ndim=1, min_length=2, real=True)
                for i, v in enumerate(records)]
     if not records:
         raise ValueError("records must hold at least one input record")
@@ -448,12 +478,12 @@ def _min_slopes(dyn, a, b, sigma_max):
     cand = [np.zeros_like(sigma_max), sigma_max]
     with np.errstate(divide="ignore", invalid="ignore"):
         if disc < 0:
-            om = math.sqrt(-disc)
+            om = dyn.q
             theta = np.arctan2(-(m * a + b), m * b / om - om * a) % math.pi
             cand += [theta / om, (theta + math.pi) / om]
         else:
-            q = math.sqrt(disc)
-            K = (b + a * m) / ((b + a * q) * (m + q))
+            q = dyn.q
+            K = (b + a * m) / ((b + a * q) * dyn.slow)
             if q == 0:
                 cand.append(-K)
             else:
@@ -515,7 +545,12 @@ def _solve_strokes(dyn, s, Z, x_start, targets, n_grid=48):
     offsets = np.r_[0, np.cumsum(counts)[:-1]]
     base = x_start + np.einsum("ki,ki->k", C, z_ss)
     y = s[seg] * (np.concatenate(targets) - base[seg])
-    scale = np.max(np.abs(np.column_stack([np.ones(K), x_start, base, cw, cpw])), axis=1)
+    # magnitudes of the terms of Phi: es(sigma) <= 2 / max(q, |m|) for every sigma, so the
+    # sinh-like term never exceeds 2 |cpw| / max(q, |m|) (cpw alone can be 1e27 while the
+    # term it multiplies is a few x-units: alpha1 = 1e30)
+    es_max = 2.0 / max(dyn.q, abs(dyn.m))
+    scale = np.max(np.abs(np.column_stack([np.ones(K), x_start, base, cw, es_max * cpw])),
+                   axis=1)
     scale = np.maximum(scale, np.maximum.reduceat(np.abs(np.concatenate(targets)), offsets))
     tol = 16 * np.finfo(float).eps * scale
     sc, sp, sn, snp = s * cw, s * cpw, s * cnw, s * cnpw     # signed stroke constants

@@ -3,7 +3,14 @@
 :func:`fit_dahl` fits the voltage-driven model (output error on x) to one or
 several loops jointly, with or without the output offset x0; starting points
 come from an equation-error grid search.  :func:`choose_fit` is the selection
-rule (smallest pooled RMS error).  Method: ``docs/hysteresis.md``.
+rule (smallest pooled RMS error).  Raw, noisy records at any sampling rate
+and start point are accepted: stroke directions come from the input, the
+equation-error start drives the model by the measured output made monotone
+along each input stroke (isotonic projection), and
+:meth:`DahlFit.parameter_table` reports every parameter's 95 % confidence
+interval, whether it sits on a bound and whether the data identify it (a
+:class:`~piezolib.hysteresis.common.FitWarning` is issued otherwise).
+Method: ``docs/hysteresis.md``.
 """
 
 import math
@@ -13,11 +20,13 @@ import numpy as np
 import scipy.optimize as opt
 
 from piezolib._checks import check_finite_array, check_integer, check_positive
+from piezolib.hysteresis.common import (check_loops, covariance, estimates, loop_errors,
+                                        parameter_frame, warn_about)
 from piezolib.hysteresis.dahl import (FORMS, STARTS, DahlModel, NotInvertibleError,
                                       dahl_hysteresis, simulate_dahl, simulate_dahl_records,
                                       strokes)
 
-__all__ = ["DahlFit", "fit_dahl", "choose_fit", "check_fit_options", "ALPHA1_BOUNDS",
+__all__ = ["DahlFit", "fit_dahl", "monotone_path", "choose_fit", "check_fit_options", "ALPHA1_BOUNDS",
            "ALPHA2_BOUNDS", "G_A_BOUNDS"]
 
 
@@ -47,6 +56,11 @@ class DahlFit:
     offset : bool
         Whether the output offset ``model.x0`` was fitted (False: x0 = 0,
         the paper's eq. 13).
+    parameters : tuple of ParameterEstimate
+        g_a, alpha1, alpha2, beta2 (and x0) with 95 % confidence intervals,
+        bound and identifiability flags, then the derived steady state
+        H_ss = beta2 gamma_a / alpha2 and first-order rate alpha2 / alpha1
+        (:meth:`parameter_table`).
     """
 
     model: DahlModel
@@ -58,6 +72,11 @@ class DahlFit:
     initial: DahlModel
     result: object
     offset: bool = False
+    parameters: tuple = ()
+
+    def parameter_table(self):
+        """pandas DataFrame of :attr:`parameters`: value, unit, 95 % CI, at_bound, identifiable."""
+        return parameter_frame(self.parameters)
 
     @property
     def worst_rms_percent(self):
@@ -75,41 +94,34 @@ class DahlFit:
 
 
 def _check_loops(loops, discard, stride):
-    """Validated loops as (v, x, used) with ``used`` the residual samples.
+    """Validated loops as (v, x, used): :func:`~piezolib.hysteresis.common.check_loops`."""
+    return check_loops(loops, discard, stride)
 
-    ``used`` holds every ``stride``-th sample from ``discard`` on plus every
-    turning point of v: the model output at these samples is exactly that of
-    the full record, because a rate-independent model only sees the path.
+
+def monotone_path(v, x):
+    """The measured x made to move with the input: isotonic along each stroke of v.
+
+    Within every run of constant direction of v, x is replaced by its
+    least-squares projection on the sequences that move in that direction
+    (and not back past the run's start).  Noise that moves a measured x
+    against the input stroke is averaged out instead of driving the
+    stroke integration backwards.
+
+    Parameters
+    ----------
+    v, x : ndarray
+        Input and measured output, 1-D, same length.
+
+    Returns
+    -------
+    ndarray
+        The projected output [x-unit].
     """
-    if isinstance(loops, tuple) and len(loops) == 2 and np.ndim(loops[0]) == 1 \
-            and np.size(loops[0]) > 2:
-        loops = [loops]                       # a single (v, x) pair
-    try:
-        loops = list(loops)
-    except TypeError:
-        raise TypeError("loops must be a sequence of (v, x) pairs of 1-D arrays") from None
-    if not loops:
-        raise ValueError("loops must hold at least one (v, x) pair")
-    discard = check_integer("discard", discard, minimum=0)
-    stride = check_integer("stride", stride, minimum=1)
-    out = []
-    for i, pair in enumerate(loops):
-        if not isinstance(pair, (tuple, list)) or len(pair) != 2:
-            raise TypeError(f"loops[{i}] must be a (v, x) pair of arrays, "
-                            f"got {type(pair).__name__}")
-        v = check_finite_array(f"loops[{i}] v", pair[0], ndim=1, min_length=8)
-        x = check_finite_array(f"loops[{i}] x", pair[1], ndim=1, min_length=8)
-        if v.size != x.size:
-            raise ValueError(f"loops[{i}]: v and x must have equal lengths "
-                             f"({v.size} and {x.size})")
-        runs = strokes(v)
-        late = [r for r in runs if r[1] > discard]
-        if not any(r[2] > 0 for r in late) or not any(r[2] < 0 for r in late) \
-                or np.ptp(x[discard:]) == 0:
-            raise ValueError(f"loops[{i}] has no full cycle after discarding {discard} "
-                             "samples: need an ascending and a descending stroke of v")
-        keep = np.union1d(np.arange(0, v.size, stride), [r[1] for r in runs] + [0])
-        out.append((v[keep], x[keep], np.flatnonzero(keep >= discard)))
+    out = np.array(x, dtype=float)
+    for start, stop, s in strokes(v):
+        seg = opt.isotonic_regression(out[start + 1:stop + 1], increasing=s > 0).x
+        out[start + 1:stop + 1] = (np.maximum(seg, out[start]) if s > 0
+                                   else np.minimum(seg, out[start]))
     return out
 
 
@@ -140,11 +152,19 @@ _GRID_CELL = 1.5   # e-folds per grid cell of the starting-point search
 
 
 def _mean_slope(data):
-    """Least-squares slope of x on v over all loops (through the records' start)."""
-    num = sum(float(np.dot(v[used] - v[0], x[used] - x[0])) for v, x, used in data)
-    den = sum(float(np.dot(v[used] - v[0], v[used] - v[0])) for v, x, used in data)
+    """Least-squares slope of x on v over all loops (each loop about its own mean).
+
+    Independent of the first sample (a record may start at a step, at rest
+    or mid-stroke).
+    """
+    num = den = 0.0
+    for v, x, used in data:
+        dv, dx = v[used] - np.mean(v[used]), x[used] - np.mean(x[used])
+        num += float(dv @ dx)
+        den += float(dv @ dv)
     if not num > 0 or not den > 0:
-        raise ValueError("the loops must show x increasing with v (positive mean slope)")
+        raise ValueError("the loops must show x increasing with v (positive mean slope): "
+                         "the data cannot support a hysteresis model x = g_a v - H")
     return num / den
 
 
@@ -153,17 +173,18 @@ def _loop_weights(data):
     return [1.0 / (np.ptp(x[used]) * math.sqrt(used.size)) for v, x, used in data]
 
 
-def _equation_error(form, data, log_a1, log_a2, g_bounds, offset, start):
+def _equation_error(form, data, paths, log_a1, log_a2, g_bounds, offset, start):
     """Residual and (g_a, b[, x0]) of the linear problem x = g_a v - b z1(x) [+ x0].
 
-    z1 is driven by the measured x, which makes the problem linear in g_a,
+    z1 is driven by the measured x (``paths``: :func:`monotone_path`), which
+    makes the problem linear in g_a,
     b = beta2 gamma_a and the offset x0.  g_a is held inside ``g_bounds``
     (clipped, the other parameters then refitted).
     """
     unit = _unit_model(form, math.exp(log_a1), math.exp(log_a2), start)
     rows, rhs = [], []
-    for (v, x, used), w in zip(data, _loop_weights(data)):
-        z1 = _z1_on_input_strokes(unit, v, x)
+    for (v, x, used), path, w in zip(data, paths, _loop_weights(data)):
+        z1 = _z1_on_input_strokes(unit, v, path)
         columns = [v[used], -z1[used]] + ([np.ones(used.size)] if offset else [])
         rows.append(w * np.column_stack(columns))
         rhs.append(w * x[used])
@@ -197,8 +218,10 @@ def _initial_guesses(form, data, gamma_a, g_bounds, starts, offset, start):
     la1 = np.linspace(lo[0], hi[0], int((hi[0] - lo[0]) / _GRID_CELL) + 1)
     la2 = np.linspace(lo[1], hi[1], int((hi[1] - lo[1]) / _GRID_CELL) + 1)
 
+    paths = [monotone_path(v, x) for v, x, used in data]
+
     def error(p):
-        return _equation_error(form, data, p[0], p[1], g_bounds, offset, start)
+        return _equation_error(form, data, paths, p[0], p[1], g_bounds, offset, start)
 
     cost = np.array([[float(np.sum(error((p, q))[0] ** 2)) for q in la2] for p in la1])
     padded = np.pad(cost, 1, constant_values=np.inf)
@@ -309,6 +332,16 @@ def fit_dahl(loops, gamma_a, form="bliman_sorine", offset=False, start="virgin",
     Returns
     -------
     DahlFit
+        With :meth:`DahlFit.parameter_table`; a
+        :class:`~piezolib.hysteresis.common.FitWarning` is issued when a
+        parameter ends on a bound or is not identifiable.
+
+    Raises
+    ------
+    ValueError
+        Where the data cannot support the model: no ascending and
+        descending stroke of v after ``discard``, x not increasing with v,
+        or no invertible model of this form near the data.
     """
     form, offset, start = check_fit_options(form, offset, start)
     gamma_a = check_positive("gamma_a", gamma_a)
@@ -361,21 +394,78 @@ def fit_dahl(loops, gamma_a, form="bliman_sorine", offset=False, start="virgin",
             result, initial = trial, candidate
     if len(candidates) > 1:
         result = solve(result.x, 1e-10)
-    x0 = _project_offset(output_error(result.x), wv) if offset else 0.0
+    r0 = output_error(result.x)
+    if r0 is None:
+        raise ValueError(f"no invertible {form} Dahl model fits these loops (every candidate "
+                         "overshoots: x + H(x) decreases along a stroke); the data cannot "
+                         "support this form")
+    x0 = _project_offset(r0, wv) if offset else 0.0
     model = _from_theta(result.x, form, gamma_a, start, x0)
-    x_model, res, rms, rms_pct, max_pct = [], [], [], [], []
-    for v, x, used in _check_loops(loops, discard, 1):
-        xm = simulate_dahl(model, v).x
-        r = xm[used] - x[used]
-        span = np.ptp(x[used])
-        x_model.append(xm)
-        res.append(r)
-        rms.append(math.sqrt(float(np.mean(r ** 2))))
-        rms_pct.append(100 * rms[-1] / span)
-        max_pct.append(100 * float(np.max(np.abs(r))) / span)
-    return DahlFit(model=model, x_model=x_model, residuals=res, rms=np.array(rms),
-                   rms_percent=np.array(rms_pct), max_percent=np.array(max_pct),
-                   initial=initial, result=result, offset=offset)
+    parameters = _parameter_estimates(output_error, result, r0, wv, offset, model, lower, upper)
+    warn_about(parameters, f"fit_dahl ({form}, offset={offset}, start={start})")
+    full = _check_loops(loops, discard, 1)
+    x_model = [simulate_dahl(model, v).x for v, x, used in full]
+    first = [int(used[0]) for v, x, used in full]
+    res, rms, rms_pct, max_pct = loop_errors(
+        x_model, [(v, x) for v, x, used in full], first[0])
+    return DahlFit(model=model, x_model=x_model, residuals=res, rms=rms,
+                   rms_percent=rms_pct, max_percent=max_pct,
+                   initial=initial, result=result, offset=offset, parameters=tuple(parameters))
+
+
+def _parameter_estimates(output_error, result, r0, wv, offset, model, lower, upper):
+    """95 % intervals of (g_a, alpha1, alpha2, beta2[, x0]) and the derived H_ss, rate.
+
+    Central differences of the weighted residuals in the fit coordinates
+    (g_a, log alpha1, log alpha2, b), plus the offset column ``wv``; a
+    coordinate whose step makes the model non-invertible gets a one-sided
+    difference, or NaN (interval unknown, not identifiable).
+    """
+    theta = result.x
+    cols = []
+    for i in range(theta.size):
+        h = 1e-6 * max(abs(theta[i]), 1.0) if i in (0, 3) else 1e-5
+        up, dn = theta.copy(), theta.copy()
+        up[i] = min(theta[i] + h, upper[i])
+        dn[i] = max(theta[i] - h, lower[i])
+        r_up, r_dn = output_error(up), output_error(dn)
+        if r_up is not None and r_dn is not None and up[i] > dn[i]:
+            cols.append((r_up - r_dn) / (up[i] - dn[i]))
+        elif r_up is not None and up[i] > theta[i]:
+            cols.append((r_up - r0) / (up[i] - theta[i]))
+        elif r_dn is not None and dn[i] < theta[i]:
+            cols.append((r0 - r_dn) / (theta[i] - dn[i]))
+        else:
+            cols.append(np.full(r0.size, np.nan))
+    if offset:
+        cols.append(wv)
+    J = np.column_stack(cols)
+    r = r0 + (_project_offset(r0, wv) * wv if offset else 0.0)
+    cov = covariance(J, r, J.shape[1])
+    g, b = theta[0], theta[3]
+    a1, a2 = model.alpha1, model.alpha2
+    values = [g, a1, a2, model.beta2] + ([model.x0] if offset else [])
+    bound = list(np.asarray(result.active_mask) != 0) + ([False] if offset else [])
+    natural = cov.copy()                                # b -> beta2 = b / gamma_a
+    natural[3, :] /= model.gamma_a
+    natural[:, 3] /= model.gamma_a
+    names = ["g_a", "alpha1", "alpha2", "beta2"] + (["x0"] if offset else [])
+    units = ["x/v", "1/x", "1/x^2", "-"] + (["x"] if offset else [])
+    logs = [False, True, True, False] + ([False] if offset else [])
+    out = estimates(names, units, values, logs, natural, bound)
+    # derived: steady state b / alpha2 (linear) and rate alpha2 / alpha1 (log)
+    grad_h = np.zeros(J.shape[1])
+    grad_h[2], grad_h[3] = -b / a2, 1.0 / a2
+    grad_l = np.zeros(J.shape[1])
+    grad_l[1], grad_l[2] = -1.0, 1.0
+    derived = np.array([grad_h, grad_l])
+    with np.errstate(invalid="ignore"):
+        dcov = derived @ np.where(np.isinf(cov), 1e300, cov) @ derived.T
+    dcov[~np.isfinite(dcov) | (dcov > 1e299)] = np.inf
+    out += estimates(["H_ss = beta2 gamma_a / alpha2", "rate alpha2 / alpha1"], ["x", "1/x"],
+                     [b / a2, a2 / a1], [False, True], dcov,
+                     [bool(bound[2] or bound[3]), bool(bound[1] or bound[2])])
+    return out
 
 
 def choose_fit(fits):

@@ -15,7 +15,7 @@ from piezolib._checks import (check_finite_array, check_integer, check_positive,
 
 __all__ = [
     "RLSResult", "rls", "arx_regressors", "ArxModel", "fit_arx", "DEFAULT_INITIAL_GAIN",
-    "MIN_SAMPLES_PER_PARAMETER", "discrete_tf", "checked_arx_regressors", "least_squares",
+    "MIN_SAMPLES_PER_PARAMETER", "MAX_INITIAL_GAIN", "discrete_tf", "checked_arx_regressors", "least_squares",
     "check_io",
 ]
 
@@ -60,14 +60,24 @@ def rls(regressors, y, initial_gain=1e6, initial_parameters=None):
     y : array_like, shape (N,)
         Measurements y(t+1).
     initial_gain : float, optional
-        W(0) = initial_gain * I; large values mean little confidence in the
-        initial parameters (the result then approaches batch least squares).
+        Dimensionless: W(0) = initial_gain * diag(1 / mean(theta_j^2)), i.e.
+        the eq. 3 initial covariance relative to the data's power in each
+        regressor, so that scaling u or y (a change of units) scales the
+        estimates and nothing else.  Large values mean little confidence in
+        the initial parameters (the result then approaches batch least
+        squares); at most ``MAX_INITIAL_GAIN``.
     initial_parameters : array_like, shape (p,), optional
         Psi(0); default zeros.
 
     Returns
     -------
     RLSResult
+
+    Raises
+    ------
+    ValueError
+        Empty, non-finite or mismatched data, or ``initial_gain`` outside
+        (0, MAX_INITIAL_GAIN].
     """
     phi = check_finite_array("regressors", regressors, ndim=2)
     n, p = phi.shape
@@ -76,9 +86,15 @@ def rls(regressors, y, initial_gain=1e6, initial_parameters=None):
     if n == 0 or p == 0:
         raise ValueError(f"regressors must be non-empty, got shape {phi.shape}")
     initial_gain = check_positive("initial_gain", initial_gain)
+    if initial_gain > MAX_INITIAL_GAIN:
+        raise ValueError(f"initial_gain must be <= {MAX_INITIAL_GAIN:g} (relative to the "
+                         f"data power; larger values lose every digit of eq. 3 in double "
+                         f"precision), got {initial_gain:g}")
     psi = (np.zeros(p) if initial_parameters is None else
            check_finite_array("initial_parameters", initial_parameters, shape=(p,)).copy())
-    W = initial_gain * np.eye(p)
+    power = np.mean(phi ** 2, axis=0)
+    power[power == 0] = 1.0                          # all-zero regressor: unit scale
+    W = np.diag(initial_gain / power)
     history = np.empty((n, p))
     errors = np.empty(n)
     for k in range(n):
@@ -146,13 +162,18 @@ class ArxModel:
     system: ct.TransferFunction
 
 
+#: Largest accepted (dimensionless) W(0) gain of :func:`rls`: eq. 3 subtracts
+#: terms of size initial_gain from O(1) ones, so 1e13 keeps ~3 digits.
+MAX_INITIAL_GAIN = 1e13
+
 #: Fewest equations per estimated parameter that :func:`fit_arx` accepts.
 MIN_SAMPLES_PER_PARAMETER = 10
 
-#: W(0) / I of the identification.  The 10 kHz regressors are strongly
-#: correlated (condition number of the regressor matrix ~4e3 on the chirps),
-#: so W(0) = 1e6 I still acts as a visible regularisation; 1e10 makes the RLS
-#: result equal to batch least squares to about 1e-6 and is numerically safe.
+#: W(0) relative to the regressors' power (see :func:`rls`).  The 10 kHz
+#: regressors are strongly correlated (condition number of the regressor
+#: matrix ~4e3 on the chirps), so 1e6 still acts as a visible regularisation;
+#: 1e10 makes the RLS result equal to batch least squares to about 1e-6 and is
+#: numerically safe.
 DEFAULT_INITIAL_GAIN = 1e10
 
 
@@ -169,7 +190,7 @@ def fit_arx(u, y, fs, na=6, nb=6, nk=1, initial_gain=DEFAULT_INITIAL_GAIN):
     na, nb, nk : int, optional
         Orders and delay (default: 6 poles, 6 numerator terms, 1 sample).
     initial_gain : float, optional
-        W(0) = initial_gain * I.
+        W(0) relative to the data power (dimensionless, see :func:`rls`).
 
     Returns
     -------
@@ -258,8 +279,21 @@ def least_squares(phi, target):
         Parameters minimising ||phi @ theta - target||.
     """
     scale = np.sqrt(np.mean(phi ** 2, axis=0))
+    if not np.all(np.isfinite(phi)) or not np.all(scale > 0):
+        raise ValueError("the regressors contain a zero, NaN or inf column: the data do not "
+                         "excite this model (or an output-error filter diverged)")
     scaled = phi / scale
-    return la.solve(_gram(scaled), scaled.T @ target, assume_a="pos") / scale
+    try:
+        return la.solve(_gram(scaled), scaled.T @ target, assume_a="pos") / scale
+    except la.LinAlgError:
+        pass            # normal equations too ill-conditioned: orthogonal least squares
+    theta, _, rank, _ = np.linalg.lstsq(scaled, target, rcond=None)
+    if rank < phi.shape[1]:
+        raise ValueError(
+            f"the regressors are linearly dependent (rank {rank} of {phi.shape[1]}): the input "
+            "does not excite a model of this order; subtract the operating point, cut constant "
+            "segments (records.cut_at_turning_points, records.split) or lower the orders")
+    return theta / scale
 
 
 def check_io(u, y):
@@ -278,6 +312,9 @@ def check_io(u, y):
     u = check_finite_array("u", u, ndim=1)
     y = check_finite_array("y", y, ndim=1)
     check_same_length(u=u, y=y)
-    if len(u) < 2 or np.ptp(u) == 0:
+    if len(u) < 2:
+        raise ValueError(f"u and y are {'empty' if len(u) == 0 else 'too short'}: got "
+                         f"{len(u)} sample(s); identification needs a record of many samples")
+    if np.ptp(u) == 0:
         raise ValueError("u is constant: a constant input does not excite the system")
     return u, y

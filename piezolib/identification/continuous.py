@@ -19,12 +19,13 @@ import scipy.signal as sg
 from piezolib._checks import (check_finite_array, check_integer, check_lti, check_positive,
                               check_siso)
 from piezolib.identification.oe import OutputErrorModel, fit_output_error
-from piezolib.identification.arx import DEFAULT_INITIAL_GAIN, check_io, least_squares
+from piezolib.identification.arx import (DEFAULT_INITIAL_GAIN, check_io, discrete_tf,
+                                         least_squares)
 from piezolib.robust.lti import balance, scale_time, time_scale_of, to_scaled
 
 __all__ = [
     "d2c", "zoh_coefficients", "zoh_simulate", "refit_numerator", "IdentifiedModel",
-    "identify", "pole_pairs", "monic_coefficients",
+    "identify", "identify_record", "pole_pairs", "monic_coefficients",
 ]
 
 
@@ -181,6 +182,13 @@ def refit_numerator(poles, u, y, fs, n_zeros=3, time_scale=None):
         raise ValueError(f"n_zeros ({n_zeros}) must be below the number of poles ({n})")
     if np.any(poles.real >= 0):
         raise ValueError(f"poles must be stable, got {poles[poles.real >= 0]}")
+    # a complex pole without its conjugate has no real denominator (taking the
+    # real part of np.poly silently turned -1+1j into -1)
+    unmatched = [p for p in poles if p.imag != 0 and np.min(np.abs(poles - np.conj(p)))
+                 > 1e-9 * max(abs(p), 1e-300)]
+    if unmatched:
+        raise ValueError(f"poles must be closed under complex conjugation; no conjugate for "
+                         f"{np.asarray(unmatched)}")
     if time_scale is None:
         magnitudes = np.abs(poles)
         time_scale = float(np.sqrt(magnitudes.min() * magnitudes.max()))
@@ -208,58 +216,120 @@ class IdentifiedModel:
     ----------
     discrete : OutputErrorModel
         Discrete model from RLS (Steiglitz-McBride passes, parameter
-        histories in each pass).
+        histories in each pass), input delay included.
     continuous_full : control.StateSpace
-        d2c of the discrete model (6 poles, up to 5 zeros).
+        d2c of the discrete model without the extra delay (``n_poles`` poles,
+        up to ``nb - 1`` zeros).
     model : control.TransferFunction
-        The 6-pole / 3-zero model of eq. 4 (``u`` -> ``y``, seconds).
+        The ``n_poles``-pole / ``n_zeros``-zero model (eq. 4: 6 and 3),
+        seconds, input -> output with the names given to :func:`identify`;
+        the extra delay is not in it (see ``delay_s``).
     dropped_share : float
         Largest ratio, up to the Nyquist frequency, of the numerator terms
-        above s^3 of ``continuous_full`` to its terms up to s^3 (zero for an
-        exact ZOH model of eq. 4's structure): how much the 3-zero
-        structure leaves out.
+        above s^n_zeros of ``continuous_full`` to its terms up to s^n_zeros
+        (zero for an exact ZOH model of that structure): how much the
+        reduced numerator leaves out.
+    delay_samples : int
+        Input delay beyond the one sample of the ZOH, ``nk - 1``.
+    delay_s : float
+        The same in seconds; the plant is ``model`` times exp(-s delay_s).
+    input_unit, output_unit : str or None
+        Units of the data; the model's gain is in output_unit / input_unit.
     """
 
     discrete: OutputErrorModel
     continuous_full: ct.StateSpace
     model: ct.TransferFunction
     dropped_share: float
+    delay_samples: int = 0
+    delay_s: float = 0.0
+    input_unit: object = None
+    output_unit: object = None
 
 
-def identify(u, y, fs, n_poles=6, n_zeros=3, initial_gain=DEFAULT_INITIAL_GAIN):
+def identify(u, y, fs, n_poles=6, n_zeros=3, initial_gain=DEFAULT_INITIAL_GAIN, *, nb=None,
+             nk=1, input_name="u", output_name="y", input_unit=None, output_unit=None):
     """Steps II-III of Fig. 3: discrete output-error model by RLS, d2c,
-    3-zero refit.
+    numerator refit.
 
     Parameters
     ----------
     u, y : array_like
-        Input and output deviations from the operating point [V], starting
-        at rest.
+        Input and output deviations from the operating point (any units,
+        e.g. V and um), starting at rest.
     fs : float
         Sampling frequency [Hz].
     n_poles, n_zeros : int, optional
         Continuous structure (eq. 4: 6 and 3).
     initial_gain : float, optional
-        RLS W(0) = initial_gain * I.
+        RLS W(0) relative to the data power (dimensionless, see ``rls``).
+    nb : int, optional
+        Numerator terms of the discrete model, 1 ... ``n_poles``; default
+        ``n_poles`` (the most a ZOH model of ``n_poles`` poles has).
+    nk : int, optional
+        Input delay of the discrete model in samples, >= 1: 1 is the ZOH's
+        own delay; each extra sample is a pure delay, removed before d2c and
+        reported as ``delay_s``.
+    input_name, output_name : str, optional
+        Signal names of the returned model.
+    input_unit, output_unit : str, optional
+        Units, carried into the result.
 
     Returns
     -------
     IdentifiedModel
     """
     n_poles = check_integer("n_poles", n_poles, minimum=1)
-    discrete = fit_output_error(u, y, fs, na=n_poles, nb=n_poles, nk=1,
-                                initial_gain=initial_gain)
-    full = d2c(discrete.system)
+    nb = n_poles if nb is None else check_integer("nb", nb, minimum=1)
+    if nb > n_poles:
+        raise ValueError(f"nb ({nb}) must not exceed n_poles ({n_poles}): more numerator "
+                         "terms put poles at z = 0, which have no continuous equivalent")
+    nk = check_integer("nk", nk, minimum=1)
+    for name, value in (("input_name", input_name), ("output_name", output_name)):
+        if not isinstance(value, str) or not value:
+            raise TypeError(f"{name} must be a non-empty string, got {value!r}")
+    discrete = fit_output_error(u, y, fs, na=n_poles, nb=nb, nk=nk, initial_gain=initial_gain)
+    delay = nk - 1
+    undelayed = discrete_tf(discrete.b[delay:], discrete.a, discrete.dt, "oe")
+    full = d2c(undelayed)
     poles = la.eigvals(full.A)
     if np.any(poles.real >= 0):
         raise ValueError(f"the identified model is unstable (poles {poles[poles.real >= 0]})")
-    model = refit_numerator(poles, u, y, fs, n_zeros=n_zeros)
+    u, y = check_io(u, y)
+    u_delayed = np.concatenate((np.zeros(delay), u[:len(u) - delay]))
+    refit = refit_numerator(poles, u_delayed, y, fs, n_zeros=n_zeros)
+    model = ct.tf(refit.num, refit.den, inputs=input_name, outputs=output_name,
+                  name="identified")
     num = monic_coefficients(full, n_poles, n_poles - 1)[1][::-1]   # s^(n-1) ... s^0
     s_grid = 1j * np.linspace(0.0, np.pi * fs, 512)[1:]
     high = np.polyval(np.concatenate((num[:n_poles - 1 - n_zeros], np.zeros(n_zeros + 1))),
                       s_grid)
     low = np.polyval(num[n_poles - 1 - n_zeros:], s_grid)
-    return IdentifiedModel(discrete, full, model, float(np.max(np.abs(high / low))))
+    return IdentifiedModel(discrete, full, model, float(np.max(np.abs(high / low))),
+                           delay, delay / fs, input_unit, output_unit)
+
+
+def identify_record(record, n_poles=6, n_zeros=3, *, nb=None, nk=1,
+                    initial_gain=DEFAULT_INITIAL_GAIN):
+    """:func:`identify` on a :class:`piezolib.records.Record`, with its rate,
+    signal names and units.
+
+    The record's signals are used as they are: subtract the operating point
+    first (e.g. with :func:`piezolib.records.detrend` or a segment that
+    starts at rest).
+
+    Returns
+    -------
+    IdentifiedModel
+    """
+    from piezolib.records import Record
+    if not isinstance(record, Record):
+        raise TypeError(f"record must be a piezolib.records.Record, got "
+                        f"{type(record).__name__}")
+    return identify(record.input, record.output, record.fs, n_poles, n_zeros, initial_gain,
+                    nb=nb, nk=nk, input_name=record.input_name,
+                    output_name=record.output_name, input_unit=record.input_unit,
+                    output_unit=record.output_unit)
 
 
 def pole_pairs(sys):

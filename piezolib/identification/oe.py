@@ -76,7 +76,7 @@ def fit_output_error(u, y, fs, na=6, nb=6, nk=1, iterations=50, tol=1e-8,
     tol : float, optional
         Stop when max |change of a parameter| / max |parameter| < tol.
     initial_gain : float, optional
-        RLS W(0) = initial_gain * I in every pass.
+        RLS W(0) relative to the data power in every pass (see ``rls``).
 
     Returns
     -------

@@ -25,9 +25,16 @@ from piezolib._checks import check_finite_array, check_siso
 from piezolib.problem.genplant import BLOCK_STRUCTURE, check_models, generalized_plant
 from piezolib.robust.lft import lft_response
 from piezolib.robust.mu import mussv
+from piezolib.robust.bounds import performance_lower_bound
+from piezolib.robust.discrete import discretize
 from piezolib.robust.lti import closed_loop_poles, hinf_norm, is_stable, loop_functions, realize
+from piezolib.robust.margins import delay_tolerance, loop_margins
 
-__all__ = ["RobustnessAnalysis", "analyze", "table3", "robust_performance_peak", "ANALYSIS_GRID"]
+__all__ = ["RobustnessAnalysis", "analyze", "table3", "robust_performance_peak", "ANALYSIS_GRID",
+           "margins_table", "achievable_mu_lower_bound", "MARGIN_DELAYS"]
+
+#: Computation delays [samples] of the sampled-loop check in :func:`margins_table`.
+MARGIN_DELAYS = (0, 1, 2, 3)
 
 #: Default analysis grid [rad/s].
 ANALYSIS_GRID = np.logspace(-2, 8, 1500)
@@ -196,3 +203,67 @@ def table3(*analyses, paper_values=None):
             raise TypeError(f"table3 takes RobustnessAnalysis results, got {type(a).__name__}")
         data[a.name] = [a.nominal_stability, a.norm_He_S, a.norm_Hy_T, a.mu_RS, a.mu_RP]
     return pd.DataFrame(data, index=index)
+
+
+def margins_table(controllers, G, fs, *, delays=MARGIN_DELAYS):
+    """Classical, disk and sampled-loop margins of several controllers on the plant G.
+
+    Parameters
+    ----------
+    controllers : dict
+        {name: K}: continuous-time SISO controllers (v_e [V] -> u_b [V]).
+    G : control.LTI
+        Plant u_c [V] -> v_y [V].
+    fs : float
+        Loop rate [Hz]: each K is discretised by Tustin
+        (:func:`piezolib.robust.discrete.discretize`) and the sampled loop
+        with the zero-order-hold plant is checked for each delay.
+    delays : sequence of int
+        Computation delays [samples], 0, 1, 2, ... consecutive.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One column per controller; rows: the continuous margins of
+        :meth:`piezolib.robust.margins.LoopMargins.as_dict`, the sampled
+        loop's delay margin [samples] and, per delay d, its spectral radius
+        and stability.
+    """
+    check_siso("G", G)
+    if not isinstance(controllers, dict) or not controllers:
+        raise TypeError("controllers must be a non-empty dict {name: K}")
+    data = {}
+    for name, K in controllers.items():
+        check_siso(f"controllers[{name!r}]", K)
+        col = loop_margins(G, K).as_dict()
+        tol = delay_tolerance(G, discretize(K, fs).K, delays=delays)
+        col["sampled loop delay margin [samples]"] = tol.delay_margin_samples
+        for d, r, ok in zip(tol.delays, tol.spectral_radius, tol.stable):
+            col[f"spectral radius, delay {d}"] = float(r)
+            col[f"stable, delay {d}"] = bool(ok)
+        data[name] = col
+    return pd.DataFrame(data)
+
+
+def achievable_mu_lower_bound(G, H_m, H_e, H_y, **kwargs):
+    """Lower bound on the peak mu_RP any stabilising controller can reach (eq. 16-21).
+
+    mu_RP >= ||[H_e S; H_y T]||_inf >= inf over stabilising K of it, an
+    H-infinity problem on the performance channels (v_r -> y1, y2) of the
+    exact P of eq. 16, solved by
+    :func:`piezolib.robust.bounds.performance_lower_bound`.
+
+    Parameters
+    ----------
+    G, H_m, H_e, H_y : control.LTI
+        As in :func:`analyze`.
+    **kwargs
+        Passed to :func:`~piezolib.robust.bounds.performance_lower_bound`.
+
+    Returns
+    -------
+    piezolib.robust.bounds.LowerBound
+    """
+    G, H_m, H_e, H_y = check_models(G, H_m, H_e, H_y)
+    P = generalized_plant(G, H_m, H_e, H_y)
+    return performance_lower_bound(P, 1, 1, ["y1", "y2"], ["v_r"], **kwargs)

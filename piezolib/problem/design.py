@@ -1,8 +1,9 @@
-"""The workbook's mu controller for a design problem, in one call (Sec. IV-B).
+"""The workbook's mu controllers for a design problem, in one call (Sec. IV-B).
 
-Synthesis plant with an effort output, DK-iteration, G S-weighted reduction and
-Tustin discretisation; the chain and the role of the effort weight rho are
-described in ``docs/design.md``.
+Synthesis plant (by default the delay-aware plant with a roll-off weight),
+DK-iteration, G S-weighted reduction, fixed-order mu-synthesis started from
+the reduced controller and Tustin discretisation; the chain, the delay model
+and the role of the roll-off weight are described in ``docs/design.md``.
 """
 
 import logging
@@ -13,10 +14,12 @@ import numpy as np
 
 from piezolib import paper
 from piezolib._checks import check_integer, check_positive
-from piezolib.problem.genplant import (DESIGN_BLOCK_STRUCTURE, DESIGN_EFFORT_WEIGHT, check_models,
-                                       design_plant)
+from piezolib.problem.genplant import (DESIGN_BLOCK_STRUCTURE, DESIGN_DELAY_SAMPLES,
+                                       DESIGN_EFFORT_WEIGHT, DESIGN_PADE_ORDER, DESIGN_ROLLOFF,
+                                       check_models, delay_aware_plant, design_plant)
 from piezolib.robust.discrete import DiscreteController, discretize
 from piezolib.robust.dk import MusynResult, musyn
+from piezolib.robust.fixed_order import FixedOrderResult, fixed_order_musyn
 from piezolib.robust.lti import loop_functions, with_signals
 from piezolib.robust.reduction import ReducedController, reduce_controller
 
@@ -24,7 +27,7 @@ __all__ = ["ControllerDesign", "design_controller", "DESIGN_GRID", "DESIGN_D_ORD
 
 logger = logging.getLogger(__name__)
 
-#: Frequency grid [rad/s] of the D-steps.
+#: Frequency grid [rad/s] of the D-steps (DK-iteration and fixed-order synthesis).
 DESIGN_GRID = np.logspace(-2, 7, 300)
 #: Order of the fitted D-scaling.
 DESIGN_D_ORDER = 4
@@ -32,7 +35,7 @@ DESIGN_D_ORDER = 4
 
 @dataclass(frozen=True)
 class ControllerDesign:
-    """Full-order and reduced mu controllers with how they were obtained.
+    """Full-order, reduced and fixed-order mu controllers with how they were obtained.
 
     Attributes
     ----------
@@ -47,9 +50,24 @@ class ControllerDesign:
     reduction : ReducedController
         Hankel singular values and errors of the reduction.
     discrete : DiscreteController
-        Discretisation check (response match below 1 kHz, sampled loop).
+        Discretisation check of ``K_reduced`` (response match below 1 kHz,
+        sampled loop without computation delay).
     plant : control.StateSpace
         The synthesis plant.
+    K_fixed : control.StateSpace or None
+        Fixed-order mu controller of the requested order, started from
+        ``K_reduced`` (None when not asked for).
+    fixed_order : FixedOrderResult or None
+        The fixed-order synthesis.
+    K_fixed_discrete : control.StateSpace or None
+        ``K_fixed`` discretised at ``fs``.
+    fixed_discrete : DiscreteController or None
+        Its discretisation check.
+    fs : float
+        Sampling rate [Hz] of the discrete controllers.
+    delay_samples : int or None
+        Computation delay [samples] the design plant models (None: the
+        paper's problem with the effort regulariser).
     """
 
     K_full: ct.StateSpace
@@ -59,26 +77,56 @@ class ControllerDesign:
     reduction: ReducedController
     discrete: DiscreteController
     plant: ct.StateSpace = field(repr=False)
+    K_fixed: ct.StateSpace | None = None
+    fixed_order: FixedOrderResult | None = field(default=None, repr=False)
+    K_fixed_discrete: ct.StateSpace | None = None
+    fixed_discrete: DiscreteController | None = field(default=None, repr=False)
+    fs: float = paper.SAMPLING_FREQUENCY_HZ
+    delay_samples: int | None = DESIGN_DELAY_SAMPLES
+
+    @property
+    def K_deployed(self):
+        """The controller to implement: ``K_fixed`` if designed, else ``K_reduced``."""
+        return self.K_reduced if self.K_fixed is None else self.K_fixed
+
+    @property
+    def K_deployed_discrete(self):
+        """``K_deployed`` discretised at ``fs``."""
+        return self.K_discrete if self.K_fixed is None else self.K_fixed_discrete
 
 
 def design_controller(G, H_m, H_e, H_y, *, order=6, d_order=DESIGN_D_ORDER, max_iter=8,
-                      effort_weight=DESIGN_EFFORT_WEIGHT, fs=paper.SAMPLING_FREQUENCY_HZ):
-    """Design the mu controller by DK-iteration and reduce it to ``order`` states.
+                      fs=paper.SAMPLING_FREQUENCY_HZ, delay_samples=DESIGN_DELAY_SAMPLES,
+                      rolloff=DESIGN_ROLLOFF, pade_order=DESIGN_PADE_ORDER,
+                      effort_weight=DESIGN_EFFORT_WEIGHT, fixed_order=True):
+    """Design the mu controllers: DK-iteration, reduction to ``order``, fixed-order synthesis.
 
     Parameters
     ----------
     G, H_m, H_e, H_y : control.LTI
         Plant (u_c [V] -> v_y [V]) and weights, e.g. from :func:`piezolib.paper.problem`.
     order : int
-        Order of the reduced controller (the paper's is 6).
+        Order of the reduced and fixed-order controllers (the paper's is 6).
     d_order : int or 'auto'
-        Order of the fitted D-scaling.
+        Order of the fitted D-scaling of the DK-iteration.
     max_iter : int
         Maximum number of DK iterations.
-    effort_weight : float
-        rho > 0 of the control-effort output rho u_b (``docs/design.md``).
     fs : float
-        Sampling rate [Hz] of the discretised controller (default: the paper's 10 kHz).
+        Sampling rate [Hz] of the real-time loop and of the discretised controllers.
+    delay_samples : int or None
+        Computation delay [samples] of the loop, modelled in the synthesis
+        plant (:func:`~piezolib.problem.genplant.delay_aware_plant`, default
+        1).  None designs for the paper's problem as printed
+        (:func:`~piezolib.problem.genplant.design_plant`, no delay, effort
+        output ``effort_weight`` u_b).
+    rolloff : piezolib.problem.genplant.RolloffWeight
+        Roll-off requirement on the controller gain (delay-aware plant only).
+    pade_order : int
+        Order of the Pade approximation of the loop delay.
+    effort_weight : float
+        rho > 0 of the effort output when ``delay_samples`` is None.
+    fixed_order : bool
+        Also run the fixed-order mu-synthesis from the reduced controller.
 
     Returns
     -------
@@ -86,22 +134,41 @@ def design_controller(G, H_m, H_e, H_y, *, order=6, d_order=DESIGN_D_ORDER, max_
 
     Notes
     -----
-    Deterministic; the DK-iteration reports its progress through :mod:`logging`
-    (logger ``piezolib.robust.dk``), one line per iteration at INFO level.
+    Deterministic; the DK-iteration and the fixed-order synthesis report their
+    progress through :mod:`logging` (loggers ``piezolib.robust.dk`` and
+    ``piezolib.robust.fixed_order``) at INFO level.
     """
     G, H_m, H_e, H_y = check_models(G, H_m, H_e, H_y)
     order = check_integer("order", order, minimum=1)
     max_iter = check_integer("max_iter", max_iter, minimum=1)
-    effort_weight = check_positive("effort_weight", effort_weight)
     fs = check_positive("fs", fs)
-    P = design_plant(G, H_m, H_e, H_y, effort_weight=effort_weight)
-    logger.info("DK-iteration on the %d-state synthesis plant (rho = %g)", P.nstates,
-                effort_weight)
+    if not isinstance(fixed_order, bool):
+        raise TypeError(f"fixed_order must be True or False, got {fixed_order!r}")
+    if delay_samples is None:
+        effort_weight = check_positive("effort_weight", effort_weight)
+        P = design_plant(G, H_m, H_e, H_y, effort_weight=effort_weight)
+        logger.info("DK-iteration on the %d-state synthesis plant (rho = %g)", P.nstates,
+                    effort_weight)
+    else:
+        delay_samples = check_integer("delay_samples", delay_samples, minimum=0)
+        P = delay_aware_plant(G, H_m, H_e, H_y, fs=fs, delay_samples=delay_samples,
+                              pade_order=pade_order, rolloff=rolloff)
+        logger.info("DK-iteration on the %d-state delay-aware plant (%d sample(s) at %g Hz)",
+                    P.nstates, delay_samples, fs)
     mu = musyn(P, DESIGN_BLOCK_STRUCTURE, 1, 1, DESIGN_GRID, d_order=d_order,
                max_iter=max_iter)
     K_full = with_signals(mu.K, ["v_e"], ["u_b"], name=f"K_mu{mu.K.nstates}")
     red = reduce_controller(K_full, order, loop_functions(G, K_full).GS, method="residualize")
     K_red = with_signals(red.K, ["v_e"], ["u_b"], name=f"K_mu{red.order}")
     disc = discretize(K_red, fs, G=G)
+    extra = {}
+    if fixed_order:
+        logger.info("fixed-order mu-synthesis of order %d from the reduced controller", order)
+        fo = fixed_order_musyn(P, DESIGN_BLOCK_STRUCTURE, K_red, DESIGN_GRID)
+        K_fixed = with_signals(fo.K, ["v_e"], ["u_b"], name=f"K_fixed{order}")
+        fixed_disc = discretize(K_fixed, fs, G=G)
+        extra = dict(K_fixed=K_fixed, fixed_order=fo, K_fixed_discrete=fixed_disc.K,
+                     fixed_discrete=fixed_disc)
     return ControllerDesign(K_full=K_full, K_reduced=K_red, K_discrete=disc.K, musyn=mu,
-                            reduction=red, discrete=disc, plant=P)
+                            reduction=red, discrete=disc, plant=P, fs=fs,
+                            delay_samples=delay_samples, **extra)

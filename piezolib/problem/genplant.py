@@ -1,14 +1,20 @@
-"""Generalized plant P of Fig. 9 (eq. 16) and its lower LFT M = F_l(P, K) (eq. 17-18).
+"""Generalized plant P of Fig. 9 (eq. 16), its lower LFT M = F_l(P, K) (eq. 17-18)
+and the delay-aware synthesis plant.
 
 Inputs ``u_Delta, v_r, u_b``; outputs ``y_Delta, y1, y2[, y_u], v_e``, all in
-volts, frequencies in rad/s.  The signal table, how H_y G is realised and why
-the synthesis plant carries an effort output are in ``docs/design.md``.
+volts, frequencies in rad/s.  The signal table, how H_y G is realised, why
+the synthesis plant carries an effort output and how the delay-aware plant
+models the sample-and-hold, the computation delay and the roll-off
+requirement are in ``docs/design.md``.
 """
+
+from dataclasses import dataclass
 
 import control as ct
 import numpy as np
 
-from piezolib._checks import check_nonnegative, check_positive, check_siso
+from piezolib._checks import (check_continuous, check_finite_array, check_finite_lti,
+                              check_integer, check_nonnegative, check_positive, check_siso)
 from piezolib.robust.lft import lower_lft
 from piezolib.robust.lti import (balance, from_scaled, scaled_coefficients, time_scale_of,
                                  to_scaled, with_signals)
@@ -16,7 +22,9 @@ from piezolib.robust.lti import (balance, from_scaled, scaled_coefficients, time
 __all__ = [
     "PLANT_INPUTS", "PLANT_OUTPUTS", "BLOCK_STRUCTURE", "DESIGN_BLOCK_STRUCTURE",
     "DESIGN_EFFORT_WEIGHT", "check_models", "generalized_plant", "design_plant",
-    "closed_loop_matrix",
+    "closed_loop_matrix", "RolloffWeight", "DESIGN_ROLLOFF", "DESIGN_DELAY_SAMPLES",
+    "DESIGN_PADE_ORDER", "effective_delay", "rolloff_weight", "delay_aware_plant",
+    "delayed_closed_loop_response",
 ]
 
 PLANT_INPUTS = ("u_Delta", "v_r", "u_b")
@@ -29,6 +37,43 @@ BLOCK_STRUCTURE = ((1, 1), (1, 2))
 DESIGN_BLOCK_STRUCTURE = ((1, 1), (1, 3))
 #: Control-effort weight rho of the synthesis plant (see :func:`design_plant`).
 DESIGN_EFFORT_WEIGHT = 1e-3
+#: Computation delay [samples] of the real-time loop the delay-aware design assumes.
+DESIGN_DELAY_SAMPLES = 1
+#: Order of the Pade approximation of the loop delay in :func:`delay_aware_plant`.
+DESIGN_PADE_ORDER = 2
+
+
+@dataclass(frozen=True)
+class RolloffWeight:
+    """Parameters of the roll-off weight W_u(s) on the controller output (KS weight).
+
+    ``W_u(s) = (1 / K_hf) ((s / omega_u + r) / (s / omega_u + 1))^n`` with
+    ``r = (K_hf / K_lf)^(1/n)``: gain 1 / K_lf in band, rising with n x 20
+    dB/decade from about ``omega_u r`` to ``omega_u``, 1 / K_hf above.  Since
+    y_u = W_u u_b joins the performance block, mu_RP < 1 implies
+    |K S| < K_hf where W_u = 1 / K_hf, i.e. the controller's gain far above
+    the loop bandwidth (where S ~ 1) stays below ``K_hf``.
+
+    Attributes
+    ----------
+    hf_gain : float
+        K_hf [V/V], largest controller gain allowed well above ``frequency``.
+    lf_gain : float
+        K_lf [V/V], gain allowed in band (large: no in-band penalty).
+    frequency : float
+        omega_u [rad/s], where the weight reaches its high-frequency level.
+    order : int
+        n, the slope of the transition in 20 dB/decade.
+    """
+
+    hf_gain: float = 10.0
+    lf_gain: float = 1e4
+    frequency: float = 3e4
+    order: int = 2
+
+
+#: Roll-off requirement of the delay-aware design (docs/design.md).
+DESIGN_ROLLOFF = RolloffWeight()
 
 
 def check_models(G, H_m, H_e, H_y):
@@ -41,6 +86,8 @@ def check_models(G, H_m, H_e, H_y):
     """
     for name, sys in (("G", G), ("H_m", H_m), ("H_e", H_e), ("H_y", H_y)):
         check_siso(name, sys)
+        check_finite_lti(name, sys)
+        check_continuous(name, sys)   # a discrete G used to come back continuous
     return G, H_m, H_e, H_y
 
 
@@ -202,3 +249,168 @@ def closed_loop_matrix(K, G, H_m, H_e, H_y, *, omega_s=None):
                else check_positive("omega_s", omega_s))
     P = generalized_plant(G, H_m, H_e, H_y, omega_s=omega_s)
     return lower_lft(P, K, omega_s)
+
+
+def effective_delay(fs, delay_samples):
+    """Effective loop delay [s] of a sampled loop: (d + 1/2) / fs.
+
+    A zero-order hold acts, below the Nyquist frequency, like half a sample of
+    delay; a computation delay of d whole samples adds d / fs.
+
+    Parameters
+    ----------
+    fs : float
+        Sampling rate [Hz].
+    delay_samples : int
+        Computation delay d >= 0 [samples].
+
+    Returns
+    -------
+    float
+        tau [s].
+
+    Examples
+    --------
+    >>> effective_delay(10e3, 1)
+    0.00015
+    """
+    fs = check_positive("fs", fs)
+    delay_samples = check_integer("delay_samples", delay_samples, minimum=0)
+    return (delay_samples + 0.5) / fs
+
+
+def rolloff_weight(params=DESIGN_ROLLOFF):
+    """The roll-off weight W_u(s) of :class:`RolloffWeight` as a transfer function.
+
+    Parameters
+    ----------
+    params : RolloffWeight
+
+    Returns
+    -------
+    control.TransferFunction
+        W_u(s), input ``u_b`` [V], output ``y_u`` [V/V-normalised].
+
+    Raises
+    ------
+    ValueError
+        Non-positive gains or frequency, ``lf_gain <= hf_gain`` or order < 1.
+    """
+    if not isinstance(params, RolloffWeight):
+        raise TypeError(f"rolloff must be a RolloffWeight, got {type(params).__name__}")
+    k_hf = check_positive("rolloff.hf_gain", params.hf_gain)
+    k_lf = check_positive("rolloff.lf_gain", params.lf_gain)
+    w_u = check_positive("rolloff.frequency", params.frequency)
+    n = check_integer("rolloff.order", params.order, minimum=1)
+    if k_lf <= k_hf:
+        raise ValueError(f"rolloff.lf_gain ({k_lf}) must exceed rolloff.hf_gain ({k_hf})")
+    r = (k_hf / k_lf) ** (1.0 / n)
+    factor = ct.tf([1.0 / w_u, r], [1.0 / w_u, 1.0])
+    W = ct.tf([1.0 / k_hf], [1.0])
+    for _ in range(n):
+        W = W * factor
+    return ct.tf(W.num, W.den, inputs="u_b", outputs="y_u", name="W_u")
+
+
+def delay_aware_plant(G, H_m, H_e, H_y, *, fs, delay_samples=DESIGN_DELAY_SAMPLES,
+                      pade_order=DESIGN_PADE_ORDER, rolloff=DESIGN_ROLLOFF, omega_s=None):
+    """Synthesis plant for a sampled loop with computation delay and a roll-off requirement.
+
+    The controller output u_b reaches the stage after the effective delay
+    tau = (d + 1/2) / fs (:func:`effective_delay`), modelled by a Pade
+    approximation of order ``pade_order``: with u_b' = e^{-s tau} u_b,
+
+        y_Delta = H_m u_b',  u_c = u_Delta + u_b',  y1 = H_e (v_r - G u_c),
+        y2 = H_y G u_c,      y_u = W_u u_b,          v_e = v_r - G u_c,
+
+    so the uncertainty acts on the input that is really applied.  y_u, with
+    the roll-off weight W_u of :func:`rolloff_weight`, joins the performance
+    block (:data:`DESIGN_BLOCK_STRUCTURE`) and replaces the 1e-3 effort
+    regulariser of :func:`design_plant`.  The paper's problem
+    (:func:`generalized_plant`) is not changed.
+
+    Parameters
+    ----------
+    G, H_m, H_e, H_y : control.LTI
+        As in :func:`generalized_plant`.
+    fs : float
+        Sampling rate [Hz] of the real-time loop.
+    delay_samples : int, optional
+        Computation delay d [samples] (default 1: the control computed from
+        v_y[k] is applied at sample k + 1).
+    pade_order : int, optional
+        Order of the Pade approximation of e^{-s tau} (>= 1).
+    rolloff : RolloffWeight, optional
+        Parameters of W_u.
+    omega_s : float, optional
+        Internal time scale [rad/s]; default ``time_scale_of(G, H_m, H_e, H_y)``.
+
+    Returns
+    -------
+    control.StateSpace
+        Inputs ``u_Delta, v_r, u_b``; outputs ``y_Delta, y1, y2, y_u, v_e``;
+        named ``P_delay``; 14 + ``pade_order`` + ``rolloff.order`` states.
+    """
+    G, H_m, H_e, H_y = check_models(G, H_m, H_e, H_y)
+    tau = effective_delay(fs, delay_samples)
+    pade_order = check_integer("pade_order", pade_order, minimum=1)
+    W_u = rolloff_weight(rolloff)
+    omega_s = (time_scale_of(G, H_m, H_e, H_y) if omega_s is None
+               else check_positive("omega_s", omega_s))
+    P0 = with_signals(to_scaled(generalized_plant(G, H_m, H_e, H_y, omega_s=omega_s), omega_s),
+                      ["u_Delta", "v_r", "u_b_applied"], list(PLANT_OUTPUTS))
+    num, den = ct.pade(tau * omega_s, pade_order)          # in scaled time
+    delay = with_signals(balance(ct.ss(ct.tf(num, den))), ["u_b"], ["u_b_applied"])
+    weight = with_signals(to_scaled(W_u, omega_s), ["u_b"], ["y_u"])
+    outputs = ["y_Delta", "y1", "y2", "y_u", "v_e"]
+    P = balance(ct.interconnect([P0, delay, weight], inputs=list(PLANT_INPUTS),
+                                outputs=outputs))
+    return from_scaled(P, omega_s, list(PLANT_INPUTS), outputs, name="P_delay")
+
+
+def delayed_closed_loop_response(K, G, H_m, H_e, H_y, omega, *, fs, delay_samples,
+                                 rolloff=None):
+    """Frequency response of M = F_l(P, K) with the exact loop delay e^{-j omega tau}.
+
+    The same loop as :func:`delay_aware_plant` with the delay exact instead
+    of Pade-approximated, tau = (d + 1/2) / fs.  Without ``rolloff`` this is
+    eq. 18 with the delay: outputs ``y_Delta, y1, y2``, block structure
+    :data:`BLOCK_STRUCTURE`; with it the output y_u = W_u u_b is added
+    (:data:`DESIGN_BLOCK_STRUCTURE`).
+
+    Parameters
+    ----------
+    K : control.LTI
+        Continuous SISO controller, v_e [V] -> u_b [V].
+    G, H_m, H_e, H_y : control.LTI
+        As in :func:`generalized_plant`.
+    omega : array_like
+        Frequencies [rad/s].
+    fs : float
+        Sampling rate [Hz].
+    delay_samples : int
+        Computation delay d [samples].
+    rolloff : RolloffWeight, optional
+        Add the roll-off output.
+
+    Returns
+    -------
+    ndarray, shape (len(omega), 3 or 4, 2)
+        Inputs ``u_Delta, v_r``.
+    """
+    check_siso("K", K)
+    G, H_m, H_e, H_y = check_models(G, H_m, H_e, H_y)
+    omega = check_finite_array("omega", omega, ndim=1)
+    tau = effective_delay(fs, delay_samples)
+    P = generalized_plant(G, H_m, H_e, H_y)
+    R = np.moveaxis(P(1j * omega, squeeze=False), -1, 0)
+    R[:, :, 2] *= np.exp(-1j * omega * tau)[:, None]        # u_b arrives tau later
+    if rolloff is not None:
+        w_u = np.ravel(rolloff_weight(rolloff)(1j * omega))
+        extra = np.zeros((omega.size, 1, 3), complex)
+        extra[:, 0, 2] = w_u
+        R = np.concatenate([R[:, :3], extra, R[:, 3:]], axis=1)
+    k = np.ravel(K(1j * omega))
+    f = k / (1 - R[:, -1, 2] * k)
+    return R[:, :-1, :2] + f[:, None, None] * R[:, :-1, 2][:, :, None] * R[:, -1, :2][:, None, :]
+

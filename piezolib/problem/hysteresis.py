@@ -5,21 +5,33 @@
 compares, :func:`fit_case_I_loops` fits one of them (cached in-process), and
 :func:`workbook_dahl_fit` is the one feedforward model shared by notebooks 03
 and 06 and :mod:`piezolib.workbook.experiments` (:data:`WORKBOOK_DAHL`, the choice of
-:func:`piezolib.hysteresis.choose_fit`).  Background: ``docs/hysteresis.md``.
+:func:`piezolib.hysteresis.choose_fit`).  :func:`workbook_pi_fit` is the
+Prandtl-Ishlinskii model fitted to the same loops, and :func:`validation_loops`
+records of the virtual stage that neither model was fitted to (model choice by
+validation, notebook 03).  Background: ``docs/hysteresis.md``.
 """
 
 import functools
 from dataclasses import fields
 from pathlib import Path
 
+import numpy as np
+
 
 from piezolib import paper
 from piezolib._checks import check_integer
 from piezolib.hysteresis.dahl import FORMS, STARTS, DahlModel
 from piezolib.hysteresis.fit import check_fit_options, fit_dahl
+from piezolib.hysteresis.pi import fit_pi
 
 __all__ = ["published_dahl", "CASE_I_CANDIDATES", "WORKBOOK_DAHL", "fit_case_I_loops",
-           "workbook_dahl_fit", "clear_cache"]
+           "workbook_dahl_fit", "clear_cache", "PI_PLAYS", "workbook_pi_fit",
+           "VALIDATION_AMPLITUDES_V", "validation_loops"]
+
+#: Play operators of the workbook's Prandtl-Ishlinskii model (linear one included).
+PI_PLAYS = 10
+#: Actuator amplitudes [V] of the validation triangles (between Table 4's 10-40 V).
+VALIDATION_AMPLITUDES_V = (15.0, 25.0, 35.0)
 
 #: Candidate (form, offset, start) fits to the Case I loops.  From rest the
 #: printed form's H is constant (both directions share one steady state), so
@@ -94,8 +106,73 @@ def _fit_case_I_loops(form, offset, start, directory, stride):
 
 
 def clear_cache():
-    """Forget every cached :func:`fit_case_I_loops` result (the next call refits)."""
+    """Forget every cached :func:`fit_case_I_loops` / :func:`workbook_pi_fit` result."""
     _fit_case_I_loops.cache_clear()
+    _workbook_pi_fit.cache_clear()
+
+
+def _period():
+    return int(round(paper.SAMPLING_FREQUENCY_HZ / paper.HYSTERESIS_TEST["frequency_Hz"]))
+
+
+def workbook_pi_fit(directory=None, n_plays=PI_PLAYS):
+    """Prandtl-Ishlinskii model fitted to the Case I loops (cached in-process).
+
+    The same four loops, samples and residual weights as the Dahl fits
+    (v = u_c [V], x = v_y [V], first period left out of the residuals),
+    ``n_plays`` plays with thresholds evenly spaced up to half the largest
+    input range, output offset fitted, plays at rest at the first sample.
+
+    Returns
+    -------
+    PIFit
+    """
+    directory = None if directory is None else str(directory)
+    return _workbook_pi_fit(directory, check_integer("n_plays", n_plays, minimum=1))
+
+
+@functools.lru_cache(maxsize=None)
+def _workbook_pi_fit(directory, n_plays):
+    from piezolib.problem import stage_data
+    loops = stage_data.load_hysteresis_loops(None if directory is None else Path(directory))
+    return fit_pi([(rec.u_c_V, rec.v_y_V) for rec in loops.values()], n_plays=n_plays,
+                  offset=True, start="rest", discard=_period())
+
+
+def validation_loops(stage=None):
+    """Virtual-stage records that no model was fitted to, for model choice by validation.
+
+    Three 10 Hz triangles of :data:`VALIDATION_AMPLITUDES_V` (three periods)
+    and one record with nested minor loops (a 5 Hz sine of 1.5 V plus a
+    23 Hz sine of 0.4 V about 2 V at the amplifier input, 0.6 s), each
+    from rest, scored after its first 0.1 s.
+
+    Parameters
+    ----------
+    stage : VirtualStage, optional
+        Default: ``VirtualStage(seed=1)`` (other noise than the Case I files).
+
+    Returns
+    -------
+    dict
+        {label: (u_c [V], v_y [V], first scored sample)}.
+    """
+    from piezolib import signals
+    from piezolib.problem.stage import VirtualStage
+    stage = VirtualStage(seed=1) if stage is None else stage
+    fs = stage.fs
+    f = paper.HYSTERESIS_TEST["frequency_Hz"]
+    first = int(round(fs / f))
+    out = {}
+    for A in VALIDATION_AMPLITUDES_V:
+        t, u = signals.triangle(A / paper.AMPLIFIER_GAIN, f, periods=3, fs=fs)
+        out[f"triangle {A:.0f} V"] = (u, stage.run(u).v_y_V, first)
+    t = np.arange(int(0.6 * fs)) / fs
+    u = 2.0 - 1.5 * np.cos(2 * np.pi * 5 * t) + 0.4 * np.sin(2 * np.pi * 23 * t) - \
+        0.5 * (1 - np.exp(-t / 0.05))
+    u = np.maximum(u - u[0], 0.0)
+    out["minor loops"] = (u, stage.run(u).v_y_V, first)
+    return out
 
 
 def workbook_dahl_fit(directory=None):

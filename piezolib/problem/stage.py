@@ -352,7 +352,7 @@ class VirtualStage:
             Identical, float for float, to stepping a :meth:`start`
             simulation through the same input.
         """
-        u = check_finite_array("u_c", u_c, ndim=1, min_length=1)
+        u = check_finite_array("u_c", u_c, ndim=1, min_length=1, real=True)
         n = len(u)
         u_dac = self.dac.convert(u)
         sat_in = Saturation.of("DAC/amplifier input", self.dac.limits, u)

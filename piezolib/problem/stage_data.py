@@ -11,12 +11,13 @@ file format is described in ``data/README.md``.
 """
 
 import io
+import json
 from dataclasses import dataclass, fields
 from pathlib import Path
 
 import numpy as np
 
-from piezolib import paper, signals
+from piezolib import paper, records, signals
 from piezolib.problem.paths import data_dir
 from piezolib.problem.stage import (ADC_RANGE_V, RECORD_COLUMNS, Saturation, StageRecord,
                                     VirtualStage, case_I_hysteresis, case_I_input)
@@ -24,7 +25,9 @@ from piezolib.problem.stage import (ADC_RANGE_V, RECORD_COLUMNS, Saturation, Sta
 __all__ = [
     "ChirpSettings", "IDENTIFICATION_CHIRP", "VALIDATION_CHIRP", "EXPERIMENT_SEEDS",
     "chirp_input", "ChirpExperiment", "experiment_paths", "write_experiment_files",
-    "load_record", "load_chirp", "load_hysteresis_loops",
+    "load_record", "load_chirp", "load_hysteresis_loops", "MANIFEST_NAME", "manifest_path",
+    "read_manifest", "check_experiment_files", "write_foreign_records", "FOREIGN_FORM",
+    "foreign_record_paths",
 ]
 
 
@@ -209,6 +212,7 @@ def write_experiment_files(directory=None):
                 "seed": seed,
                 "hysteresis_percent": round(case_I_hysteresis({A: record})[A], 4)}
         written.append(_write(paths[A], record, stage, meta))
+    written.append(_write_manifest(paths, written))
     return written
 
 
@@ -226,19 +230,94 @@ def _write(path, record, stage, meta):
     body = io.StringIO()
     np.savetxt(body, np.column_stack(list(record.columns().values())),
                fmt=list(_FORMATS), delimiter=",")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "w", newline="\n") as fh:
-        fh.write("\n".join(lines) + "\n" + ",".join(_COLUMNS) + "\n" + body.getvalue())
-    return path
+    return records.atomic_write(
+        path, "\n".join(lines) + "\n" + ",".join(_COLUMNS) + "\n" + body.getvalue())
+
+
+#: File name of the manifest next to the experiment files.
+MANIFEST_NAME = "manifest.json"
+
+
+def manifest_path(directory=None):
+    """Path of the manifest of the experiment files (``data/manifest.json``)."""
+    return (data_dir() if directory is None else Path(directory)) / MANIFEST_NAME
+
+
+def _data_rows(path):
+    text = Path(path).read_text(encoding="utf-8").splitlines()
+    return sum(1 for line in text if line and not line.startswith("#")) - 1   # minus names
+
+
+def _write_manifest(paths, written, fs=paper.SAMPLING_FREQUENCY_HZ):
+    directory = Path(written[0]).parent
+    entries = {Path(p).name: records.manifest_entry(p, _data_rows(p), fs)
+               for p in written}
+    doc = {"about": "row count, sampling rate and SHA-256 of every experiment file; written "
+                    "by python -m piezolib data (piezolib.problem.stage_data)",
+           "files": dict(sorted(entries.items()))}
+    return records.atomic_write(manifest_path(directory), json.dumps(doc, indent=1) + "\n")
+
+
+def read_manifest(directory=None):
+    """The manifest entries ``{file name: entry}`` (empty when there is no manifest).
+
+    Raises
+    ------
+    records.RecordError
+        When the manifest itself is not valid JSON.
+    """
+    path = manifest_path(directory)
+    if not path.exists():
+        return {}
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))["files"]
+    except (ValueError, KeyError) as exc:
+        raise records.RecordError(f"not a valid manifest ({exc}): regenerate it with "
+                                  "`python -m piezolib data`", path) from None
+
+
+def check_experiment_files(directory=None):
+    """Check every experiment file against the manifest.
+
+    Parameters
+    ----------
+    directory : str or Path, optional
+        Default ``data/``.
+
+    Returns
+    -------
+    dict
+        ``{Path: problem}`` for the files that are missing or fail their check
+        (empty when all are fine); ``problem`` is a one-line message naming the
+        file and, where it applies, the line.
+    """
+    problems = {}
+    try:
+        manifest = read_manifest(directory)
+    except records.RecordError as exc:
+        return {manifest_path(directory): str(exc)}
+    paths = experiment_paths(directory)
+    if not manifest:
+        return {manifest_path(directory): f"{manifest_path(directory)}: missing"}
+    for path in paths.values():
+        try:
+            load_record(path)
+            if path.name not in manifest:
+                problems[path] = f"{path}: not in the manifest"
+        except (OSError, ValueError) as exc:
+            problems[path] = str(exc).splitlines()[0]
+    return problems
 
 
 def load_record(path):
-    """Read an experiment CSV.
+    """Read an experiment CSV, checked line by line and against the manifest.
 
     Parameters
     ----------
     path : str or Path
-        A file written by :func:`write_experiment_files`.
+        A file written by :func:`write_experiment_files`.  When the folder
+        holds a manifest with an entry for the file, the row count, the
+        sampling rate and the SHA-256 are checked.
 
     Returns
     -------
@@ -250,48 +329,34 @@ def load_record(path):
     ------
     FileNotFoundError
         When the file is missing (regenerate with ``python -m piezolib data``).
-    ValueError
-        When the column header is not :data:`~piezolib.problem.stage.RECORD_COLUMNS`.
+    piezolib.records.RecordError
+        (a ``ValueError``) naming the file and the line: a missing column,
+        text or NaN in a number column, too few rows, or a file that differs
+        from its manifest entry (truncated, changed).
     """
-    meta, sat_counts, rows = {}, {}, []
-    try:
-        with open(path) as fh:
-            text = fh.read().splitlines()
-    except FileNotFoundError:
+    path = Path(path)
+    if not path.exists():
         raise FileNotFoundError(f"{path} is missing: regenerate the experiment files with "
-                                "`python -m piezolib data`") from None
-    header_done = False
-    for line in text:
-        if line.startswith("#"):
-            body = line[1:].strip()
-            if body.startswith("saturation ") and "count =" in body:
-                where, count = body[len("saturation "):].split(": count =")
-                sat_counts[where.strip()] = int(count)
-            elif " = " in body:
-                key, value = body.split(" = ", 1)
-                meta[key.strip()] = _parse_value(value.strip())
-        elif not header_done:
-            if tuple(line.split(",")) != _COLUMNS:
-                raise ValueError(f"{path}: expected columns {_COLUMNS}, got {line!r}")
-            header_done = True
-        else:
-            rows.append(line)
-    data = np.loadtxt(rows, delimiter=",", ndmin=2)
+                                "`python -m piezolib data`")
+    data, meta, lines = records.read_table(path, {c: c for c in _COLUMNS}, header=True)
+    entry = read_manifest(path.parent).get(path.name)
+    if entry is not None:
+        records.verify_file(path, entry, rows=len(lines), fs=meta.get("sample_rate_Hz"))
+    if len(lines) < 2:
+        raise records.RecordError(f"too short: {len(lines)} data row(s)", path,
+                                  int(lines[-1]) if len(lines) else None)
+    sat_counts = {}
+    for line in path.read_text(encoding="utf-8").splitlines():
+        if line.startswith("# saturation ") and ": count =" in line:
+            where, count = line[len("# saturation "):].split(": count =")
+            sat_counts[where.strip()] = int(count)
+    meta = {k: v for k, v in meta.items() if not k.startswith("saturation ")}
     sats = [Saturation(where, limits, sat_counts.get(where, 0)) for where, limits in
             (("DAC/amplifier input", paper.AMPLIFIER_INPUT_RANGE_V),
              ("amplifier output", paper.AMPLIFIER_OUTPUT_RANGE_V),
              ("ADC", ADC_RANGE_V))]
-    record = StageRecord(*data.T, *sats, seed=meta.get("seed"))
+    record = StageRecord(*(data[c] for c in _COLUMNS), *sats, seed=meta.get("seed"))
     return record, meta
-
-
-def _parse_value(text):
-    for conv in (int, float):
-        try:
-            return conv(text)
-        except ValueError:
-            pass
-    return text
 
 
 def load_chirp(which="identification", directory=None):
@@ -330,3 +395,82 @@ def load_hysteresis_loops(directory=None):
     """
     paths = experiment_paths(directory)
     return {A: load_record(paths[A])[0] for A in EXPERIMENT_SEEDS}
+
+
+# --- records in a foreign form (notebook 08) ------------------------------------------------
+#: How :func:`write_foreign_records` differs from the workbook's own files: a
+#: user's acquisition at 5 kHz, displacement in um, 5x the sensor noise, no
+#: header, each run starting at rest with a voltage step.
+FOREIGN_FORM = {"sample_rate_Hz": 5000.0, "noise_factor": 5.0, "rest_s": 0.05,
+                "columns": ("time [s]", "amplifier input u_c [V]",
+                            "measured displacement [um] = 3 um/V x v_y"),
+                "formats": ("%.5f", "%.6f", "%.5f")}
+
+_FOREIGN_RUNS = {
+    # chirp: step to 2 V, settle, then 2 V - 0.08 V (1 - cos) sweeping 5 Hz ... 2 kHz
+    "chirp.csv": dict(kind="chirp", seed=101, offset_V=2.0, settle_s=0.25, amplitude_V=0.08,
+                      f0_Hz=5.0, f1_Hz=2000.0, duration_s=2.0),
+    # loops: step to the mid value, then a sine / a triangle around it
+    "loop_sine.csv": dict(kind="sine", seed=102, offset_V=2.0, amplitude_V=1.6,
+                          frequency_Hz=10.0, periods=4),
+    "loop_triangle.csv": dict(kind="triangle", seed=103, offset_V=1.5, amplitude_V=1.5,
+                              frequency_Hz=10.0, periods=4),
+}
+
+
+def foreign_record_paths(directory=None):
+    """Paths of the foreign-form records (default ``data/own_stage/``), by file name."""
+    d = data_dir() / "own_stage" if directory is None else Path(directory)
+    return {name: d / name for name in _FOREIGN_RUNS}
+
+
+def _foreign_input(run, fs):
+    n_rest = int(round(FOREIGN_FORM["rest_s"] * fs))
+    rest = np.zeros(n_rest)
+    if run["kind"] == "chirp":
+        _, sweep = signals.chirp(run["amplitude_V"], run["f0_Hz"], run["f1_Hz"],
+                                 run["duration_s"], fs, "logarithmic")
+        settle = np.full(int(round(run["settle_s"] * fs)), run["offset_V"])
+        return np.concatenate((rest, settle, run["offset_V"] - (run["amplitude_V"] - sweep)))
+    n = int(round(run["periods"] * fs / run["frequency_Hz"]))
+    phase = 2 * np.pi * run["frequency_Hz"] * np.arange(n) / fs
+    if run["kind"] == "sine":
+        wave = np.sin(phase)
+    else:                         # triangle starting at its middle, rising
+        wave = 2 / np.pi * np.arcsin(np.sin(phase))
+    return np.concatenate((rest, run["offset_V"] + run["amplitude_V"] * wave))
+
+
+def write_foreign_records(directory=None):
+    """Write virtual-stage records in the form a user's own stage might give them.
+
+    The runs (a chirp for identification, a sine and a triangle loop for
+    hysteresis) go through :class:`~piezolib.problem.stage.VirtualStage` at
+    5 kHz with 5x its sensor noise; each starts at rest and steps to its
+    first value.  The files have no header and no comments: three columns,
+    time [s], amplifier input u_c [V] and displacement [um] (3 um/V x the
+    measured v_y), as :data:`FOREIGN_FORM` describes.  Deterministic (fixed
+    seeds and formats).
+
+    Parameters
+    ----------
+    directory : str or Path, optional
+        Default ``data/own_stage/``.
+
+    Returns
+    -------
+    list of Path
+    """
+    paths = foreign_record_paths(directory)
+    fs = FOREIGN_FORM["sample_rate_Hz"]
+    written = []
+    for name, run in _FOREIGN_RUNS.items():
+        stage = VirtualStage(seed=run["seed"], sample_rate_Hz=fs,
+                             noise_rms_V=FOREIGN_FORM["noise_factor"]
+                             * VirtualStage().settings.noise_rms_V)
+        record = stage.run(_foreign_input(run, fs))
+        table = np.column_stack((record.t_s, record.u_c_V, record.x_measured_um))
+        body = io.StringIO()
+        np.savetxt(body, table, fmt=list(FOREIGN_FORM["formats"]), delimiter=",")
+        written.append(records.atomic_write(paths[name], body.getvalue()))
+    return written

@@ -12,8 +12,12 @@ hinf        verified H-infinity synthesis by gamma-iteration (``hinfsyn``)
 sos         second-order-section magnitude model (shared by dfit and uncertainty)
 dfit        stable minimum-phase fits of magnitude data (D-scalings)
 dk          mu-synthesis by DK-iteration (``musyn``)
+fixed_order fixed-order mu-synthesis of a SISO controller (``fixed_order_musyn``)
 reduction   (weighted) balanced controller reduction
 discrete    Tustin discretisation with response checks
+margins     gain, phase, delay and disk margins; sampled-loop delay tolerance
+bounds      lower bounds on the achievable peak mu (H-infinity certificates)
+export      second-order sections: JSON, C header, reference filter
 
 Derivations and design notes: ``docs/robust.md``.
 """
@@ -25,9 +29,15 @@ from piezolib.robust.mu import *           # noqa: F401,F403
 from piezolib.robust.hinf import *         # noqa: F401,F403
 from piezolib.robust.dfit import *         # noqa: F401,F403
 from piezolib.robust.dk import *           # noqa: F401,F403
+from piezolib.robust.fixed_order import *  # noqa: F401,F403
 from piezolib.robust.reduction import *    # noqa: F401,F403
 from piezolib.robust.discrete import *     # noqa: F401,F403
-from piezolib.robust import blocks, dfit, discrete, dk, hinf, lft, lti, mu, reduction
+from piezolib.robust.margins import *      # noqa: F401,F403
+from piezolib.robust.bounds import *       # noqa: F401,F403
+from piezolib.robust.export import *       # noqa: F401,F403
+from piezolib.robust import (blocks, bounds, dfit, discrete, dk, export, fixed_order, hinf, lft,
+                             lti, margins, mu, reduction)
 
 __all__ = (lti.__all__ + lft.__all__ + blocks.__all__ + mu.__all__ + hinf.__all__
-           + dfit.__all__ + dk.__all__ + reduction.__all__ + discrete.__all__)
+           + dfit.__all__ + dk.__all__ + fixed_order.__all__ + reduction.__all__
+           + discrete.__all__ + margins.__all__ + bounds.__all__ + export.__all__)

@@ -150,7 +150,8 @@ def _full_blocks(blk, p, q):
     for b in blocks:
         if not b.is_full:
             raise ValueError("musyn supports complex full blocks only; got the "
-                             f"{b.kind} repeated scalar block {b.blk_row}")
+                             f"{b.kind} repeated scalar block {b.blk_row} (real 1 x 1 "
+                             "scalars: piezolib.robust.mixed_dk.mixed_musyn)")
     return blocks
 
 

@@ -13,7 +13,8 @@ import control as ct
 import numpy as np
 import scipy.linalg as la
 
-from piezolib._checks import check_integer, check_lti, check_positive
+from piezolib._checks import (check_finite_array, check_integer, check_lti, check_positive,
+                              check_proper)
 from piezolib.robust.lti import (balance, from_scaled, hinf_norm, max_singular_value,
                                  time_scale_of, to_scaled)
 
@@ -21,9 +22,13 @@ __all__ = ["HinfResult", "HinfSynthesisError", "hinfsyn", "DEFAULT_EFFORT_WEIGHT
 
 #: Effort / noise weight added when D12 / D21 is rank deficient ("auto").
 DEFAULT_EFFORT_WEIGHT = 1e-3
-_RANK_TOL = 1e-6      # relative to the peak gain of P12 / P21
+_RANK_TOL = 1e-9      # relative to the peak gain of P12 / P21
 _PSD_TOL = 1e-8       # relative tolerance of X >= 0, Y >= 0
-_STABLE_TOL = 1e-9    # closed-loop poles need Re < -tol * scale
+_AXIS_REL_TOL = 1e-9  # Hamiltonian eigenvalue on the axis: |Re| <= tol |lambda| ...
+_ERR_FACTOR = 10.0    # ... or |Re lambda| <= factor * eps * ||A||
+_PENCIL_ZERO_TOL = 100 * np.finfo(float).eps  # Hamiltonian: error bound / ||pencil||
+_SPREAD_LIMIT = 1e11  # pole spread beyond which failures are reported as numerical
+_RESIDUAL_TOL = 1e-5  # relative Riccati residual accepted
 
 
 class HinfSynthesisError(ValueError):
@@ -113,6 +118,61 @@ class _Plant:
         return ct.ss(self.A, B, C, D)
 
 
+def _balance_states(pl, sweeps=30):
+    """Scale the states (powers of two) so that every state's row of [A B1 B2]
+    and column of [A; C1; C2] have similar norms (in place; the transfer
+    function is unchanged).  Balancing A alone left weight states with B ~ 5e-8
+    and C ~ 2e6, and Riccati solutions spanning 15 decades."""
+    n = pl.A.shape[0]
+    if n == 0:
+        return pl
+    B = np.hstack([pl.B1, pl.B2])
+    C = np.vstack([pl.C1, pl.C2])
+    A = pl.A
+    d = np.ones(n)
+    off = ~np.eye(n, dtype=bool)
+    for _ in range(sweeps):
+        As = np.abs(A * d[None, :] / d[:, None]) * off
+        rows = np.sqrt((As ** 2).sum(1) + ((B / d[:, None]) ** 2).sum(1))
+        cols = np.sqrt((As ** 2).sum(0) + ((C * d[None, :]) ** 2).sum(0))
+        ok = (rows > 0) & (cols > 0)
+        step = np.ones(n)
+        step[ok] = np.sqrt(rows[ok] / cols[ok])
+        if np.all(np.abs(np.log2(step)) < 0.5):
+            break
+        d *= step
+    d = np.exp2(np.round(np.log2(d)))
+    pl.A = A * d[None, :] / d[:, None]
+    pl.B1, pl.B2 = pl.B1 / d[:, None], pl.B2 / d[:, None]
+    pl.C1, pl.C2 = pl.C1 * d[None, :], pl.C2 * d[None, :]
+    return pl
+
+
+def _eig_errors(A):
+    """Eigenvalues of A and the backward-error scale eps ||balance(A)||_1 of each.
+
+    (First-order bounds with eigenvalue condition numbers were tried and
+    found far too pessimistic on clustered closed-loop poles.)
+    """
+    if A.shape[0] == 0:
+        return np.zeros(0, complex), np.zeros(0)
+    balanced = la.matrix_balance(A, permute=False)[0]   # what LAPACK's eig works on
+    lam = np.linalg.eigvals(A)
+    return lam, np.full(lam.shape, np.finfo(float).eps * np.linalg.norm(balanced, 1))
+
+
+def _marginal(lam, err):
+    """True where eigenvalues ``lam`` are not clearly in the open left half-plane.
+
+    Judged relative to each eigenvalue's own magnitude (Re >= -tol |lambda|)
+    and to the rounding scale ``err`` (:func:`_eig_errors`) -- never relative to
+    the largest eigenvalue, which flagged stable weight poles 1e10 below the
+    fastest pole as marginal.
+    """
+    lam = np.atleast_1d(lam)
+    return (lam.real >= -_AXIS_REL_TOL * np.abs(lam)) | (np.abs(lam.real) <= _ERR_FACTOR * err)
+
+
 def _peak_gain(A, B, C, D, omega):
     """Largest gain on the grid only (cheap: every gamma trial is checked this way)."""
     if A.shape[0] == 0:
@@ -135,7 +195,13 @@ def _regularization_weight(name, D, rank, reference, weight, option, what):
 
 
 def _regularize(pl, effort_weight, noise_weight, omega):
-    """Add effort outputs / noise inputs when D12 / D21 lose rank."""
+    """Add effort outputs / noise inputs when D12 / D21 lose rank.
+
+    "Rank" is judged against the peak gain of P12 / P21 with a tolerance near
+    sqrt(eps) (``_RANK_TOL``): with 1e-6 a full-rank D12 = 1 beside a weight
+    of DC gain 1e7 was called rank deficient and regularised, although the
+    Riccati equations are well posed up to ratios ~1e-9.
+    """
     n, m2, p2 = pl.A.shape[0], pl.B2.shape[1], pl.C2.shape[0]
     ref12 = max(_peak_gain(pl.A, pl.B2, pl.C1, pl.D12, omega), 1e-300)
     rho_u, note_u = _regularization_weight("D12", pl.D12, m2, ref12, effort_weight,
@@ -155,11 +221,14 @@ def _regularize(pl, effort_weight, noise_weight, omega):
 
 
 def _check_stabilisable(pl, scale):
-    """Raise when an unstable or marginal mode is uncontrollable/unobservable."""
+    """Raise when an unstable or marginal mode is uncontrollable/unobservable.
+
+    Works on the scaled, balanced plant; ``scale`` [rad/s] only converts the
+    reported mode back to ordinary time.
+    """
     n = pl.A.shape[0]
-    for lam in np.linalg.eigvals(pl.A):
-        if lam.real < -_STABLE_TOL * scale:
-            continue
+    eigs, err = _eig_errors(pl.A)
+    for lam in eigs[_marginal(eigs, err)]:
         shifted = pl.A - lam * np.eye(n)
         tol = 1e-9 * max(1.0, np.linalg.norm(pl.A, 1))
         if la.svdvals(np.hstack([shifted, pl.B2]))[-1] <= tol * max(1, np.linalg.norm(pl.B2)):
@@ -195,6 +264,36 @@ def _normalize(pl):
     out.D12 = np.vstack([np.zeros((out.D12.shape[0] - m2, m2)), np.eye(m2)])
     out.D21 = np.hstack([np.zeros((p2, out.D21.shape[1] - p2)), np.eye(p2)])
     return _Normalized(out, Tu, Ty, pl.D22.copy())
+
+
+def _check_axis_zeros(pl, scale):
+    """Raise when P12 or P21 of the normalised plant has a zero on the jw axis.
+
+    With D12 = [0; I] the zeros of P12 are the unobservable modes of
+    (A - B2 C12, C11); with D21 = [0, I] those of P21 the uncontrollable modes
+    of (A - B12 C2, B11).  Such a zero makes the gamma-iteration converge to a
+    controller that cancels it (a closed-loop pole on the axis, infinite norm).
+    """
+    n, m2, p2 = pl.A.shape[0], pl.B2.shape[1], pl.C2.shape[0]
+    if n == 0:
+        return
+    q1, r1 = pl.C1.shape[0] - m2, pl.B1.shape[1] - p2
+    cases = (("P12", pl.A - pl.B2 @ pl.C1[q1:], pl.C1[:q1], False, "the controls u to the "
+              "performance outputs z"),
+             ("P21", pl.A - pl.B1[:, r1:] @ pl.C2, pl.B1[:, :r1], True, "the disturbances w "
+              "to the measurements y"))
+    for name, At, M, transpose, what in cases:
+        size = np.linalg.norm(At, 1)
+        eigs, err = _eig_errors(At)
+        for lam in eigs[_marginal(eigs, err) & _marginal(-eigs, err)]:
+            shifted = At - lam * np.eye(n)
+            stack = np.hstack([shifted, M]) if transpose else np.vstack([shifted, M])
+            if la.svdvals(stack)[-1] <= 1e-8 * max(size, np.linalg.norm(M, 1), 1e-300):
+                raise HinfSynthesisError(
+                    f"{name} (from {what}) has a zero at s = {lam * scale:.4g} rad/s on the "
+                    "imaginary axis, so no H-infinity controller attains a finite optimum "
+                    "(it would cancel that zero); move the weight pole or zero that causes "
+                    "it slightly into the left half-plane")
 
 
 # --- one gamma ---------------------------------------------------------------
@@ -234,18 +333,60 @@ def _riccati(A, B, Q, R, S):
     with np.errstate(divide="ignore", invalid="ignore"):
         lam = alpha / beta
     finite = np.isfinite(lam)
-    scale = max(1.0, np.abs(lam[finite]).max()) if np.any(finite) else 1.0
-    if (np.count_nonzero(finite & (lam.real < 0)) != n
-            or np.any(np.abs(lam[finite].real) <= 1e-10 * scale)):
+    # On the axis: purely oscillatory relative to its own size, or within its
+    # error bound of it.  (A threshold relative to the largest eigenvalue
+    # flagged stable weight poles 1e10 below the fastest one.)
+    lam = lam[finite]
+    err = np.full(lam.shape, _PENCIL_ZERO_TOL * np.linalg.norm(Hc, 1))
+    on_axis = _marginal(lam, err) & _marginal(-lam, err)
+    if np.count_nonzero(lam.real < 0) != n or np.any(on_axis):
         raise la.LinAlgError("Hamiltonian pencil has eigenvalues on the imaginary axis")
     Z11, Z21 = Z[:n, :n], Z[n:, :n]
-    if np.linalg.cond(Z11) > 1e12:
+    if np.linalg.cond(Z11) > 1 / (100 * np.finfo(float).eps):
         raise la.LinAlgError("stable subspace is not a graph (Z11 singular)")
     X = np.linalg.solve(Z11.T, Z21.T).T
-    if np.linalg.norm(X - X.T, 1) > 1e-6 * max(1.0, np.linalg.norm(X, 1)):
-        raise la.LinAlgError("Riccati solution is not symmetric")
-    X = (X + X.T) / 2
+    # symmetrised, refined by Newton steps, then judged by the residual of the
+    # (scaled) equation relative to the size of its terms (an absolute symmetry
+    # test failed on X ~ 0; eigenvalues spread over 1e10 leave errors that made
+    # X or Y spuriously indefinite before refinement)
+    X = _newton_refine(A, B, Q, R, S, (X + X.T) / 2)
+    res, size = _riccati_residual(A, B, Q, R, S, X)
+    if res > _RESIDUAL_TOL * size:
+        raise la.LinAlgError(f"Riccati residual {res / size:.2g} (relative)")
     return X / t[:, None] / t[None, :]
+
+
+def _riccati_residual(A, B, Q, R, S, X):
+    """(||residual||_1, size of the largest term) of the Riccati equation at X."""
+    XBS = X @ B + S
+    quad = XBS @ np.linalg.solve(R, XBS.T)
+    res = A.T @ X + X @ A + Q - quad
+    size = max(np.linalg.norm(A.T @ X, 1), np.linalg.norm(Q, 1), np.linalg.norm(quad, 1),
+               np.finfo(float).tiny)
+    return float(np.linalg.norm(res, 1)), float(size)
+
+
+def _newton_refine(A, B, Q, R, S, X, steps=3):
+    """Kleinman-Newton steps from X: with F = R^-1 (B'X + S') and A_F = A - B F,
+    X+ solves A_F' X+ + X+ A_F + Q + F'RF - SF - F'S' = 0.  A step is kept only
+    while A_F is stable and the residual decreases."""
+    best, (res, _) = X, _riccati_residual(A, B, Q, R, S, X)
+    for _ in range(steps):
+        F = np.linalg.solve(R, B.T @ best + S.T)
+        AF = A - B @ F
+        if np.linalg.eigvals(AF).real.max() >= 0:
+            break
+        rhs = Q + F.T @ R @ F - S @ F - F.T @ S.T
+        try:
+            Xn = la.solve_continuous_lyapunov(AF.T, -(rhs + rhs.T) / 2)
+        except (la.LinAlgError, ValueError):
+            break
+        Xn = (Xn + Xn.T) / 2
+        res_n, _ = _riccati_residual(A, B, Q, R, S, Xn)
+        if not np.isfinite(res_n) or res_n >= res:
+            break
+        best, res = Xn, res_n
+    return best
 
 
 def _central(pl, gamma):
@@ -320,6 +461,20 @@ def _check_grid(A, n_base):
     return np.unique(np.r_[base, extra, extra * 0.999, extra * 1.001])
 
 
+def _spread_hint(A, scale):
+    """A sentence on P's pole spread when it is too wide for double precision."""
+    mags = np.abs(np.linalg.eigvals(A)) * scale if A.shape[0] else np.zeros(0)
+    mags = mags[mags > 0]
+    if mags.size < 2 or mags.max() / mags.min() < _SPREAD_LIMIT:
+        return ("  P12 and P21 have no zeros on the imaginary axis (checked), so either "
+                "gamma_max is too small or the Riccati equations are ill-conditioned.")
+    return (f"  P's poles span {np.log10(mags.max() / mags.min()):.1f} decades "
+            f"({mags.min():.3g} to {mags.max():.3g} rad/s): the Hamiltonian eigenvalues of "
+            "the slowest modes cannot be told from the imaginary axis in double precision, "
+            "so this is not a proof of infeasibility; move the slowest weight pole up or drop "
+            "dynamics far beyond the bandwidth.")
+
+
 # --- the search ----------------------------------------------------------------
 
 def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60, time_budget=30.0,
@@ -364,17 +519,23 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60, time_b
     """
     t0 = time.perf_counter()
     check_lti("P", P)
-    if not P.isctime(strict=True):
-        raise ValueError("P must be a continuous-time system")
+    if P.isdtime(strict=True):
+        raise ValueError(f"P must be a continuous-time system, got a discrete one (dt={P.dt}); "
+                         "convert it first (e.g. control.sample_system's inverse d2c) or "
+                         "design in continuous time")
+    check_proper("P", P)
     P = ct.ss(P)
+    if P.nstates == 0:
+        raise ValueError("P is static (it has no states): there is no dynamic H-infinity "
+                         "problem to solve; the best static gain follows from a constant-"
+                         "matrix LFT, or add the weights' dynamics to P")
     nmeas = check_integer("nmeas", nmeas, minimum=1)
     ncon = check_integer("ncon", ncon, minimum=1)
     if nmeas >= P.noutputs or ncon >= P.ninputs:
         raise ValueError(f"P has {P.noutputs} outputs and {P.ninputs} inputs: too few for "
                          f"nmeas={nmeas}, ncon={ncon} plus performance channels")
     for name, mat in (("A", P.A), ("B", P.B), ("C", P.C), ("D", P.D)):
-        if not np.all(np.isfinite(mat)):
-            raise ValueError(f"P.{name} contains non-finite values")
+        check_finite_array(f"P.{name}", mat)
     gamma_max = check_positive("gamma_max", gamma_max)
     rtol = check_positive("rtol", rtol)
     max_iter = check_integer("max_iter", max_iter, minimum=2)
@@ -383,11 +544,12 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60, time_b
     ws = time_scale_of(P) if time_scale is None else check_positive("time_scale", time_scale)
 
     Ps = to_scaled(P, ws)
-    pl = _Plant.split(Ps, nmeas, ncon)
+    pl = _balance_states(_Plant.split(Ps, nmeas, ncon))
     _check_stabilisable(pl, ws)
     grid = _check_grid(pl.A, 200)
     regularization, rho_u, rho_n = _regularize(pl, effort_weight, noise_weight, grid)
     nz = _normalize(pl)
+    _check_axis_zeros(nz.plant, ws)
     gamma_d = _d11_bound(nz.plant)
     attempts = []
     cache, tried = {}, {}
@@ -398,8 +560,7 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60, time_b
         K, status = _central(nz.plant, gamma)
         if K is not None:
             A, B, C, D = _close_loop(nz.plant, K)
-            poles = np.linalg.eigvals(A)
-            if poles.real.max() >= -_STABLE_TOL:
+            if np.any(_marginal(*_eig_errors(A))):
                 K, status = None, "closed loop unstable (numerical failure)"
             else:
                 peak = _peak_gain(A, B, C, D, _check_grid(A, 150))
@@ -421,8 +582,7 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60, time_b
             raise HinfSynthesisError(
                 f"no gamma <= {min(hi, gamma_max):.3g} is feasible within the budget "
                 f"({len(attempts)} trials, {time.perf_counter() - t0:.1f} s); last outcome: "
-                f"{attempts[-1][1]}.  Check that P12 and P21 have no zeros on the "
-                "imaginary axis and that the weights are stable.")
+                f"{attempts[-1][1]}.{_spread_hint(pl.A, ws)}")
         hi = min(4.0 * hi, gamma_max)
     lo = floor = max(gamma_d, 1e-9 * hi)
     trial = hi / 4.0
@@ -475,11 +635,19 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60, time_b
         Ks = ct.feedback(Ks, static, sign=-1)
     K = from_scaled(balance(Ks), ws, P.output_labels[-nmeas:], P.input_labels[-ncon:], name="K")
     CLs = balance(Ps.lft(balance(Ks), nu=ncon, ny=nmeas))
-    poles = np.linalg.eigvals(CLs.A) * ws if CLs.nstates else np.zeros(0)
-    if poles.size and poles.real.max() >= 0:
-        raise HinfSynthesisError("the controller does not stabilise the unregularised plant")
+    poles_s, err = _eig_errors(np.asarray(CLs.A, float))
+    if np.any(_marginal(poles_s, err)):
+        worst = poles_s[np.argmax(poles_s.real)] * ws
+        raise HinfSynthesisError(
+            "the controller does not stabilise the unregularised plant with a margin "
+            f"(closed-loop pole at {worst:.4g} rad/s)")
+    poles = poles_s * ws
     norm, w_peak = hinf_norm(CLs, omega=_check_grid(CLs.A, 2000)) if CLs.nstates else (
         float(np.linalg.norm(CLs.D, 2)), 0.0)
+    if not np.isfinite(norm) or norm > gamma * (1 + verify_rtol):
+        # never report success for a loop whose recomputed norm exceeds gamma
+        converged = False
+        attempts.append((float(gamma), f"recomputed norm {norm:.4g} on the given plant > gamma"))
     CL = from_scaled(CLs, ws, P.input_labels[:-ncon], P.output_labels[:-nmeas],
                      name="closed_loop")
     return HinfResult(K=K, gamma=float(gamma), gamma_infeasible=float(lo), norm=float(norm),

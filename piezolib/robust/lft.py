@@ -3,7 +3,8 @@
 import control as ct
 import numpy as np
 
-from piezolib._checks import check_finite_array, check_lti, check_positive
+from piezolib._checks import (check_continuous, check_finite_array, check_finite_lti,
+                              check_lti, check_positive)
 from piezolib.robust.lti import balance, from_scaled, time_scale_of, to_scaled
 
 __all__ = ["lower_lft", "lft_response"]
@@ -11,8 +12,10 @@ __all__ = ["lower_lft", "lft_response"]
 
 def _split(P, K):
     """(nmeas, ncon) of the loop of P and K, checked."""
-    check_lti("P", P)
-    check_lti("K", K)
+    for name, sys in (("P", P), ("K", K)):
+        check_lti(name, sys)
+        check_finite_lti(name, sys)
+        check_continuous(name, sys)   # a discrete K used to come back continuous
     nmeas, ncon = K.ninputs, K.noutputs
     if P.noutputs <= nmeas or P.ninputs <= ncon:
         raise ValueError(f"P ({P.noutputs}x{P.ninputs}) is too small for a "
@@ -43,7 +46,9 @@ def lower_lft(P, K, omega_s=None):
     Raises
     ------
     ValueError
-        P has no channels left besides the controller's.
+        P has no channels left besides the controller's, a non-finite
+        coefficient, or a discrete-time P or K (use python-control's
+        ``lft`` on discrete models directly).
     """
     nmeas, ncon = _split(P, K)
     omega_s = time_scale_of(P, K) if omega_s is None else check_positive("omega_s", omega_s)

@@ -14,7 +14,8 @@ import numpy as np
 import scipy.linalg as la
 import scipy.optimize as opt
 
-from piezolib._checks import check_finite_array, check_positive, check_siso, check_lti
+from piezolib._checks import (check_continuous, check_finite_array, check_finite_lti,
+                              check_lti, check_positive, check_proper, check_siso)
 
 __all__ = [
     "frequency_grid", "scaled_coefficients", "scale_time", "balance",
@@ -300,7 +301,7 @@ def hinf_norm(sys, omega=None, rtol=1e-9):
     Parameters
     ----------
     sys : control.LTI
-        Stable continuous-time system.
+        Stable, proper, continuous-time system with finite coefficients.
     omega : array_like, optional
         Search grid [rad/s]; default 1e-2 ... 1e9 rad/s, 4000 points.
     rtol : float, optional
@@ -313,7 +314,9 @@ def hinf_norm(sys, omega=None, rtol=1e-9):
     omega_peak : float
         Frequency of the peak [rad/s]; 0 for a peak at DC.
     """
-    check_lti("sys", sys)
+    check_finite_lti("sys", sys)
+    check_continuous("sys", sys)
+    check_proper("sys", sys)      # an improper sys used to return the top of the grid
     poles = ct.poles(sys)
     if np.any(poles.real >= 0):
         raise ValueError("sys must be stable for a finite H-infinity norm; "

@@ -198,6 +198,11 @@ def mussv(M, blk, omega=None, *, lower=True, restarts=3, iterations=60, tol=1e-1
     rng = np.random.default_rng(seed)
     blk_tuple = tuple(b.blk_row for b in blocks)
     has_real = any(b.is_real for b in blocks)
+    # mu is homogeneous: work on M / c with c the largest |entry| at each
+    # frequency (absurd scales such as 1e300 stay in range), scale back below
+    c = np.abs(arr).max(axis=(1, 2))
+    c = np.where(c > 0, c, 1.0)
+    arr = arr / c[:, None, None]
 
     if has_real:
         upper, d, g, Dl, Dr, G = mixed_upper_bound(arr, blocks)
@@ -216,5 +221,9 @@ def mussv(M, blk, omega=None, *, lower=True, restarts=3, iterations=60, tol=1e-1
     # lower one can exceed the upper one by rounding only (a larger excess
     # would be a bug, and is left visible)
     low = np.where(low <= upper * (1 + 1e-9), np.minimum(low, upper), low)
+    upper, low, Delta = upper * c, low * c, Delta / c[:, None, None]
+    if G is not None:
+        G = G * c[:, None, None]
+        g = g * c[:, None]
     return MuResult(upper=upper, lower=low, d=d, Dl=Dl, Dr=Dr, g=g, G=G, Delta=Delta,
                     omega=omega, blk=blk_tuple)

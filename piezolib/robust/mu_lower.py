@@ -213,7 +213,8 @@ def mixed_lower_bound(M, blocks, upper, *, iterations=60, restarts=3, rng=None):
     (scaled by 1 / upper) and refined coordinate-wise; the complex part uses
     the power iteration.  Without complex blocks only a single 1 x 1 real
     scalar is handled exactly (mu = |m| for real m); other purely real
-    structures get the plain power-iteration bound (often 0).
+    structures use :func:`_real_lower_bound` (a vertex search with one free
+    coordinate).
 
     Parameters
     ----------
@@ -245,8 +246,7 @@ def mixed_lower_bound(M, blocks, upper, *, iterations=60, restarts=3, rng=None):
             lower = np.where(ok, np.abs(m), 0.0)
             Delta = np.where(ok, 1 / np.where(ok, m.real, 1), 0.0)[:, None, None] + 0j
             return lower, Delta
-        v = np.linalg.svd(M)[2][:, 0, :].conj()
-        return _lower_bound(M, blocks, [(v, v)], iterations, rng, restarts, upper)
+        return _real_lower_bound(M, blocks, upper, rng, iterations)
     IR = np.concatenate([np.arange(q)[bi] for _, (bi, _) in real])
     OR = np.concatenate([np.arange(p)[bo] for _, (_, bo) in real])
     IC = np.concatenate([np.arange(q)[bi] for _, (bi, _) in comp])
@@ -335,3 +335,151 @@ def mixed_lower_bound(M, blocks, upper, *, iterations=60, restarts=3, rng=None):
             beta = np.where(beta > 0, beta, 1.0)
         step /= 2
     return lower, Delta
+
+
+_BETA_GRID = 40              # log-spaced trial values of beta per search
+_BETA_SPAN = 1e-4            # the grid covers [1e-4, 1] x upper
+_BISECTIONS = 60
+
+
+def _real_lower_bound(M, blocks, upper, rng, iterations):
+    """Lower bound of mu for purely real (repeated) scalar structures.
+
+    All blocks but one 1 x 1 block j sit at a vertex, delta_b = s_b / beta
+    (s_b = +-1); closing them leaves the scalar loop
+    n_j(beta) = M_jj + M_jo D_o (I - M_oo D_o)^-1 M_oj and
+    det(I - M Delta) = det(I - M_oo D_o) (1 - delta_j n_j(beta)).  So
+    delta_j = 1 / n_j(beta) destabilises with a real delta_j exactly where
+    Im n_j(beta) = 0, and the whole Delta has norm 1 / beta when
+    |n_j(beta)| >= beta.  The largest such beta in (0, upper] is found on a
+    log grid and refined by bisection on the sign of Im n_j, for every free
+    block j and a set of sign vectors s (all vertices for up to four blocks,
+    else the signs of a complex-structure worst case and seeded random
+    ones), followed by single sign flips of the best vertex.  The result is
+    a valid lower bound (its Delta is returned) but not always mu: the
+    worst real perturbation need not have this form, and a complex M may
+    give mu = 0.
+    """
+    nf, p, q = M.shape
+    layout = list(zip(blocks, block_slices(blocks)))
+    nr = len(layout)
+    owner = np.concatenate([np.full(b.size, j) for j, (b, _) in enumerate(layout)])
+    free = [j for j, (b, _) in enumerate(layout) if b.size == 1]
+    lower = np.zeros(nf)
+    Delta = np.zeros((nf, q, p), complex)
+    if p == 1:                         # one 1 x 1 real block: mu = |m| for real m
+        m = M[:, 0, 0]
+        ok = (np.abs(m.imag) <= 1e-12 * np.abs(m)) & (m != 0)
+        lower = np.where(ok, np.abs(m), 0.0)
+        Delta[:, 0, 0] = np.where(ok, 1 / np.where(ok, m.real, 1), 0.0)
+        return lower, Delta
+    scale = np.where(upper > 0, upper, 0.0)
+    if not free or not np.any(scale > 0):
+        return lower, Delta
+    if nr <= 4:
+        signs = np.array(np.meshgrid(*[[1.0, -1.0]] * nr)).reshape(nr, -1).T
+        signs = np.repeat(signs[:, None, :], nf, axis=1)
+    else:
+        # signs of the worst complex-scalar perturbation, then random vertices
+        cplx = tuple(type(b).scalar(b.size) for b, _ in layout)
+        v = np.linalg.svd(M)[2][:, 0, :].conj()
+        _, Dc = _lower_bound(M, cplx, [(v, v)], iterations, rng, 0, np.zeros(nf))
+        first = np.array([Dc[:, sl[0].start, sl[1].start].real for _, sl in layout]).T
+        first = np.where(first >= 0, 1.0, -1.0)
+        rand = np.where(rng.standard_normal((11, nf, nr)) >= 0, 1.0, -1.0)
+        signs = np.concatenate([first[None], -first[None], rand])
+    best_s = np.ones((nf, nr))
+
+    def search(sign_sets):
+        """Try every sign vector of sign_sets (ns, nf, nr) with every free block."""
+        for j in free:
+            val, D = _free_coordinate(M, layout, owner, j, sign_sets, scale)
+            k = np.argmax(val, axis=0)
+            v = val[k, np.arange(nf)]
+            better = v > lower
+            lower[better] = v[better]
+            Delta[better] = D[k[better], np.nonzero(better)[0]]
+            best_s[better] = sign_sets[k[better], np.nonzero(better)[0]]
+
+    search(signs)
+    for _ in range(2):                 # single sign flips of the best vertex
+        flips = np.repeat(best_s[None], nr, axis=0)
+        flips[np.arange(nr), :, np.arange(nr)] *= -1
+        search(flips)
+    return lower, Delta
+
+
+def _free_coordinate(M, layout, owner, j, signs, scale):
+    """Largest beta in (0, scale] with a real destabilising delta_j (see _real_lower_bound).
+
+    Returns the bound (ns, nf) (0 where none is found) and Delta (ns, nf, q, p).
+    """
+    ns, nf, nr = signs.shape
+    p = M.shape[1]
+    bj, (ij, oj) = layout[j]
+    rows_j, cols_j = oj.start, ij.start               # M's output / input of block j
+    others = np.nonzero(owner != j)[0]
+    Mb = np.broadcast_to(M, (ns, nf, p, p))
+    s_el = signs[..., owner[others]]                  # (ns, nf, n_o) sign per element
+    Moo = Mb[..., others[:, None], others[None, :]]
+    Moj = Mb[..., others, cols_j]
+    Mjo = Mb[..., rows_j, others]
+    mjj = Mb[..., rows_j, cols_j]
+    eye = np.eye(len(others))
+
+    def loop(beta):
+        """n_j(beta), shape beta.shape; beta (ns, nf, ...) broadcast over trailing axes."""
+        extra = beta.ndim - 2
+        exp = (Ellipsis,) + (None,) * extra
+        d = s_el[(slice(None), slice(None)) + (None,) * extra] / beta[..., None]
+        X = eye - _expand(Moo, extra) * d[..., None, :]
+        sol = np.linalg.solve(X, _expand(Moj, extra)[..., None])[..., 0]
+        return mjj[exp] + np.einsum("...i,...i->...", _expand(Mjo, extra), d * sol)
+
+    unit = np.where(scale > 0, scale, 1.0)          # rows with scale 0 are dropped below
+    grid = unit[None, :, None] * np.logspace(np.log10(_BETA_SPAN), 0, _BETA_GRID)
+    grid = np.broadcast_to(grid, (ns, nf, _BETA_GRID))
+    with np.errstate(all="ignore"):
+        n = loop(grid)
+    # complex mode: bisect on the sign of Im n_j; real mode (n_j real on the
+    # whole grid, e.g. a real M): bisect on the sign of |n_j| - beta
+    real_mode = np.all(np.abs(n.imag) <= 1e-10 * np.abs(n), axis=-1)
+    h = np.where(real_mode[..., None], np.sign(np.abs(n) - grid), np.sign(n.imag))
+    feasible = np.abs(n) >= grid
+    change = np.where(real_mode[..., None], (h[..., :-1] > 0) & (h[..., 1:] < 0),
+                      (h[..., :-1] * h[..., 1:] < 0) & (feasible[..., :-1] | feasible[..., 1:]))
+    # the highest sign change on the grid
+    has = change.any(axis=-1) & (scale > 0)[None, :]
+    top = _BETA_GRID - 2 - np.argmax(change[..., ::-1], axis=-1)
+    lo = np.log(np.take_along_axis(grid, top[..., None], -1)[..., 0])
+    hi = np.log(np.take_along_axis(grid, top[..., None] + 1, -1)[..., 0])
+    at_top = real_mode & (h[..., -1] >= 0) & (scale > 0)[None, :]   # feasible at beta = upper
+    lo = np.where(at_top, np.log(grid[..., -1]), lo)
+    hi = np.where(at_top, lo, hi)
+    has = has | at_top
+    h_lo = np.where(at_top, 1.0, np.take_along_axis(h, top[..., None], -1)[..., 0])
+    for _ in range(_BISECTIONS):
+        mid = 0.5 * (lo + hi)
+        with np.errstate(all="ignore"):
+            nm = loop(np.exp(mid))
+        hm = np.where(real_mode, np.sign(np.abs(nm) - np.exp(mid)), np.sign(nm.imag))
+        same = hm == h_lo
+        lo, hi = np.where(same, mid, lo), np.where(same, hi, mid)
+    beta = np.exp(np.where(np.abs(h_lo) > 0, lo, hi))
+    with np.errstate(all="ignore"):
+        n_root = loop(beta)
+    dj = 1 / n_root.real
+    ok = (has & np.isfinite(dj) & (np.abs(n_root.imag) <= 1e-9 * np.abs(n_root))
+          & (np.abs(dj) * beta <= 1 + 1e-12))
+    q = M.shape[2]
+    D = np.zeros((ns, nf, q, p), complex)
+    delta = signs[..., owner] / np.where(ok, beta, 1.0)[..., None]
+    delta[..., cols_j] = np.where(ok, dj, 0.0)
+    idx = np.arange(p)
+    D[..., idx, idx] = np.where(ok[..., None], delta, 0.0)
+    return np.where(ok, beta, 0.0), D
+
+
+def _expand(a, extra):
+    """Insert ``extra`` axes after the two leading (sign set, frequency) axes."""
+    return a[(slice(None), slice(None)) + (None,) * extra]

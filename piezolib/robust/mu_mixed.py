@@ -7,7 +7,8 @@ entry point.
 
 import numpy as np
 
-from piezolib.robust.blocks import block_slices
+from piezolib.robust.blocks import Block, block_slices
+from piezolib.robust.mu_upper import balancing_logs, complex_upper_bound
 
 __all__ = ["mixed_upper_bound"]
 
@@ -57,7 +58,10 @@ def mixed_upper_bound(M, blocks):
 
     Non-square full blocks are padded to square ones (this changes neither mu
     nor the bound); repeated scalars are relaxed to independent 1 x 1 ones
-    (a valid, possibly conservative bound).  Every frequency starts cold.
+    (a valid, possibly conservative bound).  Every frequency starts cold,
+    from an Osborne-balanced matrix (scaling ratios up to about 1e30); where
+    the complex D-scaled bound (real blocks taken as complex, G = 0) is
+    lower, or AB13MD fails, that bound and its scalings are returned.
 
     Parameters
     ----------
@@ -81,15 +85,35 @@ def mixed_upper_bound(M, blocks):
 
     nf, p, q = M.shape
     Mp, nblock, itype, rows, cols = _pad_square(M, blocks)
+    n = Mp.shape[1]
+    # Osborne pre-balancing on the padded structure (one unit per padded
+    # block): AB13MD then starts from a well-scaled matrix, and the scalings
+    # map back as D = D_ab D0, G = G_ab D0^2 (all diagonal)
+    padded = tuple(Block.full(int(m), int(m)) if t == 2 else Block.scalar(1, real=True)
+                   for m, t in zip(nblock, itype))
+    x0 = balancing_logs(Mp, padded)[0]
+    Mb = np.exp(x0)[:, :, None] * Mp * np.exp(-x0)[:, None, :]
     upper = np.zeros(nf)
-    dpad = np.ones((nf, Mp.shape[1]))
-    gpad = np.zeros((nf, Mp.shape[1]))
+    dpad = np.ones((nf, n))
+    gpad = np.zeros((nf, n))
     for k in range(nf):
-        if not np.any(Mp[k]):
+        if not np.any(Mb[k]):
             continue
         # always a cold start: warm starts (x from the previous frequency)
         # were seen to make AB13MD iterate without end
-        upper[k], dpad[k], gpad[k], _ = ab13md(Mp[k], nblock, itype)
+        try:
+            upper[k], dpad[k], gpad[k], _ = ab13md(Mb[k], nblock, itype)
+        except Exception:            # AB13MD's own failure: the complex bound below stands
+            upper[k] = np.inf
+    dpad, gpad = dpad * np.exp(x0), gpad * np.exp(2 * x0)
+    # a complex D-scaled bound also bounds mu (real blocks are a subset of
+    # complex ones, G = 0); it rescues frequencies where AB13MD stalls
+    cplx = tuple(Block.full(1, 1) if t == 1 else b for b, t in zip(padded, itype))
+    cu, _, cDl, _ = complex_upper_bound(Mp, cplx)
+    use_c = cu < upper
+    upper = np.where(use_c, cu, upper)
+    dpad[use_c] = np.abs(np.diagonal(cDl[use_c], axis1=1, axis2=2))
+    gpad[use_c] = 0.0
     if Mp.shape[1] == 1 and itype[0] == 1:
         # AB13MD returns 0 for a 1 x 1 real problem; mu is |m| if m is real
         m = Mp[:, 0, 0]

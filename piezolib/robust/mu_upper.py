@@ -10,15 +10,106 @@ import numpy as np
 
 from piezolib.robust.blocks import block_slices
 
-__all__ = ["complex_upper_bound"]
+__all__ = ["complex_upper_bound", "balancing_logs"]
 
 # continuation of the smoothing exponent t of the log-Schatten-t surrogate
-_T_SCHEDULE = (2.0, 8.0, 32.0, 128.0, 512.0, 2048.0, 8192.0, 32768.0, 131072.0)
-_NEWTON_ITERATIONS = 12           # per smoothing level (most stop after 2-4)
+_T_SCHEDULE = (2.0, 8.0, 32.0, 128.0, 512.0, 2048.0, 8192.0, 32768.0, 131072.0, 524288.0,
+               2097152.0, 8388608.0)
+_NEWTON_ITERATIONS = 40           # per smoothing level (most stop after 2-4)
 _STEP_FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125, 1 / 16, 1 / 64, 1 / 256])
 _MAX_STEP = 4.0                   # [log units] per Newton step
-_MAX_LOG_SCALE = 40.0             # |log d| bound: d ratios up to e^40 ~ 2e17
+_MAX_LOG_SCALE = 200.0            # |log d| bound relative to the balanced start
+_OSBORNE_SWEEPS = 60
+_OSBORNE_REG = 2 * np.log(1e-30)  # log of the relative floor on block norms (ratios to 1e30)
 
+
+
+def _units(blocks, elementwise):
+    """Balancing units: (outputs, inputs) index arrays that share one scale.
+
+    A full block (or 1 x 1 scalar) is one unit; with ``elementwise`` every
+    element of a repeated scalar is its own unit (its D-scale may be any
+    invertible matrix, so in particular any diagonal one).
+    """
+    out, n_in, n_out = [], 0, 0
+    for b in blocks:
+        if b.repeated and b.size > 1 and elementwise:
+            for j in range(b.size):
+                out.append((np.array([n_out + j]), np.array([n_in + j])))
+        else:
+            out.append((np.arange(n_out, n_out + b.cols), np.arange(n_in, n_in + b.rows)))
+        n_in, n_out = n_in + b.rows, n_out + b.cols
+    return out
+
+
+def balancing_logs(M, blocks, elementwise=True):
+    """Osborne balancing of the block norms of M: a start for the D-scaling.
+
+    Minimises the Frobenius norm of D_l M D_r^-1 over scalings that are
+    constant on each balancing unit (a full block; each element of a
+    repeated scalar when ``elementwise``), by Osborne's sweeps on the matrix
+    of squared block norms, in logarithms, batched over frequency.  Block
+    norms below 1e-30 times the largest are floored there, so scaling ratios
+    up to about 1e30 are reached and reducible matrices stay finite.
+
+    Parameters
+    ----------
+    M : ndarray, shape (nf, p, q)
+    blocks : tuple of Block
+        Structure fitting M.
+    elementwise : bool, optional
+        Scale the elements of repeated scalars independently.
+
+    Returns
+    -------
+    xl : ndarray, shape (nf, p)
+        log of the scale of each output (row of M).
+    xr : ndarray, shape (nf, q)
+        log of the scale of each input (column of M).
+    """
+    nf, p, q = M.shape
+    units = _units(blocks, elementwise)
+    nu = len(units)
+    Pout = np.zeros((p, nu))
+    Pin = np.zeros((q, nu))
+    for u, (o, i) in enumerate(units):
+        Pout[o, u] = 1.0
+        Pin[i, u] = 1.0
+    if nu < 2:
+        return np.zeros((nf, p)), np.zeros((nf, q))
+    B2 = np.einsum("pu,npq,qv->nuv", Pout, np.abs(M) ** 2, Pin)
+    B2[:, np.arange(nu), np.arange(nu)] = 0.0
+    total = B2.sum(axis=(1, 2))
+    with np.errstate(divide="ignore"):
+        logB = np.log(B2)                              # -inf for zero blocks
+        floor = np.where(total > 0, np.log(np.where(total > 0, total, 1)), 0.0) + _OSBORNE_REG
+    x = np.zeros((nf, nu))
+    for _ in range(_OSBORNE_SWEEPS):
+        largest = np.zeros(nf)
+        for u in range(nu):
+            # log of row and column sums of the scaled squared norms (u's own entry excluded)
+            row = np.logaddexp(_logsumexp(logB[:, u, :] - 2 * x, u), floor - 2 * x[:, u]) + 2 * x[:, u]
+            col = np.logaddexp(_logsumexp(logB[:, :, u] + 2 * x, u), floor + 2 * x[:, u]) - 2 * x[:, u]
+            step = (col - row) / 4
+            x[:, u] += step
+            largest = np.maximum(largest, np.abs(step))
+        if largest.max() < 1e-4:
+            break
+    x -= x[:, -1:]
+    xl, xr = np.zeros((nf, p)), np.zeros((nf, q))
+    for u, (o, i) in enumerate(units):
+        xl[:, o] = x[:, u:u + 1]
+        xr[:, i] = x[:, u:u + 1]
+    return xl, xr
+
+
+def _logsumexp(a, skip):
+    """log sum exp over the last axis, leaving out entry ``skip``."""
+    a = np.delete(a, skip, axis=-1)
+    m = np.max(a, axis=-1)
+    m = np.where(np.isfinite(m), m, 0.0)
+    with np.errstate(divide="ignore"):
+        return m + np.log(np.sum(np.exp(a - m[:, None]), axis=-1))
 
 
 class _Scaling:
@@ -307,6 +398,10 @@ def _complex_upper(M, blocks, tol):
 def complex_upper_bound(M, blocks, tol=1e-12):
     """D-scaled upper bound of mu for a structure without real blocks.
 
+    The D-scaling starts from Osborne balancing (:func:`balancing_logs`,
+    which reaches scaling ratios far beyond what the Newton steps could
+    travel) and is refined by Newton steps on the smooth surrogate.
+
     Parameters
     ----------
     M : ndarray, shape (nf, p, q)
@@ -327,13 +422,28 @@ def complex_upper_bound(M, blocks, tol=1e-12):
     Dl, Dr : ndarray, shapes (nf, p, p) and (nf, q, q)
         The scalings (real when every block has a scalar scaling).
     """
-    upper, theta, scaling = _complex_upper(M, blocks, tol)
+    nf, p, q = M.shape
+    xl0, xr0 = balancing_logs(M, blocks)
+    M0 = np.exp(xl0)[:, :, None] * M * np.exp(-xr0)[:, None, :]
+    upper, theta, scaling = _complex_upper(M0, blocks, tol)
     Dl, Dr, _, _ = scaling.matrices(theta)
-    d = np.full((M.shape[0], len(blocks)), np.nan)
-    xl, _ = scaling.diag_logs(theta)
-    for i, b in enumerate(blocks):
-        if b.scalar_scaling:
-            d[:, i] = np.exp(xl[:, scaling.slots[i][1].start])
+    Dl = Dl * np.exp(xl0)[:, None, :]            # D = D_theta @ diag(exp(x0))
+    Dr = Dr * np.exp(xr0)[:, None, :]
+    # the unscaled matrix (D = I) is a candidate too
+    plain = np.linalg.svd(M, compute_uv=False)[:, 0]
+    use_plain = plain < upper
+    upper = np.where(use_plain, plain, upper)
+    Dl[use_plain] = np.eye(p)
+    Dr[use_plain] = np.eye(q)
+    d = np.full((nf, len(blocks)), np.nan)
+    ref = scaling.reference
+    if ref is not None:
+        diag_l = np.abs(np.diagonal(Dl, axis1=1, axis2=2))
+        ref_scale = diag_l[:, scaling.slots[ref][1].start]
+        Dl, Dr = Dl / ref_scale[:, None, None], Dr / ref_scale[:, None, None]
+        for i, b in enumerate(blocks):
+            if b.scalar_scaling:
+                d[:, i] = diag_l[:, scaling.slots[i][1].start] / ref_scale
     if scaling.diagonal:
         Dl, Dr = Dl.real, Dr.real
     return upper, d, Dl, Dr

@@ -22,14 +22,17 @@ from piezolib.hysteresis.dahl import DahlModel
 from piezolib.hysteresis.measure import hysteresis_measure
 from piezolib.metrics import improvement_percent
 from piezolib.problem.hysteresis import workbook_dahl_fit
-from piezolib.workbook.loop import DISCARD_PERIODS, discrete_controller, run_loop
+from piezolib.robust.export import SOSController
+from piezolib.workbook.loop import (COMPUTATION_DELAY_SAMPLES, DISCARD_PERIODS,
+                                    discrete_controller, run_loop)
 
 __all__ = ["table4_reference", "table4_measure",
            "CASES", "MIN_MEASURED_S", "run_case", "case_table", "ExperimentResult",
            "hysteresis_test", "tracking_periods", "tracking_reference", "tracking_test"]
 
 
-def table4_reference(amplitude_V, periods=3, frequency_hz=None, fs=paper.SAMPLING_FREQUENCY_HZ):
+def table4_reference(amplitude_V, periods=3, frequency_hz=None, fs=paper.SAMPLING_FREQUENCY_HZ,
+                     amplifier_gain=paper.AMPLIFIER_GAIN):
     """Reference of the Table 4 experiments for one actuator amplitude.
 
     A triangle from 0 to ``amplitude_V / AMPLIFIER_GAIN`` [V] at 10 Hz: the
@@ -44,7 +47,10 @@ def table4_reference(amplitude_V, periods=3, frequency_hz=None, fs=paper.SAMPLIN
     periods : int, optional
         Number of periods.
     frequency_hz, fs : float, optional
-        Triangle frequency (default 10 Hz) and sampling rate [Hz].
+        Triangle frequency (default 10 Hz) and sampling rate [Hz] (default
+        the paper's 10 kHz).
+    amplifier_gain : float, optional
+        Actuator volts per amplifier-input volt (default the paper's 10).
 
     Returns
     -------
@@ -54,12 +60,14 @@ def table4_reference(amplitude_V, periods=3, frequency_hz=None, fs=paper.SAMPLIN
         Reference [V].
     """
     amplitude_V = check_positive("amplitude_V", amplitude_V)
+    gain = check_positive("amplifier_gain", amplifier_gain)
     f = paper.HYSTERESIS_TEST["frequency_Hz"] if frequency_hz is None else frequency_hz
-    return signals.triangle(amplitude_V / paper.AMPLIFIER_GAIN, f, periods=periods, fs=fs)
+    return signals.triangle(amplitude_V / gain, f, periods=periods, fs=fs)
 
 
 def table4_measure(reference_V, v_y_V, discard_periods=1, frequency_hz=None,
-                   fs=paper.SAMPLING_FREQUENCY_HZ):
+                   fs=paper.SAMPLING_FREQUENCY_HZ, amplifier_gain=paper.AMPLIFIER_GAIN,
+                   um_per_volt=paper.UM_PER_VOLT):
     """Hysteresis of one Table 4 loop, measured the same way in every case.
 
     The loop is the measured displacement x = 3 um/V * v_y [um] against the
@@ -78,7 +86,12 @@ def table4_measure(reference_V, v_y_V, discard_periods=1, frequency_hz=None,
         Measured sensor output [V], same length.
     discard_periods : int, optional
     frequency_hz, fs : float, optional
-        Triangle frequency (default 10 Hz) and sampling rate [Hz].
+        Triangle frequency (default 10 Hz) and sampling rate [Hz] (default
+        the paper's 10 kHz).
+    amplifier_gain : float, optional
+        Actuator volts per reference volt (default the paper's 10).
+    um_per_volt : float, optional
+        Sensor scale [um/V] (default the paper's 3).
 
     Returns
     -------
@@ -94,8 +107,9 @@ def table4_measure(reference_V, v_y_V, discard_periods=1, frequency_hz=None,
     if start >= reference_V.size - 8:
         raise ValueError(f"discarding {discard_periods} period(s) leaves no record "
                          f"({reference_V.size} samples)")
-    return hysteresis_measure(paper.AMPLIFIER_GAIN * reference_V[start:],
-                              paper.UM_PER_VOLT * v_y_V[start:])
+    gain = check_positive("amplifier_gain", amplifier_gain)
+    scale = check_positive("um_per_volt", um_per_volt)
+    return hysteresis_measure(gain * reference_V[start:], scale * v_y_V[start:])
 
 
 # --------------------------------------------------------------------------- the cases
@@ -110,7 +124,8 @@ CASES = {
 MIN_MEASURED_S = 0.1
 
 
-def run_case(case, stage, v_r, dahl, controller=None, case_I_gain=None):
+def run_case(case, stage, v_r, dahl, controller=None, case_I_gain=None,
+             delay_samples=COMPUTATION_DELAY_SAMPLES):
     """Run Case I, II or III of Sec. V on one reference.
 
     Parameters
@@ -128,6 +143,9 @@ def run_case(case, stage, v_r, dahl, controller=None, case_I_gain=None):
     case_I_gain : float, optional
         g of Case I, applied without offset (u_c = v_r / g); default: the
         static part of the Dahl model, u_c = (v_r - x0) / g_a.
+    delay_samples : int
+        Computation delay of the feedback [samples] (Case III; default 1,
+        :data:`piezolib.workbook.loop.COMPUTATION_DELAY_SAMPLES`).
 
     Returns
     -------
@@ -147,7 +165,8 @@ def run_case(case, stage, v_r, dahl, controller=None, case_I_gain=None):
         return run_loop(stage, v_r, feedforward=dahl)
     if controller is None:
         raise ValueError("case III needs a controller")
-    return run_loop(stage, v_r, feedforward=dahl, controller=controller)
+    return run_loop(stage, v_r, feedforward=dahl, controller=controller,
+                    delay_samples=delay_samples)
 
 
 def case_table(case_values, columns):
@@ -257,6 +276,8 @@ def _positive_values(name, values, default):
 def _case_III_controller(controller, stage):
     if controller is None:
         raise ValueError("controller must be given (Case III)")
+    if isinstance(controller, SOSController):
+        return controller
     return discrete_controller(controller, stage.fs)
 
 
@@ -275,7 +296,7 @@ def _experiment(columns, run, measure):
 
 
 def hysteresis_test(stage, dahl, controller, amplitudes_V=None, periods=4,
-                    discard_periods=DISCARD_PERIODS):
+                    discard_periods=DISCARD_PERIODS, delay_samples=COMPUTATION_DELAY_SAMPLES):
     """Table 4: hysteresis % of 10 Hz triangles, Cases I-III.
 
     The reference of each amplitude A is :func:`table4_reference` (0 ...
@@ -289,11 +310,13 @@ def hysteresis_test(stage, dahl, controller, amplitudes_V=None, periods=4,
     stage : piezolib.problem.stage.VirtualStage
     dahl : DahlModel or None
         None: the workbook's shared model (:func:`run_case`).
-    controller : see :func:`piezolib.workbook.loop.discrete_controller`
-        Case III's feedback (not None).
+    controller : see :func:`piezolib.workbook.loop.run_loop`
+        Case III's feedback (not None); an exported SOSController runs in float32.
     amplitudes_V : sequence of float, optional
         Actuator amplitudes [V]; default 10, 20, 30, 40 V.
     periods, discard_periods : int
+    delay_samples : int
+        Computation delay of Case III's feedback [samples] (default 1).
 
     Returns
     -------
@@ -306,7 +329,7 @@ def hysteresis_test(stage, dahl, controller, amplitudes_V=None, periods=4,
 
     def run(case, A):
         v_r = _table4_triangle(A, periods, stage.fs)[1]
-        return run_case(case, stage, v_r, dahl, Kd, case_I_gain=1.0)
+        return run_case(case, stage, v_r, dahl, Kd, case_I_gain=1.0, delay_samples=delay_samples)
 
     def measure(result, A):
         return table4_measure(result.v_r_V, result.v_y_V, discard_periods=discard_periods,
@@ -316,7 +339,8 @@ def hysteresis_test(stage, dahl, controller, amplitudes_V=None, periods=4,
 
 
 def tracking_test(stage, dahl, controller, frequencies_Hz=None, amplitude_um=None,
-                  discard_periods=DISCARD_PERIODS, min_measured_s=MIN_MEASURED_S):
+                  discard_periods=DISCARD_PERIODS, min_measured_s=MIN_MEASURED_S,
+                  delay_samples=COMPUTATION_DELAY_SAMPLES):
     """Table 5: tracking error % of 12 um triangles, Cases I-III.
 
     Each frequency runs :func:`tracking_periods` periods of
@@ -330,8 +354,8 @@ def tracking_test(stage, dahl, controller, frequencies_Hz=None, amplitude_um=Non
     stage : piezolib.problem.stage.VirtualStage
     dahl : DahlModel or None
         None: the workbook's shared model (:func:`run_case`).
-    controller : see :func:`piezolib.workbook.loop.discrete_controller`
-        Case III's feedback (not None).
+    controller : see :func:`piezolib.workbook.loop.run_loop`
+        Case III's feedback (not None); an exported SOSController runs in float32.
     frequencies_Hz : sequence of float, optional
         Default 1, 10, 20, 30, 40, 50 Hz.
     amplitude_um : float, optional
@@ -339,6 +363,8 @@ def tracking_test(stage, dahl, controller, frequencies_Hz=None, amplitude_um=Non
     discard_periods : int
     min_measured_s : float
         [s]
+    delay_samples : int
+        Computation delay of Case III's feedback [samples] (default 1).
 
     Returns
     -------
@@ -353,7 +379,7 @@ def tracking_test(stage, dahl, controller, frequencies_Hz=None, amplitude_um=Non
     def run(case, f):
         periods = tracking_periods(f, discard_periods, min_measured_s)
         v_r = tracking_reference(f, periods, amplitude_um, stage.fs)[1]
-        return run_case(case, stage, v_r, dahl, Kd)
+        return run_case(case, stage, v_r, dahl, Kd, delay_samples=delay_samples)
 
     def measure(result, f):
         return result.tracking_error_percent(f, discard_periods, range_um=amplitude_um)

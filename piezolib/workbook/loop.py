@@ -1,8 +1,10 @@
 """The 10 kHz control loop of Fig. 1 on the virtual stage.
 
-u_c[k] = u_f[k] + u_b[k]: the feedforward u_f of the whole reference first,
-then the discrete controller on v_e[k] = v_r[k] - v_y[k] sample by sample,
-each u_c held for one DAQ period.  Timing, signal flow and start-up are
+u_c[k] = u_f[k] + u_b[k - d]: the feedforward u_f of the whole reference
+first, then the discrete controller on v_e[k] = v_r[k] - v_y[k] sample by
+sample, its output applied ``d`` samples later (the computation delay,
+default :data:`COMPUTATION_DELAY_SAMPLES` = 1), each u_c held for one DAQ
+period.  Timing, signal flow and start-up are
 described in ``docs/design.md``; the experiments of Sec. V (Cases I-III,
 Tables 4-5) are in :mod:`piezolib.workbook.experiments`.
 """
@@ -20,8 +22,17 @@ from piezolib.hysteresis.compensator import feedforward as dahl_feedforward
 from piezolib.hysteresis.dahl import DahlModel
 from piezolib.metrics import tracking_error_percent
 from piezolib.robust.discrete import DiscreteController, discretize
+from piezolib.robust.export import SectionFilter, SOSController
 
-__all__ = ["LoopResult", "discrete_controller", "run_loop", "DISCARD_PERIODS"]
+__all__ = ["LoopResult", "discrete_controller", "run_loop", "DISCARD_PERIODS",
+           "COMPUTATION_DELAY_SAMPLES"]
+
+#: Whole samples between reading v_y[k] and applying the u_b computed from it.
+#: A real-time loop reads the ADC at tick k, computes u_b, and can write the
+#: DAC at tick k + 1 at the earliest (the DAC update of tick k has already
+#: happened when the computation ends), so the loop's own delay is one sample;
+#: 0 reproduces the idealised loop that applies u_b[k] at once.
+COMPUTATION_DELAY_SAMPLES = 1
 
 #: Periods left out before measuring: the loop starts from rest and its
 #: start-up lasts into the second period (the first lower reversal of the
@@ -104,8 +115,11 @@ class LoopResult:
         What the stage applied (``u_c_V`` as the DAC produced it) and measured.
     feedforward : str
         Description of the feedforward path.
-    controller : control.StateSpace or None
+    controller : control.StateSpace, SOSController or None
         The discrete controller used.
+    delay_samples : int
+        Computation delay of the run [samples]: u_b_V[k] reached the DAC at
+        tick k + delay_samples.
     """
 
     v_r_V: np.ndarray
@@ -114,6 +128,7 @@ class LoopResult:
     record: object
     feedforward: str
     controller: object = field(default=None, repr=False)
+    delay_samples: int = COMPUTATION_DELAY_SAMPLES
 
     def __len__(self):
         return len(self.v_r_V)
@@ -125,8 +140,10 @@ class LoopResult:
 
     @property
     def u_c_requested_V(self):
-        """u_f + u_b as computed, before the DAC limits and quantises it [V]."""
-        return self.u_f_V + self.u_b_V
+        """u_f[k] + u_b[k - delay_samples] as sent to the DAC, before it limits and quantises [V]."""
+        d = self.delay_samples
+        applied = np.r_[np.zeros(d), self.u_b_V[:len(self.u_b_V) - d]] if d else self.u_b_V
+        return self.u_f_V + applied
 
     @property
     def v_y_V(self):
@@ -198,7 +215,8 @@ def _feedforward_signal(feedforward, v_r):
                     f"got {type(feedforward).__name__}")
 
 
-def run_loop(stage, v_r, *, feedforward=None, controller=None):
+def run_loop(stage, v_r, *, feedforward=None, controller=None,
+             delay_samples=COMPUTATION_DELAY_SAMPLES, sections_dtype="float32"):
     """Run the loop of Fig. 1 on a stage at its sample rate.
 
     Parameters
@@ -215,9 +233,18 @@ def run_loop(stage, v_r, *, feedforward=None, controller=None):
         (v = u_c, x = v_y, both in V): u_f = (x_r - x0 + H(x_r)) / g_a
         (eq. 14, x0 = the model's offset) with x_r = v_r in sensor volts,
         H from the model's start state.
-    controller : None, float, control.LTI or DiscreteController
+    controller : None, float, control.LTI, DiscreteController or SOSController
         Feedback K on v_e = v_r - v_y (see :func:`discrete_controller`);
-        ``None`` runs open loop.
+        ``None`` runs open loop.  An exported
+        :class:`~piezolib.robust.export.SOSController` (its ``fs`` must be
+        the stage's) runs through the reference section filter in
+        ``sections_dtype`` arithmetic: what a real-time target would run.
+    delay_samples : int
+        Computation delay d >= 0 [samples]: u_b computed from v_y[k] reaches
+        the DAC at tick k + d (u_b = 0 before).  The feedforward, computed
+        ahead from the reference, is not delayed.
+    sections_dtype : {'float32', 'float64'}
+        Arithmetic of an SOSController.
 
     Returns
     -------
@@ -233,32 +260,58 @@ def run_loop(stage, v_r, *, feedforward=None, controller=None):
     if not isinstance(stage, VirtualStage):
         raise TypeError(f"stage must be a VirtualStage, got {type(stage).__name__}")
     v_r = check_finite_array("v_r", v_r, ndim=1, min_length=2)
+    delay = check_integer("delay_samples", delay_samples, minimum=0)
     u_f, ff_text = _feedforward_signal(feedforward, v_r)
+    if isinstance(controller, SOSController):
+        if not math.isclose(controller.fs, stage.fs, rel_tol=1e-9):
+            raise ValueError(f"controller sections run at {controller.fs:g} Hz, the stage at "
+                             f"{stage.fs:g} Hz")
+        filt = SectionFilter(controller, sections_dtype)
+        u_b, record = _closed_loop(stage, v_r, u_f, filt.step, delay)
+        return LoopResult(v_r, u_f, u_b, record, ff_text, controller, delay)
     Kd = discrete_controller(controller, stage.fs)
     if Kd is None:
         record = stage.run(u_f)
-        return LoopResult(v_r, u_f, np.zeros_like(v_r), record, ff_text, None)
-    u_b, record = _closed_loop(stage, v_r, u_f, _augmented(Kd))
-    return LoopResult(v_r, u_f, u_b, record, ff_text, Kd)
+        return LoopResult(v_r, u_f, np.zeros_like(v_r), record, ff_text, None, delay)
+    u_b, record = _closed_loop(stage, v_r, u_f, _state_space_step(Kd), delay)
+    return LoopResult(v_r, u_f, u_b, record, ff_text, Kd, delay)
 
 
-def _closed_loop(stage, v_r, u_f, M):
-    """Sample-by-sample loop; returns (u_b, StageRecord)."""
+def _state_space_step(Kd):
+    """One-sample step function x -> u_b of the discrete state-space controller."""
+    M = _augmented(Kd)
     n = M.shape[0] - 1
+    w = np.zeros(n + 1)
+
+    def step(e):
+        nonlocal w
+        w[n] = e
+        w = M @ w
+        return float(w[n])
+    return step
+
+
+def _closed_loop(stage, v_r, u_f, controller_step, delay):
+    """Sample-by-sample loop with ``delay`` samples of computation delay; (u_b, StageRecord).
+
+    ``u_b[k]`` is the controller output computed at tick k; the DAC receives
+    u_f[k] + u_b[k - delay].
+    """
     sim = stage.start()
     step = sim.step
-    w = np.zeros(n + 1)
     u_b = np.empty(len(v_r))
+    pending = [0.0] * delay          # outputs computed but not yet applied, oldest first
     v_y = sim.v_y_V
     for k, (r, f) in enumerate(zip(v_r.tolist(), u_f.tolist())):
-        w[n] = r - v_y
-        w = M @ w
-        ub = float(w[n])
+        ub = controller_step(r - v_y)
         # the DAC limits any finite request, so only a growing controller
         # state can get here; stop long before it overflows (NaN fails too)
         if not abs(ub) < _DIVERGED_V:
             raise ValueError(f"the controller output diverged at sample {k} "
                              f"(t = {k / stage.fs:.4f} s): is the closed loop stable?")
         u_b[k] = ub
+        if delay:
+            pending.append(ub)
+            ub = pending.pop(0)
         v_y = step(f + ub)
     return u_b, sim.record()

@@ -13,10 +13,11 @@ import numpy as np
 import pandas as pd
 
 from piezolib._checks import check_nonnegative
+from piezolib.records import atomic_write
 from piezolib.workbook.paths import results_dir
 
-__all__ = ["COLUMNS", "REASONS", "NOTEBOOK_TABLES", "verdict", "ClaimTable", "save_results",
-           "load_claims", "reproduction_table", "verdict_counts"]
+__all__ = ["COLUMNS", "REASONS", "NOTEBOOK_TABLES", "OTHER_TABLES", "verdict", "ClaimTable",
+           "save_results", "load_claims", "reproduction_table", "verdict_counts"]
 
 COLUMNS = ["section", "quantity", "unit", "paper", "ours", "tolerance",
            "verdict", "reason", "note"]
@@ -59,7 +60,7 @@ class ClaimTable:
 
     def add(self, section, quantity, paper, ours, *, unit="", rtol=0.0, atol=0.0,
             reason="", note=""):
-        """Add one claim and return its verdict.
+        """Add one claim; its verdict is in the last row of :meth:`frame`.
 
         Parameters
         ----------
@@ -90,7 +91,6 @@ class ClaimTable:
                               verdict=result,
                               reason=reason if result == "differs" else "",
                               note=note))
-        return result
 
     def frame(self):
         """The claims as a DataFrame with columns :data:`COLUMNS`."""
@@ -102,15 +102,16 @@ class ClaimTable:
 
 
 def save_results(frame, name):
-    """Write a DataFrame to ``data/results/<name>.csv`` (floats to 6 significant
+    """Write a DataFrame to ``data/results/<name>.csv`` atomically (floats to 6 significant
     digits so that reruns on other machines give the same file)."""
     if not isinstance(frame, pd.DataFrame):
         raise TypeError(f"frame must be a pandas DataFrame, got {type(frame).__name__}")
     path = results_dir() / f"{name}.csv"
     # object columns mix numbers and text; round their floats like the rest
     frame = frame.apply(lambda col: col.map(_six_digits) if col.dtype == object else col)
-    frame.to_csv(path, index=False, float_format="%.6g")
-    return path
+    # one string, then a temporary file and a rename: a reader never sees a partial file
+    return atomic_write(path, frame.to_csv(index=False, float_format="%.6g",
+                                           lineterminator="\n"))
 
 
 def _is_number(x):
@@ -137,6 +138,12 @@ NOTEBOOK_TABLES = {
     "tracking": "06_tracking_experiments",
 }
 
+#: Result tables of notebooks that check no published claim (every row has
+#: paper = None): loaded by :func:`load_claims` only when asked for by name.
+OTHER_TABLES = {
+    "own_stage": "08_your_own_stage",
+}
+
 
 def load_claims(names=None):
     """Concatenate the comparison tables written by the notebooks.
@@ -144,7 +151,8 @@ def load_claims(names=None):
     Parameters
     ----------
     names : sequence of str, optional
-        Table names (keys of :data:`NOTEBOOK_TABLES`); default all.
+        Table names (keys of :data:`NOTEBOOK_TABLES` or :data:`OTHER_TABLES`);
+        default all of :data:`NOTEBOOK_TABLES`.
 
     Returns
     -------
@@ -157,20 +165,21 @@ def load_claims(names=None):
         Naming the notebook to run when a table is missing.
     """
     names = list(NOTEBOOK_TABLES) if names is None else list(names)
+    tables = {**NOTEBOOK_TABLES, **OTHER_TABLES}
     frames = []
     for name in names:
-        if name not in NOTEBOOK_TABLES:
-            raise ValueError(f"unknown table {name!r}; expected one of {list(NOTEBOOK_TABLES)}")
+        if name not in tables:
+            raise ValueError(f"unknown table {name!r}; expected one of {list(tables)}")
         path = results_dir() / f"{name}.csv"
         if not path.exists():
             raise FileNotFoundError(
-                f"{path} is missing: run notebook {NOTEBOOK_TABLES[name]} "
-                f"(python -m piezolib reproduce {NOTEBOOK_TABLES[name][:2]})")
+                f"{path} is missing: run notebook {tables[name]} "
+                f"(python -m piezolib reproduce {tables[name][:2]})")
         frame = pd.read_csv(path, dtype=str, keep_default_na=False)
         missing = set(COLUMNS) - set(frame.columns)
         if missing:
             raise ValueError(f"{path.name} lacks column(s) {sorted(missing)}")
-        frame.insert(0, "source", NOTEBOOK_TABLES[name])
+        frame.insert(0, "source", tables[name])
         frames.append(frame[["source"] + COLUMNS])
     return pd.concat(frames, ignore_index=True)
 

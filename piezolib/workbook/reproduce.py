@@ -16,11 +16,16 @@ import time
 
 from piezolib.workbook.paths import notebooks_dir, project_root
 
-__all__ = ["DATA_STEPS", "list_notebooks", "run_notebook", "run", "NotebookFailure"]
+__all__ = ["DATA_STEPS", "DATA_CHECKS", "check_data", "list_notebooks", "run_notebook", "run", "NotebookFailure"]
 
 #: Data-generating steps run before the notebooks, as "module:function" names
 #: of functions that take no arguments and return the list of files written.
 DATA_STEPS = ["piezolib.problem.stage_data:write_experiment_files"]
+
+#: Checks run before the data steps, as "module:function" names of functions
+#: that take no arguments and return ``{path: problem}`` for the files that
+#: fail; each failing file gets one line when the data steps regenerate it.
+DATA_CHECKS = ["piezolib.problem.stage_data:check_experiment_files"]
 
 
 class NotebookFailure(RuntimeError):
@@ -81,6 +86,10 @@ def run(selection=None, timeout=600, keep_going=False, data=True, stream=sys.std
     total = len(steps) + len(list_notebooks(selection))
     k = 0
     start_all = time.perf_counter()
+    if steps:
+        for path, problem in check_data().items():
+            print(f"regenerating {path}: it failed its check ({problem})", file=stream,
+                  flush=True)
     for step in steps:
         k += 1
         start = time.perf_counter()
@@ -115,6 +124,15 @@ def run(selection=None, timeout=600, keep_going=False, data=True, stream=sys.std
           f"{project_root() / 'figures'}, tables in {project_root() / 'data' / 'results'}",
           file=stream, flush=True)
     return failures
+
+
+def check_data():
+    """Run :data:`DATA_CHECKS`; return ``{path: problem}`` of the files that fail."""
+    problems = {}
+    for check in DATA_CHECKS:
+        module, func = check.split(":")
+        problems.update(getattr(importlib.import_module(module), func)())
+    return problems
 
 
 def _line(stream, k, total, name, seconds, status):

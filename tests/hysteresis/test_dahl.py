@@ -270,3 +270,32 @@ def test_bad_records_raise():
         hy.simulate_dahl(m, [0.0, 1.0, np.nan])
     with pytest.raises(ValueError, match="beta1 = 0"):
         hy.simulate_dahl(model(beta1=0.1), [0.0, 1.0])
+
+
+@pytest.mark.parametrize("alpha1, alpha2", [(1e30, 1e30), (1e30, 1e40)])
+def test_extreme_alpha_gives_the_first_order_limit(alpha1, alpha2):
+    """alpha1 = 1e30: the first-order Dahl limit, H = s h (1 - e^(-rate sigma)) from z = 0,
+    rate alpha2/alpha1 and h = beta2 gamma_a / alpha2 (the steady state) exactly."""
+    h = 0.1
+    m = hy.DahlModel(alpha1, alpha2, 0.0, h * alpha2 / 30.0, 30.0, 1.0, form="bliman_sorine")
+    rate = alpha2 / alpha1
+    x = np.linspace(0.0, 2.0, 201)
+    expected = h * (1.0 - np.exp(-rate * x))
+    np.testing.assert_allclose(hy.dahl_hysteresis(m, x), expected, rtol=1e-9, atol=1e-12)
+    v = np.r_[np.linspace(0.0, 2.0, 101), np.linspace(2.0, 0.0, 101)[1:]]
+    sim = hy.simulate_dahl(m, v)
+    np.testing.assert_allclose(sim.x + sim.H, v, rtol=0, atol=1e-12)     # eq. 13 holds
+    if rate < 1e6:          # (at rate 1e10, dH/dx = 1e9 h at a reversal: x's rounding shows)
+        np.testing.assert_allclose(sim.H, hy.dahl_hysteresis(m, sim.x), rtol=0, atol=1e-12)
+    else:
+        np.testing.assert_allclose(sim.H[20:100], h, rtol=1e-12)           # steady state
+        np.testing.assert_allclose(sim.H[120:], -h, rtol=1e-12)
+
+
+def test_complex_input_is_a_clear_error():
+    # complex x used to end in a bare KeyError: 0
+    x = np.sin(np.linspace(0, 6, 200)) * (1 + 0.5j)
+    with pytest.raises(TypeError, match="x must be real-valued"):
+        hy.dahl_hysteresis(model(), x)
+    with pytest.raises(TypeError, match="v must be real-valued"):
+        hy.simulate_dahl(model(), x)

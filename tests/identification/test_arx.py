@@ -27,10 +27,13 @@ def test_rls_equations_on_a_generic_regressor():
     psi = np.array([2.0, -1.0, 0.5])
     result = I.rls(phi, phi @ psi, initial_gain=1e12)
     assert np.allclose(result.parameters, psi, atol=1e-8)
-    # one step by hand: eq. 1, 3, 2 with W(0) = g I and Psi(0) = 0
+    # one step by hand: eq. 1, 3, 2 with W(0) = g diag(1/theta^2) (the data
+    # power of a one-sample record) and Psi(0) = 0
     g, theta, y0 = 10.0, phi[0], float(phi[0] @ psi)
     one = I.rls(phi[:1], [y0], initial_gain=g)
-    W = g * np.eye(3) - g * g * np.outer(theta, theta) / (1 + g * theta @ theta)
+    W0 = np.diag(g / theta ** 2)
+    w = W0 @ theta
+    W = W0 - np.outer(w, w) / (1 + theta @ w)
     assert one.a_priori_errors[0] == y0
     assert np.allclose(one.history[0], W @ theta * y0)
     assert np.allclose(one.gain_matrix, W)
@@ -48,3 +51,27 @@ def test_bad_data_raise(u, y, match):
         I.fit_arx(u, y, FS)
     with pytest.raises(ValueError, match=match):
         I.identify(u, y, FS)
+
+
+@pytest.mark.parametrize("scale_u, scale_y", [(1e4, 1.0), (1e-4, 1.0), (1.0, 1e5), (1e6, 1e-3)])
+def test_fit_arx_is_invariant_to_units(arx_system, scale_u, scale_y):
+    # regression: with W(0) = 1e10 I, u scaled by 1e4 turned a1 = 0.171 into -1929
+    u, y = arx_system.data(n=3000, seed=4)
+    y = y + 1e-3 * np.random.default_rng(5).standard_normal(len(y))   # not exactly ARX
+    ref = I.fit_arx(u, y, FS, na=3, nb=2)
+    scaled = I.fit_arx(u * scale_u, y * scale_y, FS, na=3, nb=2)
+    np.testing.assert_allclose(scaled.a, ref.a, rtol=1e-7, atol=1e-9)
+    np.testing.assert_allclose(scaled.b * scale_u / scale_y, ref.b, rtol=1e-7, atol=1e-9)
+
+
+@pytest.mark.parametrize("gain", [1e300, 1e14, 0.0, -1.0, np.nan, np.inf])
+def test_absurd_initial_gain_is_rejected(arx_system, gain):
+    u, y = arx_system.data(n=500)
+    with pytest.raises(ValueError, match="initial_gain"):
+        I.fit_arx(u, y, FS, na=3, nb=2, initial_gain=gain)
+
+
+@pytest.mark.parametrize("n, word", [(0, "empty"), (1, "too short")])
+def test_empty_record_says_so(n, word):
+    with pytest.raises(ValueError, match=f"u and y are {word}"):
+        I.fit_arx(np.ones(n), np.ones(n), FS)

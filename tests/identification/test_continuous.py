@@ -89,3 +89,58 @@ def test_time_scale_defaults_to_one_chosen_from_the_model():
     assert np.allclose(explicit, chosen, rtol=1e-8, atol=0)
     with pytest.raises(ValueError, match="time_scale"):
         I.monic_coefficients(G, time_scale=-1.0)
+
+
+def test_user_chosen_delay_and_numerator_order_on_foreign_data():
+    """nb != n_poles and nk = 2: the extra sample is reported as a delay, the
+    model carries the user's names and units."""
+    G = ct.tf([2e6], [1.0, 200.0, 1e6])                  # 2 poles, no zero
+    fs = 5e3
+    u = np.random.default_rng(5).standard_normal(3000)
+    y = np.concatenate(([0.0], I.zoh_simulate(G, u, fs)[:-1]))   # one more sample of delay
+    result = I.identify(u, y, fs, n_poles=2, n_zeros=0, nb=2, nk=2, input_name="v_in",
+                        output_name="x", input_unit="V", output_unit="um")
+    assert result.delay_samples == 1 and result.delay_s == pytest.approx(1 / fs)
+    assert result.model.input_labels == ["v_in"] and result.model.output_labels == ["x"]
+    assert (result.input_unit, result.output_unit) == ("V", "um")
+    assert len(result.discrete.b) == 2 + 2            # nk leading zeros, nb terms
+    assert np.allclose(np.sort_complex(result.model.poles()), np.sort_complex(G.poles()),
+                       rtol=1e-6)
+    assert float(result.model.dcgain()) == pytest.approx(2.0, rel=1e-6)
+    # nb = 1 < n_poles = 2: a lower numerator order is accepted and keeps its structure
+    short = I.identify(u, y, fs, n_poles=2, n_zeros=0, nb=1, nk=2)
+    assert len(short.discrete.b) == 2 + 1 and short.discrete.b[:2].tolist() == [0.0, 0.0]
+    assert float(short.model.dcgain()) == pytest.approx(2.0, rel=0.05)
+
+
+def test_identify_rejects_orders_it_cannot_convert():
+    u = np.random.default_rng(6).standard_normal(2000)
+    y = I.zoh_simulate(ct.tf([1e6], [1.0, 200.0, 1e6]), u, 5e3)
+    with pytest.raises(ValueError, match="nb"):
+        I.identify(u, y, 5e3, n_poles=2, n_zeros=0, nb=3)
+    with pytest.raises(ValueError, match="nk"):
+        I.identify(u, y, 5e3, n_poles=2, n_zeros=0, nk=0)
+    with pytest.raises(TypeError, match="input_name"):
+        I.identify(u, y, 5e3, n_poles=2, n_zeros=0, input_name=3)
+
+
+def test_identify_record_takes_rate_names_and_units_from_the_record():
+    from piezolib.records import Record
+    G = ct.tf([1e6], [1.0, 200.0, 1e6])
+    u = np.random.default_rng(7).standard_normal(2000)
+    rec = Record(u, I.zoh_simulate(G, u, 5e3), 5e3, input_unit="V", output_unit="um",
+                 input_name="v", output_name="d")
+    result = I.identify_record(rec, n_poles=2, n_zeros=0)
+    assert result.model.input_labels == ["v"] and result.output_unit == "um"
+    assert float(result.model.dcgain()) == pytest.approx(1.0, rel=1e-6)
+    with pytest.raises(TypeError, match="record"):
+        I.identify_record((u, u))
+
+
+def test_refit_numerator_rejects_unpaired_complex_pole():
+    # -1+1j used to be turned into -1 by taking the real part of the polynomial
+    u = np.random.default_rng(0).standard_normal(500)
+    with pytest.raises(ValueError, match="closed under complex conjugation"):
+        I.refit_numerator([-1 + 1j, -5.0], u, u, 1e3, n_zeros=1)
+    G = I.refit_numerator([-1 + 1j, -1 - 1j], u, u, 1e3, n_zeros=1)
+    np.testing.assert_allclose(np.sort_complex(ct.poles(G)), [-1 - 1j, -1 + 1j], rtol=1e-9)

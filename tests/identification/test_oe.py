@@ -2,6 +2,7 @@
 
 import control as ct
 import numpy as np
+import scipy.signal as sg
 
 from piezolib import identification as I
 from piezolib import paper
@@ -38,3 +39,12 @@ def test_estimated_models_have_neutral_signal_names(arx_system):
     models += [result.discrete.system, result.continuous_full, result.model]
     for model in models:
         assert (model.input_labels, model.output_labels) == (["u"], ["y"]), model.name
+
+
+def test_output_error_with_nb_below_na_and_two_sample_delay():
+    a = np.array([1.0, -1.5, 0.7, -0.1])
+    b = np.array([0.0, 0.0, 0.5, 0.25])                  # nk = 2, nb = 2
+    u = np.random.default_rng(8).standard_normal(2000)
+    y = sg.lfilter(b, a, u)
+    model = I.fit_output_error(u, y, FS, na=3, nb=2, nk=2)
+    assert np.allclose(model.a, a, atol=1e-8) and np.allclose(model.b, b, atol=1e-8)

@@ -18,7 +18,7 @@ def test_analysis_of_published_controller(models, published):
     G, H_m, _, _, K = models
     a = published
     assert a.nominal_stability and a.name == "K"
-    # values recomputed from the printed models (DESIGN.md); paper prints 0.81 / 0.92 / 0.48
+    # values recomputed from the printed models (as notebook 00 does); paper prints 0.81 / 0.92 / 0.48
     assert a.norm_He_S == pytest.approx(0.808, abs=0.002)
     assert a.norm_Hy_T == pytest.approx(0.982, abs=0.002)
     assert a.mu_RS == pytest.approx(0.819, abs=0.002)
@@ -78,3 +78,33 @@ def test_analyze_rejects_bad_arguments(models, change, error, match):
     args.update(change)
     with pytest.raises(error, match=match):
         analysis.analyze(**args)
+
+
+def test_margins_table_published_controller(models):
+    G, _, _, _, K = models
+    # a more aggressive controller: the published K with twice the gain
+    table = analysis.margins_table({"published": K, "2 K": 2 * K}, G, paper.SAMPLING_FREQUENCY_HZ)
+    pub, hot = table["published"], table["2 K"]
+    assert pub["closed loop stable"] and pub["phase margin [deg]"] > 60
+    # the delay margin in samples of the sampled loop is the continuous one minus about the
+    # half sample of the zero-order hold (Tustin's warping aside)
+    cont = pub["delay margin [us]"] * 1e-6 * paper.SAMPLING_FREQUENCY_HZ
+    assert 0.3 < cont - pub["sampled loop delay margin [samples]"] < 1.0
+    assert all(pub[f"stable, delay {d}"] for d in analysis.MARGIN_DELAYS)
+    # the whole-sample delays tolerated agree with the sampled loop's delay margin
+    stable = [hot[f"stable, delay {d}"] for d in analysis.MARGIN_DELAYS]
+    first_bad = stable.index(False) if False in stable else len(stable)
+    assert hot["stable, delay 0"] and first_bad < len(stable)
+    assert first_bad == int(np.floor(hot["sampled loop delay margin [samples]"])) + 1
+    with pytest.raises(TypeError, match="controllers"):
+        analysis.margins_table([K], G, 1e4)
+
+
+def test_achievable_mu_lower_bound_below_published_mu(models, published):
+    G, H_m, H_e, H_y, _ = models
+    lb = analysis.achievable_mu_lower_bound(G, H_m, H_e, H_y)
+    # a lower bound of every controller's mu_RP, the published K's included
+    assert lb.value <= published.mu_RP
+    # and of its nominal-performance part, sqrt(|H_e S|^2 + |H_y T|^2) >= each alone
+    assert lb.value <= lb.hinf_upper
+    assert lb.hinf_upper >= lb.value and lb.method == "hinf"

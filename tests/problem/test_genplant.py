@@ -107,3 +107,95 @@ def test_improper_output_weight_is_refused(models):
     with pytest.raises(ValueError, match="H_y G is improper"):
         genplant.generalized_plant(G, H_m, H_e, improper, omega_s=1e4)
 
+
+
+# --- the delay-aware synthesis plant -------------------------------------------
+
+FS = paper.SAMPLING_FREQUENCY_HZ
+
+
+def test_effective_delay_is_hold_plus_computation():
+    assert genplant.effective_delay(FS, 1) == pytest.approx(1.5e-4)
+    assert genplant.effective_delay(FS, 0) == pytest.approx(0.5e-4)
+    assert genplant.effective_delay(5e3, 2) == pytest.approx(5e-4)
+    with pytest.raises(ValueError, match="delay_samples"):
+        genplant.effective_delay(FS, -1)
+    with pytest.raises(ValueError, match="fs"):
+        genplant.effective_delay(0.0, 1)
+
+
+def test_delay_channel_matches_the_exact_delay_at_low_frequency(models):
+    G, H_m, H_e, H_y, _ = models
+    P = genplant.delay_aware_plant(G, H_m, H_e, H_y, fs=FS, delay_samples=1)
+    assert P.input_labels == ["u_Delta", "v_r", "u_b"]
+    assert P.output_labels == ["y_Delta", "y1", "y2", "y_u", "v_e"] and P.name == "P_delay"
+    assert P.nstates == 14 + genplant.DESIGN_PADE_ORDER + genplant.DESIGN_ROLLOFF.order
+    tau = 1.5e-4
+    omega = np.logspace(0, np.log10(0.5 / tau), 200)          # omega tau <= 0.5
+    got = response(P, omega)
+    exact = response(genplant.generalized_plant(G, H_m, H_e, H_y), omega)
+    delay = np.exp(-1j * omega * tau)
+    # every u_b entry is the undelayed one times e^{-j omega tau} (Pade error < 1e-4 here)
+    for out, row in ((0, 0), (1, 1), (2, 2), (4, 3)):
+        np.testing.assert_allclose(got[:, out, 2], exact[:, row, 2] * delay, rtol=1e-4)
+        np.testing.assert_allclose(got[:, out, :2], exact[:, row, :2], rtol=1e-7, atol=1e-12)
+    # the delay matters: without it the u_b column is off by omega tau
+    assert np.max(np.abs(exact[:, 3, 2] / got[:, 4, 2] - 1)) > 0.4
+    W_u = np.ravel(genplant.rolloff_weight()(1j * omega))
+    np.testing.assert_allclose(got[:, 3, 2], W_u, rtol=1e-8)
+    np.testing.assert_allclose(got[:, 3, :2], 0, atol=1e-12)
+
+
+def test_exact_delay_response_agrees_with_the_pade_plant(models):
+    G, H_m, H_e, H_y, K = models
+    omega = np.logspace(0, 3.5, 50)
+    P = genplant.delay_aware_plant(G, H_m, H_e, H_y, fs=FS, delay_samples=2, pade_order=3)
+    pade = robust.lft_response(P, K, omega)
+    exact = genplant.delayed_closed_loop_response(K, G, H_m, H_e, H_y, omega, fs=FS,
+                                                  delay_samples=2,
+                                                  rolloff=genplant.DESIGN_ROLLOFF)
+    np.testing.assert_allclose(exact, pade, rtol=1e-4, atol=1e-9)
+    # without the roll-off output it is eq. 18 with the delay; d -> no delay is not eq. 18
+    plain = genplant.delayed_closed_loop_response(K, G, H_m, H_e, H_y, omega, fs=FS,
+                                                  delay_samples=2)
+    np.testing.assert_allclose(plain, exact[:, [0, 1, 2], :], rtol=1e-12)
+    M = response(genplant.closed_loop_matrix(K, G, H_m, H_e, H_y), omega)
+    assert np.max(np.abs(plain - M)) > 1e-2
+
+
+def test_rolloff_weight_levels_and_errors():
+    params = genplant.RolloffWeight(hf_gain=5.0, lf_gain=1e3, frequency=2e4, order=2)
+    W = genplant.rolloff_weight(params)
+    assert abs(np.ravel(W(1j * 1e-3))[0]) == pytest.approx(1e-3, rel=1e-6)
+    assert abs(np.ravel(W(1j * 1e9))[0]) == pytest.approx(0.2, rel=1e-4)
+    mags = np.abs(np.ravel(W(1j * np.logspace(0, 7, 50))))
+    assert np.all(np.diff(mags) > 0)                       # rises monotonically
+    assert genplant.DESIGN_ROLLOFF.hf_gain == 10.0
+    for bad, match in ((dict(hf_gain=0.0), "hf_gain"), (dict(lf_gain=1.0), "lf_gain"),
+                       (dict(frequency=-1.0), "frequency"), (dict(order=0), "order")):
+        with pytest.raises(ValueError, match=match):
+            genplant.rolloff_weight(genplant.RolloffWeight(**bad))
+    with pytest.raises(TypeError, match="RolloffWeight"):
+        genplant.rolloff_weight(10.0)
+
+
+@pytest.mark.parametrize("change, match", [
+    (dict(fs=0.0), "fs"), (dict(delay_samples=-1), "delay_samples"),
+    (dict(pade_order=0), "pade_order"),
+])
+def test_delay_aware_plant_rejects_bad_arguments(models, change, match):
+    G, H_m, H_e, H_y, _ = models
+    args = dict(fs=FS, delay_samples=1)
+    args.update(change)
+    with pytest.raises(ValueError, match=match):
+        genplant.delay_aware_plant(G, H_m, H_e, H_y, **args)
+
+
+def test_discrete_or_nan_plant_is_rejected():
+    # a discrete G used to give a continuous generalized plant; a NaN coefficient
+    # used to surface as "algebraic loop detected"
+    G, H_m, H_e, H_y, _ = paper.problem()
+    with pytest.raises(ValueError, match=r"G must be continuous-time.*dt=0\.0001"):
+        genplant.generalized_plant(ct.c2d(G, 1e-4), H_m, H_e, H_y)
+    with pytest.raises(ValueError, match="G has a NaN coefficient"):
+        genplant.generalized_plant(ct.tf([np.nan], [1.0, 1.0]), H_m, H_e, H_y)

@@ -70,3 +70,17 @@ def test_workbook_fit_is_shared_and_deterministic():
         ph.fit_case_I_loops("bliman_sorine", True, "lowered")
     with pytest.raises(ValueError, match="form must be one of"):
         ph.fit_case_I_loops("first_order", True, "rest")
+
+
+def test_workbook_pi_fit_and_validation_records():
+    fit = ph.workbook_pi_fit()
+    assert ph.workbook_pi_fit() is fit                         # cached
+    assert len(fit.model.thresholds) == ph.PI_PLAYS and fit.model.invertible
+    assert fit.worst_rms_percent < 1.0
+    records = ph.validation_loops()
+    assert list(records)[:3] == [f"triangle {A:.0f} V" for A in ph.VALIDATION_AMPLITUDES_V]
+    for u, v_y, first in records.values():
+        assert u.shape == v_y.shape and u[0] == 0.0 and 0 < first < u.size
+        assert u.min() >= 0.0 and u.max() <= 4.0              # inside the 0-40 V stroke
+    with pytest.raises(ValueError, match="n_plays must be >= 1"):
+        ph.workbook_pi_fit(n_plays=0)

@@ -177,3 +177,9 @@ def test_record_columns_and_segment(stage):
 def test_zoh_helper_is_shared_with_identification(stage):
     b, a = identification.zoh_coefficients(paper.plant(), 1e-4)
     assert np.array_equal(b, stage.b) and np.array_equal(a, stage.a)
+
+
+def test_run_rejects_complex_input(stage):
+    # the imaginary part used to be dropped silently
+    with pytest.raises(TypeError, match="u_c must be real-valued"):
+        stage.run(np.ones(100) * (1 + 1j))

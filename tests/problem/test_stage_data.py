@@ -14,7 +14,8 @@ def test_experiment_files_are_reproducible_and_current(tmp_path):
     second = D.write_experiment_files(tmp_path / "b")
     for p, q in zip(first, second):
         assert p.read_bytes() == q.read_bytes()
-    committed = D.experiment_paths()
+    committed = {**D.experiment_paths(), "manifest": D.manifest_path()}
+    assert first[-1].name == D.MANIFEST_NAME               # the manifest too, byte-identical
     for p in first:
         stored = [c for c in committed.values() if c.name == p.name][0]
         assert stored.exists(), f"{stored} missing: run python -m piezolib data"
@@ -71,3 +72,56 @@ def test_chirp_input_ramps_holds_and_stays_below_its_top(settings):
     assert np.all(u[n_ramp:start] == settings.top_V) and u[start] == settings.top_V
     assert u.max() <= settings.top_V
     assert np.ptp(u[start:]) == pytest.approx(2 * settings.amplitude_V, rel=1e-3)
+
+
+def test_manifest_is_current_and_every_committed_file_passes():
+    assert D.manifest_path().exists(), "data/manifest.json missing: run python -m piezolib data"
+    assert D.check_experiment_files() == {}
+    entries = D.read_manifest()
+    assert sorted(entries) == sorted(p.name for p in D.experiment_paths().values())
+    assert entries["hysteresis_loop_20V.csv"]["rows"] == 3001
+
+
+@pytest.fixture
+def data_copy(tmp_path):
+    import shutil
+    for p in [*D.experiment_paths().values(), D.manifest_path()]:
+        shutil.copy(p, tmp_path / p.name)
+    return tmp_path
+
+
+def test_truncated_or_corrupted_file_names_the_file_and_line(data_copy):
+    path = data_copy / "hysteresis_loop_20V.csv"
+    lines = path.read_text().splitlines(keepends=True)
+    path.write_text("".join(lines[:2000]))                     # cut at a line boundary
+    with pytest.raises(ValueError, match=r"hysteresis_loop_20V.csv, line 2001: truncated"):
+        D.load_hysteresis_loops(data_copy)
+    problems = D.check_experiment_files(data_copy)
+    assert list(problems) == [path] and "line 2001" in problems[path]
+    bad = lines[:118] + ["0.0098,abc,0.1,0.1,0.1\n"] + lines[119:]
+    path.write_text("".join(bad))
+    with pytest.raises(ValueError, match=r"line 119: column 'u_c_V': 'abc' is not a number"):
+        D.load_record(path)
+    path.write_text("".join(lines[:22]))                       # header only
+    with pytest.raises(ValueError, match="line 23: truncated"):
+        D.load_record(path)
+
+
+def test_foreign_records_are_reproducible_and_current(tmp_path):
+    written = D.write_foreign_records(tmp_path)
+    committed = D.foreign_record_paths()
+    for p in written:
+        assert committed[p.name].exists(), f"{committed[p.name]} missing"
+        assert committed[p.name].read_bytes() == p.read_bytes(), f"{p.name} is out of date"
+
+
+def test_foreign_records_have_the_foreign_form():
+    from piezolib import records
+    path = D.foreign_record_paths()["loop_sine.csv"]
+    assert not path.read_text().startswith("#")                 # no header, no comments
+    rec = records.load_csv(path, time=0, input=1, output=2, input_unit="V", output_unit="um")
+    assert rec.fs == pytest.approx(D.FOREIGN_FORM["sample_rate_Hz"])
+    rest = int(D.FOREIGN_FORM["rest_s"] * rec.fs)
+    assert np.all(rec.input[:rest] == 0) and rec.input[rest] > 1.0      # at rest, then a step
+    # 5x the stage's noise: 3 um/V x 2.5 mV = 7.5 nm rms (plus 0.9 nm ADC steps) at rest
+    assert 0.005 < np.std(rec.output[:rest]) < 0.011

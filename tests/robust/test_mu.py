@@ -378,3 +378,30 @@ def test_bad_input_names_the_argument():
         mussv(frd, RP_BLK, omega=[1.0, 2.0])
     with pytest.raises(TypeError, match="restarts"):
         mussv(M, RP_BLK, restarts=1.5)
+
+
+@pytest.mark.parametrize("blk", [[(1, 1)] * 3, [(-1, 0), (1, 1), (1, 1)], [(-1, 0)] * 3])
+def test_absurd_scales_give_scaled_bounds(blk):
+    # mu(c M) = |c| mu(M): the bounds follow for c = 1e-300 ... 1e300, without overflow
+    rng = np.random.default_rng(30)
+    N = crandn(rng, 3, 3)
+    ref = mussv(N, blk)
+    for c in (1e-300, 1e300):
+        res = mussv(N * c, blk)
+        np.testing.assert_allclose(res.upper / c, ref.upper, rtol=1e-9)
+        np.testing.assert_allclose(res.lower / c, ref.lower, rtol=1e-9)
+        assert_attains_lower(N[None] * c, res, rtol=1e-8)
+
+
+@pytest.mark.parametrize("M, blk, error, match", [
+    (np.zeros((0, 2, 2)), [(1, 1), (1, 1)], ValueError, "M must not be empty"),
+    (np.zeros((2, 0)), [(1, 1)], ValueError, "M must not be empty"),
+    (np.ones(3), [(1, 1)], ValueError, "M must be a p x q matrix"),
+    (np.array([["a"]]), [(1, 1)], TypeError, "M must be numeric"),
+    (np.array([[np.inf]]), [(1, 1)], ValueError, "M contains"),
+    (np.ones((2, 2)), [], ValueError, "blk must be a non-empty"),
+    (np.ones((3, 3)), [(-2, 0), (1, 2)], ValueError, "blk does not fit M"),
+])
+def test_more_bad_input(M, blk, error, match):
+    with pytest.raises(error, match=match):
+        mussv(M, blk)

@@ -71,8 +71,9 @@ def test_feedforward_paths(stage):
 
 
 # --- linear closed loop: the LTI theory, sample for sample ---------------------------
+@pytest.mark.parametrize("delay", [0, 1, 2])
 @pytest.mark.parametrize("which", ["published", "integrator"])
-def test_linear_stage_closed_loop_matches_lti_theory(linear_stage, which):
+def test_linear_stage_closed_loop_matches_lti_theory(linear_stage, which, delay):
     Ts = 1 / FS
     if which == "published":
         Kd = loop.discrete_controller(paper.controller())
@@ -80,11 +81,13 @@ def test_linear_stage_closed_loop_matches_lti_theory(linear_stage, which):
         Kd = ct.ss(ct.tf([40 * Ts, 0], [1, -1], Ts))
     v = reference(peak=2.0, frequency_hz=20.0, periods=2)
     g = 0.9
-    got = loop.run_loop(linear_stage, v, feedforward=g, controller=Kd)
+    got = loop.run_loop(linear_stage, v, feedforward=g, controller=Kd, delay_samples=delay)
+    assert got.delay_samples == delay
     Gd = ct.ss(ct.tf(linear_stage.b, linear_stage.a, Ts))
-    L = Gd * Kd
+    KD = Kd * ct.ss(ct.tf([1], [1] + [0] * delay, Ts))     # z^-d after the controller
+    L = Gd * KD
     T = ct.feedback(L, 1)                   # v_r -> v_y
-    SG = ct.feedback(Gd, Kd)                # u_f -> v_y
+    SG = ct.feedback(Gd, KD)                # u_f -> v_y
     t = np.arange(v.size) * Ts
     want = (ct.forced_response(T, t, v).outputs
             + ct.forced_response(SG, t, v / g).outputs)
@@ -168,3 +171,32 @@ def test_bad_stage_and_too_short_run(stage):
 def test_bad_feedforward_tuple(stage):
     with pytest.raises(TypeError, match="feedforward must be"):
         loop.run_loop(stage, reference(), feedforward=(1.0, 2.0, 3.0))
+
+
+def test_default_delay_is_one_sample(stage):
+    assert loop.COMPUTATION_DELAY_SAMPLES == 1
+    v = reference(frequency_hz=10.0)
+    Kd = loop.discrete_controller(paper.controller())
+    a = loop.run_loop(stage, v, feedforward=DAHL, controller=Kd)
+    b = loop.run_loop(stage, v, feedforward=DAHL, controller=Kd, delay_samples=1)
+    assert a.delay_samples == 1 and np.array_equal(a.v_y_V, b.v_y_V)
+    # what reached the DAC is u_f[k] + u_b[k - 1]
+    assert np.allclose(a.u_c_requested_V[1:], a.u_f_V[1:] + a.u_b_V[:-1], rtol=0, atol=1e-15)
+    with pytest.raises(ValueError, match="delay_samples"):
+        loop.run_loop(stage, v, controller=Kd, delay_samples=-1)
+
+
+def test_exported_sections_run_like_the_model(stage):
+    from piezolib.robust.export import controller_sos
+    v = reference(frequency_hz=10.0)
+    Kd = loop.discrete_controller(paper.controller())
+    sos = controller_sos(Kd, "K_pub")
+    model = loop.run_loop(stage, v, feedforward=DAHL, controller=Kd)
+    f64 = loop.run_loop(stage, v, feedforward=DAHL, controller=sos, sections_dtype="float64")
+    f32 = loop.run_loop(stage, v, feedforward=DAHL, controller=sos)
+    assert np.max(np.abs(f64.u_b_V - model.u_b_V)) < 1e-9
+    # float32 sections: the measured output stays within a few ADC steps of the model's
+    assert np.max(np.abs(f32.v_y_V - model.v_y_V)) < 5e-3
+    with pytest.raises(ValueError, match="Hz"):
+        loop.run_loop(stage, v, controller=controller_sos(
+            ct.tf([0.1], [1, -0.5], 1e-3), "K_slow"))

@@ -20,8 +20,9 @@ def test_verdict_relative_and_absolute():
 def test_claim_table_writes_csv(tmp_path, monkeypatch):
     monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
     table = report.ClaimTable("unit_test")
-    assert table.add("IV-C", "||H_e S||", 0.81, 0.8077, rtol=0.01) == "agrees"
-    assert table.add("IV-C", "bandwidth", None, 335.5, unit="Hz") == "not published"
+    assert table.add("IV-C", "||H_e S||", 0.81, 0.8077, rtol=0.01) is None   # no cell output
+    table.add("IV-C", "bandwidth", None, 335.5, unit="Hz")
+    assert list(table.frame().verdict) == ["agrees", "not published"]
     path = table.save()
     assert path == tmp_path / "data" / "results" / "unit_test.csv"
     text = path.read_text().splitlines()
@@ -70,3 +71,17 @@ def test_load_claims_and_reproduction_table(tmp_path, monkeypatch):
     assert published.reason.tolist() == ["", "inconsistent parameters", "unexplained"]
     counts = report.verdict_counts(published)
     assert counts.loc["all", "agrees"] == 1 and counts.loc["all", "differs"] == 2
+
+
+def test_other_tables_load_only_by_name(tmp_path, monkeypatch):
+    monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
+    assert not set(report.OTHER_TABLES) & set(report.NOTEBOOK_TABLES)
+    with pytest.raises(FileNotFoundError, match="reproduce 08"):
+        report.load_claims(["own_stage"])
+    table = report.ClaimTable("own_stage")
+    table.add("own stage", "validation fit", None, 89.5, unit="%")
+    table.save()
+    claims = report.load_claims(["own_stage"])
+    assert claims.source.tolist() == ["08_your_own_stage"]
+    with pytest.raises(FileNotFoundError, match="reproduce 00"):
+        report.load_claims()                          # the default set does not include it

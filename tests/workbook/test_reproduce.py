@@ -41,3 +41,27 @@ def test_selection_and_listing(workbook):
     assert [p.name for p in reproduce.list_notebooks(["01"])] == ["01_b.ipynb"]
     with pytest.raises(ValueError, match="no notebook matches"):
         reproduce.list_notebooks(["07"])
+
+
+def test_reproduce_says_when_it_regenerates_a_file_that_failed_its_check(workbook):
+    import io
+    import shutil
+
+    from piezolib.problem import stage_data
+    from piezolib.workbook.paths import project_root
+
+    real = project_root().__class__(__file__).resolve().parents[2] / "data"
+    (workbook / "data").mkdir()
+    for name in [*(p.name for p in stage_data.experiment_paths(real).values()),
+                 stage_data.MANIFEST_NAME]:
+        shutil.copy(real / name, workbook / "data" / name)
+    broken = workbook / "data" / "chirp_validation.csv"
+    broken.write_text("".join(broken.read_text().splitlines(keepends=True)[:500]))
+    assert list(reproduce.check_data()) == [broken]
+    out = io.StringIO()
+    assert reproduce.run(data=True, stream=out) == 0            # no notebooks in this workbook
+    lines = out.getvalue().splitlines()
+    regenerated = [line for line in lines if line.startswith("regenerating")]
+    assert len(regenerated) == 1 and "chirp_validation.csv" in regenerated[0]
+    assert "line 501" in regenerated[0]
+    assert reproduce.check_data() == {}                          # regenerated and intact again

@@ -1,4 +1,8 @@
-"""Figures of notebook 00 (the published design at a glance): Fig. 1, 10 and 11."""
+"""Figures of notebook 00 (the published design at a glance): Fig. 10 and 11.
+
+The block diagrams of notebook 00 (Fig. 1, 2, 9) are in
+:mod:`piezolib.workbook.figures.diagrams`.
+"""
 
 import control as ct
 import numpy as np
@@ -6,48 +10,12 @@ import numpy as np
 from piezolib.robust.lti import frequency_grid
 from piezolib.workbook import plotting
 
-__all__ = ["fig01_control_loop", "fig10_step_responses", "fig11_sensitivity_templates",
+__all__ = ["fig10_step_responses", "fig11_sensitivity_templates",
            "sensitivity_templates_figure", "STEP_TITLES"]
 
 #: Panel titles of the step responses of Fig. 10, in the order of LoopFunctions (S, T, KS, GS).
 STEP_TITLES = {"S": "(a) S: v_r -> v_e", "T": "(b) T: v_r -> v_y",
                "KS": "(c) KS: v_r -> u_b", "GS": "(d) GS: input disturbance -> v_y"}
-
-
-def fig01_control_loop():
-    """Fig. 1: the loop with its signals and units, saved as ``fig01_control_loop.png``.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-    """
-    fig, ax = plotting.new_figure(figsize=(9.5, 3.4))
-    blocks = {
-        "ref": (1.0, 0.0, "1/3 V/um"),
-        "sum_e": (2.9, 0.0, "o"),
-        "K": (4.4, 0.0, "K(s)\neq. 24"),
-        "ff": (4.4, 1.5, "Dahl FF\neq. 14"),
-        "sum_u": (6.2, 0.0, "o"),
-        "G": (9.4, 0.0, "DAQ, amplifier x10,\npiezo stage, sensor:\nG(s) of eq. 4 + hysteresis"),
-    }
-    wires = [
-        ((-0.6, 0.0), "ref", "x_r [um]"),
-        ("ref", "sum_e", "v_r [V]"),
-        ("sum_e", "K", "v_e [V]"),
-        ("K", "sum_u", "u_b [V]"),
-        ((-0.2, 0.0), (-0.2, 1.5), ""),
-        ((-0.2, 1.5), "ff", "x_r [um]"),
-        ("ff", (6.2, 1.5), "u_f [V]"),
-        ((6.2, 1.5), "sum_u", ""),
-        ("sum_u", "G", "u_c [V]"),
-        ("G", (13.2, 0.0), "v_y [V]"),
-        ((12.7, 0.0), (12.7, -1.2), ""),
-        ((12.7, -1.2), (2.9, -1.2), "v_y [V]  (x = 3 um/V * v_y)"),
-        ((2.9, -1.2), "sum_e", "-"),
-    ]
-    plotting.block_diagram(ax, blocks, wires)
-    plotting.save_figure(fig, 1, "control_loop")
-    return fig
 
 
 def fig10_step_responses(loop, t=None):
@@ -72,6 +40,10 @@ def fig10_step_responses(loop, t=None):
         ax.plot(1e3 * resp.time, np.ravel(resp.outputs))
         ax.set_title(title)
         ax.set_ylabel("amplitude [V/V]")
+    # a biproper K makes KS start at K(inf) (hundreds of V/V), a strictly proper one peaks
+    # within microseconds: next to a settled value near 1, that needs a symmetric log axis
+    axes[1, 0].set_yscale("symlog", linthresh=1.0)
+    axes[1, 0].set_ylabel("amplitude [V/V] (log beyond +-1)")
     for ax in axes[1]:
         ax.set_xlabel("time [ms]")
     plotting.save_figure(fig, 10, "step_responses")
@@ -131,6 +103,7 @@ def sensitivity_templates_figure(loops, H_e, H_y, omega=None, template_color=Non
     ax_s.set_title("(a) output sensitivity S and its template")
     ax_t.set_title("(b) complementary sensitivity T and its template")
     ax_s.set_ylim(-80, 30)
-    for ax in (ax_s, ax_t):
-        ax.legend(loc="lower right")
+    # the empty corners: S rises to 0 dB at high frequency, T falls from 0 dB
+    ax_s.legend(loc="lower right")
+    ax_t.legend(loc="lower left")
     return fig

@@ -42,7 +42,8 @@ def fig14_hysteresis_cases(result, frequency_hz=None, controller="our 6th-order 
                 ax.set_ylabel("x = 3 v_y [um]")
         axes[-1, k].set_xlabel("10 x reference [V]")
     fig.suptitle(f"Fig. 14: loops at {frequency_hz:g} Hz; I open loop, II Dahl feedforward, "
-                 f"III feedforward + {controller}")
+                 f"III feedforward + {controller}\n(every case run here in the loop and measured "
+                 "after the first period: Case I differs slightly from the recorded data files)")
     plotting.save_figure(fig, 14, "hysteresis_cases")
     return fig
 

@@ -12,7 +12,7 @@ from piezolib.workbook import plotting
 from piezolib.workbook.experiments import table4_reference
 
 __all__ = ["extra_dahl_published_audit", "fig07_dahl_fit", "fig08_feedforward_on_model",
-           "extra_case2_loops", "extra_case2_residual"]
+           "extra_case2_loops", "extra_case2_residual", "extra_model_validation"]
 
 GAIN, UM = paper.AMPLIFIER_GAIN, paper.UM_PER_VOLT
 #: Samples per period of the 10 Hz Table 4 triangle at the DAQ rate.
@@ -63,8 +63,8 @@ def extra_dahl_published_audit(published, record, x_ranges):
         v = feedforward(published[form], x_v)
         axes[1].plot(GAIN * v, UM * x_v, style, label=f"published, {form.replace('_', '-')}")
     axes[1].set(xlabel="actuator voltage 10 u_c [V]", ylabel="x = 3 v_y [um]",
-                title="(b) 40 V stroke, v = u_c, x = v_y convention")
-    axes[1].legend(fontsize=7)
+                title="(b) 40 V stroke, v = u_c, x = v_y convention", ylim=(-1, 20))
+    axes[1].legend(fontsize=7, loc="upper left")
     spans = np.logspace(-6, 5, 45)
     for form, style in (("printed", "-"), ("bliman_sorine", "--")):
         pct = []
@@ -72,13 +72,18 @@ def extra_dahl_published_audit(published, record, x_ranges):
             xs = x_path * span / x_path.max()
             pct.append(_loop_width(feedforward(published[form], xs)[PERIOD:], xs[PERIOD:]))
         axes[2].loglog(spans, np.maximum(pct, 1e-6), style, label=form.replace("_", "-"))
-    for unit, span in x_ranges.items():
+    for span in x_ranges.values():
         axes[2].axvline(span, color="0.6", lw=0.7)
-        axes[2].text(span, 2e3, unit.split()[-1], rotation=90, fontsize=7, va="top")
+    # unit tags as ticks of a top axis, clear of the curves
+    tags = axes[2].secondary_xaxis("top")
+    tags.set_xticks(list(x_ranges.values()), [u.split()[-1] for u in x_ranges], fontsize=7,
+                    rotation=90)
+    tags.minorticks_off()
+    tags.set_xlabel("40 V stroke in each unit", fontsize=7)
     axes[2].axhspan(6, 13, color="#4f8f3a", alpha=0.2, label="Table 4, Case I")
     axes[2].set(xlabel="stroke of x [x-units]", ylabel="hysteresis % (eq. 26)",
                 title="(c) loop width vs stroke length", ylim=(1e-6, 1e4))
-    axes[2].legend(fontsize=7, loc="lower left")
+    axes[2].legend(fontsize=7, loc="center right", bbox_to_anchor=(1.0, 0.3))
     plotting.save_figure(fig, None, "dahl_published_audit")
     return fig
 
@@ -144,7 +149,17 @@ def fig08_feedforward_on_model(t, x_r, x_plain, x_comp):
     axes[0].set(xlabel="desired displacement x_r [um]", ylabel="model displacement x [um]",
                 title="(a) workbook Dahl model, 12 um, 10 Hz")
     axes[0].legend()
-    axes[1].plot(t, UM * (x_comp - x_r) * 1e3)
+    error_nm = UM * (x_comp - x_r) * 1e3
+    stroke_nm = UM * np.ptp(x_r) * 1e3
+    if np.max(np.abs(error_nm)) <= 1e-9 * stroke_nm:
+        # an identity up to floating-point round-off: say so rather than plot 1e-10 nm noise
+        axes[1].axhline(0.0, color="#1f4e79")
+        axes[1].set_ylim(-1, 1)
+        axes[1].text(0.5, 0.6, "exact to round-off:\n"
+                     f"max |x - x_r| = {np.max(np.abs(error_nm)):.0e} nm",
+                     transform=axes[1].transAxes, ha="center", fontsize=8)
+    else:
+        axes[1].plot(t, error_nm)
     axes[1].set(xlabel="time [s]", ylabel="x - x_r [nm]", title="(b) compensation error")
     plotting.save_figure(fig, 8, "feedforward_on_model")
     return fig
@@ -174,7 +189,7 @@ def extra_case2_loops(loops, case_I, runs, case_II):
     for k, A in enumerate(amplitudes):
         rec = loops[A]
         axes[0, k].plot(GAIN * rec.u_c_V[PERIOD:], UM * rec.v_y_V[PERIOD:], color="0.5", lw=0.8)
-        axes[0, k].set_title(f"Case I, {A:.0f} V: {case_I[A]:.2f} %")
+        axes[0, k].set_title(f"Case I (data file), {A:.0f} V: {case_I[A]:.2f} %")
         for (name, by_amplitude), style in zip(runs.items(), ("-", "--")):
             run = by_amplitude[A]
             axes[1, k].plot(GAIN * run.v_r_V[PERIOD:], UM * run.v_y_V[PERIOD:], style,
@@ -215,4 +230,48 @@ def extra_case2_residual(runs, percents):
     fig.suptitle("Case II, workbook model: residual x - x_r against the reference "
                  "(eq. 26 reads the gap at the grey line)", fontsize=9)
     plotting.save_figure(fig, None, "case2_residual")
+    return fig
+
+
+def extra_model_validation(records, models, scores):
+    """Validation records (not fitted) against each model: loops (top) and errors (bottom).
+
+    Parameters
+    ----------
+    records : dict
+        {label: (u_c [V], v_y [V], first scored sample)}.
+    models : dict
+        {name: model with ``simulate(u_c) -> v_y``}; up to three are drawn.
+    scores : pandas.DataFrame
+        :func:`piezolib.hysteresis.validation_table` of these models and records.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Saved as ``extra_model_validation.png``.
+    """
+    labels = list(records)
+    fig, axes = plotting.new_figure(2, len(labels), figsize=(11.5, 5.6), sharex="col")
+    styles = ("-", "--", ":")
+    colors = ("#1f77b4", "#c0504d", "#4f8f3a")
+    for k, label in enumerate(labels):
+        u, v_y, first = records[label]
+        late = slice(first, None)
+        axes[0, k].plot(GAIN * u[late], UM * v_y[late], color="0.6", lw=2.0, label="stage")
+        for (name, model), style, color in zip(models.items(), styles, colors):
+            x = model.simulate(u)
+            rms = scores.loc[(name, label), "RMS %"]
+            axes[0, k].plot(GAIN * u[late], UM * x[late], style, lw=0.9, color=color,
+                            label=f"{name} ({rms:.2f} %)")
+            axes[1, k].plot(GAIN * u[late], UM * (x[late] - v_y[late]), style, lw=0.8,
+                            color=color)
+        axes[0, k].set_title(label, fontsize=9)
+        axes[0, k].legend(fontsize=6, loc="upper left", title="RMS of stroke",
+                          title_fontsize=6)
+        axes[1, k].set_xlabel("actuator voltage 10 u_c [V]")
+    axes[0, 0].set_ylabel("x = 3 v_y [um]")
+    axes[1, 0].set_ylabel("model - stage [um]")
+    fig.suptitle("Validation on virtual-stage records no model was fitted to "
+                  "(all fitted to the Case I loops)", fontsize=9)
+    plotting.save_figure(fig, None, "model_validation")
     return fig

@@ -15,7 +15,8 @@ from piezolib.robust.lti import frequency_grid, realize
 from piezolib.workbook.plotting import db, new_figure, save_figure
 
 __all__ = [
-    "bode_overlay", "extra_stage_case_i_loops", "extra_identification_chirp",
+    "bode_overlay", "extra_stage_case_i_loops", "fig13_hysteresis_measure",
+    "extra_identification_chirp",
     "extra_rls_convergence", "fig04_chirp_validation", "extra_residual_whiteness",
     "extra_bode_identified_vs_published",
 ]
@@ -93,8 +94,70 @@ def extra_stage_case_i_loops(loops, percent, paper_percent):
         ax.plot(rec.v_a_V, rec.x_measured_um, lw=0.8)
         ax.set_title(f"{A:g} V: {percent[A]:.2f} % (paper {paper_percent[A]:.2f} %)")
         ax.set_xlabel("actuator voltage v_a [V]")
-    np.atleast_1d(axes)[0].set_ylabel("displacement 3 µm/V · v_y [µm]")
+    np.atleast_1d(axes)[0].set_ylabel("displacement 3 um/V * v_y [um]")
+    fig.suptitle("Table 4, Case I: the recorded loops of data/hysteresis_loop_*.csv (3 periods "
+                 "each, all measured); notebook 06 reruns Case I with its own noise", fontsize=8)
     save_figure(fig, None, "stage_case_i_loops")
+    return fig
+
+
+def fig13_hysteresis_measure(v, x, measure, amplitude_V):
+    """Fig. 13: how the hysteresis % of eq. 25-26 is read off a measured loop.
+
+    The loop is drawn with the midpoint input V_M (eq. 25), the two branch
+    outputs at V_M (X_UP above, X_LO below) and the output range X_MAX -
+    X_MIN that eq. 26 divides by, all taken from ``measure``.
+
+    Parameters
+    ----------
+    v : array_like
+        Input of the loop: actuator voltage [V].
+    x : array_like
+        Measured displacement [um], same length.
+    measure : piezolib.hysteresis.HysteresisMeasure
+        :func:`piezolib.hysteresis.hysteresis_measure` of ``(v, x)``.
+    amplitude_V : float
+        Amplitude of the triangle [V] (title).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Saved as ``fig13_hysteresis_measure.png``.
+    """
+    v = check_finite_array("v", v, ndim=1, min_length=8)
+    x = check_finite_array("x", x, ndim=1, min_length=8)
+    if v.shape != x.shape:
+        raise ValueError(f"x must have the length of v ({v.size}), got {x.size}")
+    x_up, x_lo = max(measure.x_up, measure.x_lo), min(measure.x_up, measure.x_lo)
+    v_min, v_max = float(v.min()), float(v.max())
+    fig, ax = new_figure(figsize=(6.4, 4.6))
+    ax.plot(v, x, color="0.45", lw=0.8, label="measured loop (virtual stage)")
+    ax.axvline(measure.v_mid, color="#1f4e79", lw=1.0, ls="--")
+    for level in (measure.x_max, measure.x_min):
+        ax.axhline(level, color="0.6", lw=0.8, ls=":")
+    ax.plot([measure.v_mid] * 2, [x_up, x_lo], "o", color="#c0504d", ms=5, zorder=3)
+    ax.annotate("", xy=(measure.v_mid, x_lo), xytext=(measure.v_mid, x_up),
+                arrowprops=dict(arrowstyle="<->", color="#c0504d", lw=1.2, shrinkA=4,
+                                shrinkB=4))
+    span = v_max - v_min
+    # X_UP up-left and X_LO down-right of their points: both away from the branches
+    ax.text(measure.v_mid - 0.03 * span, x_up, "X_UP", color="#c0504d", va="bottom",
+            ha="right", fontsize=8)
+    ax.text(measure.v_mid + 0.03 * span, x_lo, "X_LO", color="#c0504d", va="top",
+            ha="left", fontsize=8)
+    ax.text(measure.v_mid + 0.01 * span, measure.x_max + 0.04 * (measure.x_max - measure.x_min),
+            "V_M = (V_MAX - V_MIN)/2 + V_MIN", color="#1f4e79", ha="left", va="bottom",
+            fontsize=7.5)
+    ax.text(v_min, measure.x_max, "X_MAX", va="bottom", ha="left", fontsize=7.5, color="0.35")
+    ax.text(v_max, measure.x_min, "X_MIN", va="top", ha="right", fontsize=7.5, color="0.35")
+    ax.set_xlim(v_min - 0.04 * span, v_max + 0.04 * span)
+    x_span = measure.x_max - measure.x_min
+    ax.set_ylim(measure.x_min - 0.12 * x_span, measure.x_max + 0.12 * x_span)
+    ax.set(xlabel="actuator voltage v_a [V]", ylabel="displacement x = 3 um/V * v_y [um]",
+           title=f"{amplitude_V:g} V loop: hysteresis = |X_UP - X_LO| / (X_MAX - X_MIN) "
+                 f"x 100 = {measure.percent:.2f} %  (eq. 26)")
+    ax.legend(loc="lower right")
+    save_figure(fig, 13, "hysteresis_measure")
     return fig
 
 
@@ -153,7 +216,7 @@ def extra_rls_convergence(model, fs, sweep_start):
         ax.axvline(sweep_start / fs, color="0.6", lw=0.6, ls="--")
         ax.set_ylabel(f"{name}_i (discrete)")
         ax.legend(ncol=6, loc="lower right")
-    ax_a.set_ylim(-7, 7)
+    ax_a.set_ylim(-8.5, 7)          # room for the legend under a3 (about -5)
     ax_b.set_ylim(-0.4, 0.4)
     ax_b.set_xlabel("time [s] (dashed: start of the sweep)")
     ax_a.set_title("parameter convergence of the final RLS pass (eq. 1–3)")
@@ -161,8 +224,13 @@ def extra_rls_convergence(model, fs, sweep_start):
     return fig
 
 
-def fig04_chirp_validation(y, y_sim, sweep_start, fs, zoom_s=(0.55, 0.57)):
+def fig04_chirp_validation(y, y_sim, sweep_start, fs, zoom_s=(0.55, 0.57), window_s=0.005):
     """Fig. 4: measured and simulated output of the validation chirp.
+
+    Three panels: (a) the whole sweep, each trace drawn as its envelope (its
+    maximum and minimum over windows of ``window_s``), so that neither hides
+    the other; (b) both traces over the ``zoom_s`` window; (c) the residual
+    over that window [mV].
 
     Parameters
     ----------
@@ -175,7 +243,9 @@ def fig04_chirp_validation(y, y_sim, sweep_start, fs, zoom_s=(0.55, 0.57)):
     fs : float
         Sampling frequency [Hz].
     zoom_s : pair of float, optional
-        Time window [s] after the sweep start of the residual panel.
+        Time window [s] after the sweep start of panels (b) and (c).
+    window_s : float, optional
+        Length [s] of the envelope windows of panel (a).
 
     Returns
     -------
@@ -184,22 +254,40 @@ def fig04_chirp_validation(y, y_sim, sweep_start, fs, zoom_s=(0.55, 0.57)):
     """
     y = check_finite_array("y", y, ndim=1, min_length=2)
     y_sim = check_finite_array("y_sim", y_sim, ndim=1, min_length=2)
+    if y_sim.shape != y.shape:
+        raise ValueError(f"y_sim must have the length of y ({y.size}), got {y_sim.size}")
     sweep = slice(sweep_start, None)
     fit = identification.fit_percent(y[sweep], y_sim[sweep])
-    residual = y[sweep] - y_sim[sweep]
     t = (np.arange(len(y)) - sweep_start) / fs
-    fig, (ax_full, ax_zoom) = new_figure(2, 1, figsize=(7.0, 5.0))
-    for ax in (ax_full, ax_zoom):
-        ax.plot(t[sweep], y[sweep], lw=0.8, label="measured (virtual stage)")
-        ax.plot(t[sweep], y_sim[sweep], lw=0.8, ls="--", label="simulated (identified model)")
-        ax.set_ylabel("v_y − operating point [V]")
-    ax_full.set_title(f"validation chirp: fit {fit:.1f} %")
-    ax_full.legend(loc="lower left")
+    n = max(1, int(round(window_s * fs)))
+    m = (len(y) - sweep_start) // n
+    if m < 2:
+        raise ValueError(f"window_s = {window_s} s leaves fewer than two windows in the sweep")
+    t_env = t[sweep_start:sweep_start + m * n].reshape(m, n).mean(axis=1)
+    fig, (ax_full, ax_zoom, ax_res) = new_figure(3, 1, figsize=(7.0, 7.0),
+                                                 height_ratios=(1.3, 1.0, 0.7))
+    styles = (("measured (virtual stage)", dict(color="#7fa7cf", lw=2.2)),
+              ("simulated (identified model)", dict(color="#7a1f1f", lw=0.9, ls="--")))
+    for (label, style), trace in zip(styles, (y, y_sim)):
+        blocks = trace[sweep_start:sweep_start + m * n].reshape(m, n)
+        ax_full.plot(t_env, blocks.max(axis=1), label=label, **style)
+        ax_full.plot(t_env, blocks.min(axis=1), **style)
+    ax_full.set(title=f"(a) whole sweep, envelopes over {1e3 * window_s:g} ms windows: "
+                      f"fit {fit:.1f} %",
+                xlabel="time since the start of the sweep [s]",
+                ylabel="v_y − operating point [V]")
+    ax_full.legend(loc="lower right")
     zoom = (t > zoom_s[0]) & (t < zoom_s[1])
-    ax_zoom.plot(t[zoom], residual[zoom[sweep]], lw=0.6, color="0.4", label="residual")
-    ax_zoom.set_xlim(*zoom_s)
-    ax_zoom.set_xlabel("time since the start of the sweep [s]")
-    ax_zoom.legend(loc="lower left")
+    if zoom.sum() < 2:
+        raise ValueError(f"zoom_s = {zoom_s} s holds fewer than two samples")
+    for (label, style), trace in zip(styles, (y, y_sim)):
+        ax_zoom.plot(t[zoom], trace[zoom], label=label, **style)
+    ax_zoom.set(title=f"(b) {zoom_s[0]:g} ... {zoom_s[1]:g} s after the start of the sweep",
+                xlim=zoom_s, xlabel="time since the start of the sweep [s]",
+                ylabel="v_y − operating point [V]")
+    ax_res.plot(t[zoom], 1e3 * (y[zoom] - y_sim[zoom]), lw=0.7, color="0.3")
+    ax_res.set(title="(c) residual: measured − simulated", xlim=zoom_s,
+               xlabel="time since the start of the sweep [s]", ylabel="residual [mV]")
     save_figure(fig, 4, "chirp_validation")
     return fig
 

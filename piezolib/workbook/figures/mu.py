@@ -1,4 +1,5 @@
-"""Figures of notebook 05 (mu-synthesis): D-scaling fit, Hankel values, Fig. 10 and Fig. 12."""
+"""Figures of notebook 05 (mu-synthesis): D-scaling fit, Hankel values, the delay-aware
+design, Fig. 10 and Fig. 12."""
 
 import control as ct
 import numpy as np
@@ -7,7 +8,7 @@ from piezolib.robust.lti import loop_functions
 from piezolib.workbook import plotting
 from piezolib.workbook.figures.audit import STEP_TITLES
 
-__all__ = ["extra_d_scaling_fit", "extra_hankel_singular_values",
+__all__ = ["extra_d_scaling_fit", "extra_hankel_singular_values", "extra_delay_aware_design",
            "fig10_step_responses_designs", "fig12_mu_bounds"]
 
 
@@ -76,19 +77,27 @@ def fig10_step_responses_designs(G, controllers, t=None):
     Returns
     -------
     matplotlib.figure.Figure
-        Saved as ``fig10_step_responses_designs.png``; KS is clipped to -5 ... 25.
+        Saved as ``fig10_step_responses_designs.png``; KS (which starts at
+        K(inf)) is on a symmetric log axis.
     """
     t = np.linspace(0, 0.01, 2001) if t is None else t
     fig, axes = plotting.new_figure(2, 2, figsize=(9, 5.5), sharex=True)
-    for name, K in controllers.items():
+    # overlapping designs stay visible: wide solid first, thinner dashed/dotted on top
+    styles = [dict(ls="-", lw=2.6), dict(ls="--", lw=1.8), dict(ls="-.", lw=1.4),
+              dict(ls=":", lw=1.8), dict(ls=(0, (5, 1, 1, 1)), lw=1.1)]
+    for k, (name, K) in enumerate(controllers.items()):
         loop = loop_functions(G, K)
         for ax, title, sys in zip(axes.flat, STEP_TITLES.values(), loop):
             resp = ct.step_response(sys, T=t)
-            ax.plot(1e3 * resp.time, np.ravel(resp.outputs), label=name)
+            ax.plot(1e3 * resp.time, np.ravel(resp.outputs), label=name,
+                    **styles[k % len(styles)])
             ax.set_title(title)
     for ax in axes.flat:
         ax.set_ylabel("amplitude [V/V]")
-    axes[1, 0].set_ylim(-5, 25)
+    # a biproper K makes KS start at K(inf) (hundreds of V/V), a strictly proper one peaks
+    # within microseconds: next to a settled value near 1, that needs a symmetric log axis
+    axes[1, 0].set_yscale("symlog", linthresh=1.0)
+    axes[1, 0].set_ylabel("amplitude [V/V] (log beyond +-1)")
     for ax in axes[1]:
         ax.set_xlabel("time [ms]")
     axes[0, 1].legend(loc="lower right")
@@ -112,8 +121,9 @@ def fig12_mu_bounds(results):
     fig, (ax_rs, ax_rp) = plotting.new_figure(1, 2, figsize=(10, 3.8), sharey=True)
     for name, a in results.items():
         line, = ax_rs.semilogx(a.omega, a.mu_RS_curve, label=name)
-        ax_rp.semilogx(a.omega, a.mu_RP_upper, color=line.get_color(), label=f"{name}, upper")
-        ax_rp.semilogx(a.omega, a.mu_RP_lower_curve, color=line.get_color(), ls=":",
+        ax_rp.semilogx(a.omega, a.mu_RP_upper, color=line.get_color(), lw=2.4, alpha=0.45,
+                       label=f"{name}, upper")
+        ax_rp.semilogx(a.omega, a.mu_RP_lower_curve, color=line.get_color(), ls="--", lw=1.0,
                        label=f"{name}, lower")
     for ax, title in ((ax_rs, "(a) robust stability: mu(M11) = |H_m T|"),
                       (ax_rp, "(b) robust performance: mu(M), upper and lower bounds")):
@@ -121,7 +131,55 @@ def fig12_mu_bounds(results):
         ax.set_xlim(1e0, 1e7)
         ax.set_xlabel("frequency [rad/s]")
         ax.set_title(title)
-    ax_rs.set_ylabel("mu")
-    ax_rp.legend(fontsize=7, loc="upper left")
+    ax_rs.set_ylabel("μ")
+    ax_rp.legend(fontsize=7, loc="lower left", ncol=2)
     plotting.save_figure(fig, 12, "mu_bounds")
     return fig
+
+
+def extra_delay_aware_design(omega, mu_results, controllers, rolloff=None, lower_bound=None):
+    """mu bounds of the delay-aware designs and the controllers' gains against the roll-off.
+
+    Parameters
+    ----------
+    omega : array_like
+        Frequencies [rad/s] of the mu results and of the gain plot.
+    mu_results : dict
+        ``{label: MuResult}`` on ``omega`` (upper bound solid, lower dotted).
+    controllers : dict
+        ``{label: K}``, continuous SISO controllers [V/V] for panel (b).
+    rolloff : control.LTI, optional
+        Roll-off weight W_u; 1 / |W_u| is drawn as the gain allowance.
+    lower_bound : float, optional
+        Lower bound on the achievable peak mu (horizontal line).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Saved as ``extra_delay_aware_design.png``.
+    """
+    omega = np.asarray(omega, float)
+    fig, (ax_mu, ax_k) = plotting.new_figure(1, 2, figsize=(11, 4.0))
+    for name, res in mu_results.items():
+        line, = ax_mu.semilogx(omega, res.upper, label=f"{name}, upper")
+        ax_mu.semilogx(omega, res.lower, ls=":", lw=2.2, color=line.get_color(),
+                       label=f"{name}, lower")
+    if lower_bound is not None:
+        ax_mu.axhline(lower_bound, color="k", ls="--", lw=0.9,
+                      label=f"no controller below {lower_bound:.3f}")
+    ax_mu.set_xlim(omega[0], omega[-1])
+    ax_mu.set_xlabel("frequency [rad/s]")
+    ax_mu.set_ylabel("mu_RP")
+    ax_mu.set_title("(a) mu_RP of the delay-aware problem")
+    ax_mu.legend(fontsize=7, loc="lower left")
+    for name, K in controllers.items():
+        plotting.plot_magnitude(ax_k, omega, np.ravel(K(1j * omega)), label=name)
+    if rolloff is not None:
+        plotting.plot_magnitude(ax_k, omega, 1 / np.ravel(rolloff(1j * omega)), color="k",
+                                ls="--", lw=0.9, label="1 / |W_u| (roll-off allowance)")
+    ax_k.set_ylabel("|K| [dB]")
+    ax_k.set_title("(b) controller gain")
+    ax_k.legend(fontsize=7, loc="lower left")
+    plotting.save_figure(fig, None, "delay_aware_design")
+    return fig
+

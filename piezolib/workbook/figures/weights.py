@@ -42,8 +42,9 @@ def extra_weight_templates(error_params, output_params, omega=None,
     axes[0].set_title("template on S: 1/|H_e|")
     axes[1].set_title("template on T: 1/|H_y|")
     axes[1].set_ylim(-200, 20)
-    for ax in axes:
-        ax.legend(loc="lower right")
+    # the empty corners: 1/|H_e| rises to M_e at high frequency, 1/|H_y| falls from M_y
+    axes[0].legend(loc="lower right")
+    axes[1].legend(loc="lower left")
     plotting.save_figure(fig, None, "weight_templates")
     return fig
 

@@ -37,7 +37,36 @@ def test_fig04_is_saved_under_the_paper_number(figures_dir):
     fig = F.fig04_chirp_validation(y, y_sim, 1000, FS, zoom_s=(0.2, 0.22))
     assert (figures_dir / "fig04_chirp_validation.png").is_file()
     fit = identification.fit_percent(y[1000:], y_sim[1000:])
-    assert fig.axes[0].get_title() == f"validation chirp: fit {fit:.1f} %"
+    ax_full, ax_zoom, ax_res = fig.axes
+    assert ax_full.get_title().endswith(f"fit {fit:.1f} %")
+    # every panel has its x label; both traces are visible (envelopes, then the traces)
+    assert all(ax.get_xlabel() for ax in fig.axes)
+    assert len(ax_full.lines) == 4 and len(ax_zoom.lines) == 2
+    measured, simulated = ax_zoom.lines
+    assert measured.get_linewidth() > simulated.get_linewidth()
+    assert measured.get_linestyle() != simulated.get_linestyle()
+    np.testing.assert_allclose(ax_res.lines[0].get_ydata(),
+                               1e3 * (measured.get_ydata() - simulated.get_ydata()))
+    with pytest.raises(ValueError, match="y_sim"):
+        F.fig04_chirp_validation(y, y_sim[:-1], 1000, FS)
+
+
+def test_fig13_marks_the_quantities_of_eq_25_26(figures_dir):
+    from piezolib.hysteresis import hysteresis_measure
+    t = np.arange(3001) / FS
+    v = 20 * (1 - np.abs(((10 * t) % 1) * 2 - 1))       # three 10 Hz triangles, 0 ... 20 V
+    rising = np.gradient(v) > 0
+    x = 0.3 * v + np.where(rising, -0.4, 0.4) * np.sin(np.pi * v / 20)  # a loop 0.8 um wide
+    measure = hysteresis_measure(v, x)
+    fig = F.fig13_hysteresis_measure(v, x, measure, 20.0)
+    assert (figures_dir / "fig13_hysteresis_measure.png").is_file()
+    ax = fig.axes[0]
+    assert f"{measure.percent:.2f} %" in ax.get_title()
+    dots = [line for line in ax.lines if line.get_marker() == "o"][0]
+    np.testing.assert_allclose(dots.get_xdata(), [measure.v_mid] * 2)
+    np.testing.assert_allclose(sorted(dots.get_ydata()), sorted([measure.x_up, measure.x_lo]))
+    assert {"X_UP", "X_LO", "X_MAX", "X_MIN"} <= {t.get_text() for t in ax.texts}
+    assert ax.get_ylabel().endswith("[µm]")                   # the units rule was applied
 
 
 def test_residual_whiteness_figure(figures_dir):

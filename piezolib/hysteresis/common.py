@@ -1,0 +1,210 @@
+"""What every hysteresis model and fit of this package shares.
+
+A model (:class:`~piezolib.hysteresis.dahl.DahlModel`,
+:class:`~piezolib.hysteresis.pi.PIModel`) satisfies :class:`HysteresisModel`:
+``simulate(v) -> x`` and ``feedforward(x_r) -> v``.  A fit
+(:class:`~piezolib.hysteresis.fit.DahlFit`, :class:`~piezolib.hysteresis.pi.PIFit`)
+carries the model, its output and errors per loop, and a parameter table with
+95 % confidence intervals from the Jacobian (:class:`ParameterEstimate`).
+:func:`check_loops` validates measured loops for every fit.
+"""
+
+import math
+import warnings
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from piezolib._checks import check_finite_array, check_integer
+
+__all__ = ["HysteresisModel", "FitWarning", "ParameterEstimate", "estimates",
+           "covariance", "parameter_frame", "warn_about", "check_loops", "loop_errors", "Z95"]
+
+#: Two-sided 95 % quantile of the normal distribution.
+Z95 = 1.959963984540054
+
+
+@runtime_checkable
+class HysteresisModel(Protocol):
+    """A rate-independent hysteresis model with a feedforward.
+
+    ``simulate(v)`` returns the displacement [x-unit] for an input record
+    [v-unit], ``feedforward(x_r)`` the input that makes the model follow the
+    desired displacement x_r (exactly, for the models of this package).
+    """
+
+    def simulate(self, v): ...
+
+    def feedforward(self, x_r): ...
+
+
+class FitWarning(UserWarning):
+    """A fitted parameter sits on a bound or is not identifiable from the data."""
+
+
+@dataclass(frozen=True)
+class ParameterEstimate:
+    """One fitted (or derived) parameter with its 95 % confidence interval.
+
+    Attributes
+    ----------
+    name : str
+    value : float
+    unit : str
+        In the units of the records (``x`` the output, ``v`` the input unit).
+    low, high : float
+        95 % confidence interval from the Jacobian at the optimum, assuming
+        white residuals (with model error in the residuals, an optimistic
+        interval; NaN where the Jacobian is singular).  For a parameter
+        fitted on a log scale the interval is exp(log value +- 1.96 se).
+    at_bound : bool
+        The optimum lies on a bound of this parameter.
+    identifiable : bool
+        The relative standard error is below 1/1.96 (the 95 % interval stays
+        within a factor e of the value for a log parameter, excludes 0 for a
+        linear one) and the parameter is not on a bound.
+    """
+
+    name: str
+    value: float
+    unit: str
+    low: float
+    high: float
+    at_bound: bool
+    identifiable: bool
+
+
+def estimates(names, units, values, log_scale, cov, at_bound):
+    """:class:`ParameterEstimate` list from values and the covariance of the fit coordinates.
+
+    Parameters
+    ----------
+    names, units : sequence of str
+    values : array_like
+        Parameter values (natural scale).
+    log_scale : sequence of bool
+        Whether the fit coordinate of each parameter is its logarithm.
+    cov : ndarray
+        Covariance of the fit coordinates (log for ``log_scale`` ones).
+    at_bound : sequence of bool
+    """
+    out = []
+    se = np.sqrt(np.abs(np.diag(cov)))       # inf: not seen by the data, NaN: unknown
+    for name, unit, value, log, s, bound in zip(names, units, values, log_scale, se, at_bound):
+        value = float(value)
+        if log:
+            spread = math.exp(min(Z95 * s, 700.0)) if np.isfinite(s) else s
+            low, high = value / spread, value * spread
+            rel = s
+        else:
+            low, high = value - Z95 * s, value + Z95 * s
+            rel = s / abs(value) if value != 0 else math.inf
+        ok = bool(np.isfinite(rel) and Z95 * rel < 1.0 and not bound)
+        out.append(ParameterEstimate(name, value, unit, float(low), float(high), bool(bound), ok))
+    return out
+
+
+def covariance(J, r, dof_used):
+    """Least-squares covariance s^2 (J^T J)^+ with s^2 = |r|^2 / (n - p).
+
+    Columns that do not change the residual at all give an infinite variance.
+    """
+    n, p = J.shape
+    s2 = float(r @ r) / max(n - dof_used, 1)
+    if not np.all(np.isfinite(J)):
+        return np.full((p, p), np.nan)
+    U, sv, Vt = np.linalg.svd(J, full_matrices=False)
+    tiny = sv <= sv[0] * 1e-12 if sv.size and sv[0] > 0 else np.ones_like(sv, dtype=bool)
+    inv = np.where(tiny, 0.0, 1.0 / np.where(tiny, 1.0, sv) ** 2)
+    cov = (Vt.T * inv) @ Vt * s2
+    # a direction the data do not see: infinite variance for every parameter in it
+    for k in np.flatnonzero(tiny):
+        cov[np.abs(Vt[k]) > 1e-8, np.abs(Vt[k]) > 1e-8] = np.inf
+    return cov
+
+
+def parameter_frame(parameters):
+    """pandas DataFrame of :class:`ParameterEstimate` rows, indexed by name."""
+    import pandas as pd
+    return pd.DataFrame([{"value": p.value, "unit": p.unit, "95% CI low": p.low,
+                          "95% CI high": p.high, "at_bound": p.at_bound,
+                          "identifiable": p.identifiable} for p in parameters],
+                        index=pd.Index([p.name for p in parameters], name="parameter"))
+
+
+def warn_about(parameters, what, stacklevel=3):
+    """Warn (:class:`FitWarning`) about every parameter on a bound or not identifiable."""
+    bad = [p for p in parameters if p.at_bound or not p.identifiable]
+    if bad:
+        text = "; ".join(f"{p.name} = {p.value:.4g} " + (
+            "on a bound" if p.at_bound else f"not identifiable (95% CI {p.low:.3g} ... "
+                                            f"{p.high:.3g})") for p in bad)
+        warnings.warn(f"{what}: {text}", FitWarning, stacklevel=stacklevel)
+    return bad
+
+
+def check_loops(loops, discard=0, stride=1, what="loops"):
+    """Validated loops as a list of (v, x, used), ``used`` the residual samples.
+
+    ``used`` holds every ``stride``-th sample from ``discard`` on plus every
+    turning point of v; ``v`` and ``x`` are thinned the same way (a rate-
+    independent model only sees the path, so its output there is exact).
+
+    Raises
+    ------
+    TypeError, ValueError
+        Naming the loop: not (v, x) pairs, NaN, unequal lengths, fewer than
+        8 samples, or no ascending and descending stroke of v after
+        ``discard`` (the data cannot show a loop).
+    """
+    from piezolib.hysteresis.dahl import strokes
+    if isinstance(loops, tuple) and len(loops) == 2 and np.ndim(loops[0]) == 1 \
+            and np.size(loops[0]) > 2:
+        loops = [loops]                       # a single (v, x) pair
+    try:
+        loops = list(loops)
+    except TypeError:
+        raise TypeError(f"{what} must be a sequence of (v, x) pairs of 1-D arrays") from None
+    if not loops:
+        raise ValueError(f"{what} must hold at least one (v, x) pair")
+    discard = check_integer("discard", discard, minimum=0)
+    stride = check_integer("stride", stride, minimum=1)
+    out = []
+    for i, pair in enumerate(loops):
+        if not isinstance(pair, (tuple, list)) or len(pair) != 2:
+            raise TypeError(f"{what}[{i}] must be a (v, x) pair of arrays, "
+                            f"got {type(pair).__name__}")
+        v = check_finite_array(f"{what}[{i}] v", pair[0], ndim=1, min_length=8)
+        x = check_finite_array(f"{what}[{i}] x", pair[1], ndim=1, min_length=8)
+        if np.iscomplexobj(v) or np.iscomplexobj(x):
+            raise TypeError(f"{what}[{i}]: v and x must be real")
+        if v.size != x.size:
+            raise ValueError(f"{what}[{i}]: v and x must have equal lengths "
+                             f"({v.size} and {x.size})")
+        runs = strokes(v)
+        late = [r for r in runs if r[1] > discard]
+        if not any(r[2] > 0 for r in late) or not any(r[2] < 0 for r in late) \
+                or np.ptp(x[discard:]) == 0:
+            raise ValueError(f"{what}[{i}] has no full cycle after discarding {discard} "
+                             "samples: need an ascending and a descending stroke of v")
+        keep = np.union1d(np.arange(0, v.size, stride), [r[1] for r in runs] + [0])
+        out.append((v[keep], x[keep], np.flatnonzero(keep >= discard)))
+    return out
+
+
+def loop_errors(x_models, loops, discard):
+    """Residuals and (rms, rms %, max %) per loop on the samples from ``discard`` on.
+
+    Percentages are of each loop's output range on those samples.
+    """
+    res, rms, rms_pct, max_pct = [], [], [], []
+    for xm, (v, x) in zip(x_models, loops):
+        x = np.asarray(x, dtype=float)
+        r = xm[discard:] - x[discard:]
+        span = float(np.ptp(x[discard:]))
+        res.append(r)
+        rms.append(math.sqrt(float(np.mean(r ** 2))))
+        rms_pct.append(100 * rms[-1] / span)
+        max_pct.append(100 * float(np.max(np.abs(r))) / span)
+    return res, np.array(rms), np.array(rms_pct), np.array(max_pct)

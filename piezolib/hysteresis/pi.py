@@ -1,0 +1,317 @@
+"""Prandtl-Ishlinskii hysteresis model: play operators, NNLS fit, exact inverse feedforward.
+
+x = x0 + sum_i w_i F_{r_i}[v], with F_r the play (backlash) operator of
+threshold r (r_0 = 0: F_0[v] = v, the linear part).  Rate independent, as
+the Dahl model.  :func:`fit_pi` finds the weights of fixed thresholds by
+non-negative least squares (one linear problem: no starting point, no local
+minima); :meth:`PIModel.inverse` is the exact inverse, another PI operator
+with thresholds r^_j = sum_{i<=j} w_i (r_j - r_i) and weights
+w^_0 = 1/w_0, w^_j = -w_j / (W_j W_{j-1}) (W_j = w_0 + ... + w_j), so that
+:meth:`PIModel.feedforward` followed by :meth:`PIModel.simulate` is the
+identity.  Both models share the interface of
+:class:`~piezolib.hysteresis.common.HysteresisModel`.
+"""
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.optimize as opt
+
+from piezolib._checks import check_finite_array, check_integer
+from piezolib.hysteresis.common import (FitWarning, check_loops, covariance, estimates,
+                                        loop_errors, parameter_frame, warn_about)
+from piezolib.hysteresis.dahl import NotInvertibleError, strokes
+
+__all__ = ["PI_STARTS", "PIModel", "PIFit", "play_outputs", "fit_pi", "FitWarning"]
+
+#: Initial play states: "rest" as if lowered to the first input (y_i = v_0 + r_i,
+#: the descending branch), "virgin" every play centred on it (y_i = v_0).
+PI_STARTS = ("rest", "virgin")
+
+
+def play_outputs(v, thresholds, y0):
+    """Outputs of the play operators F_{r_i} for an input record, stroke by stroke.
+
+    Parameters
+    ----------
+    v : ndarray
+        Input [v-unit], 1-D.
+    thresholds : ndarray
+        Thresholds r_i >= 0 [v-unit].
+    y0 : ndarray
+        Play outputs before the first sample (clipped to [v_0 - r, v_0 + r]).
+
+    Returns
+    -------
+    ndarray, shape (len(v), len(thresholds))
+        Along a rising stroke y = max(y_start, v - r), along a falling one
+        y = min(y_start, v + r): one numpy operation per stroke.
+    """
+    r = np.asarray(thresholds, dtype=float)
+    Y = np.empty((v.size, r.size))
+    y = np.clip(np.asarray(y0, dtype=float), v[0] - r, v[0] + r)
+    Y[0] = y
+    for start, stop, s in strokes(v):
+        seg = v[start + 1:stop + 1, None]
+        Y[start + 1:stop + 1] = np.maximum(y, seg - r) if s > 0 else np.minimum(y, seg + r)
+        y = Y[stop]
+    return Y
+
+
+@dataclass(frozen=True)
+class PIModel:
+    """Prandtl-Ishlinskii model x = x0 + sum_i w_i F_{r_i}[v].
+
+    Attributes
+    ----------
+    thresholds : tuple of float
+        r_0 = 0 <= r_1 <= ... [v-unit] (non-decreasing; r_0 = 0 is the linear term).
+    weights : tuple of float
+        w_i [x-unit per v-unit]; the fitted model has w_i >= 0 and w_0 > 0,
+        the inverse has negative weights.
+    x0 : float, optional
+        Output offset [x-unit].
+    start : {"rest", "virgin"}, optional
+        Initial play state relative to the first input v_0 (:data:`PI_STARTS`).
+    """
+
+    thresholds: tuple
+    weights: tuple
+    x0: float = 0.0
+    start: str = "rest"
+
+    def __post_init__(self):
+        r = check_finite_array("thresholds", self.thresholds, ndim=1, min_length=1)
+        w = check_finite_array("weights", self.weights, ndim=1)
+        if np.iscomplexobj(r) or np.iscomplexobj(w):
+            raise TypeError("thresholds and weights must be real")
+        if w.size != r.size:
+            raise ValueError(f"weights must hold one weight per threshold ({r.size}), "
+                             f"got {w.size}")
+        if r[0] != 0 or np.any(np.diff(r) < 0):
+            raise ValueError("thresholds must start at 0 and be non-decreasing, "
+                             f"got {tuple(r)}")
+        if not math.isfinite(self.x0):
+            raise ValueError(f"x0 must be finite, got {self.x0!r}")
+        if self.start not in PI_STARTS:
+            raise ValueError(f"start must be one of {PI_STARTS}, got {self.start!r}")
+        object.__setattr__(self, "thresholds", tuple(float(x) for x in r))
+        object.__setattr__(self, "weights", tuple(float(x) for x in w))
+        object.__setattr__(self, "x0", float(self.x0))
+
+    @property
+    def invertible(self):
+        """w_0 > 0 and every w_i >= 0: x rises strictly with v along every stroke."""
+        return self.weights[0] > 0 and min(self.weights) >= 0
+
+    def initial_state(self, v0):
+        """Play outputs before the first sample, for the first input ``v0`` [v-unit]."""
+        r = np.asarray(self.thresholds)
+        return v0 + r if self.start == "rest" else np.full(r.size, float(v0))
+
+    def simulate(self, v, state=None):
+        """Displacement [x-unit] for the input record ``v`` [v-unit].
+
+        Parameters
+        ----------
+        v : array_like
+            Input, 1-D, at least 2 samples.
+        state : array_like, optional
+            Play outputs before the first sample (default: the model's ``start``).
+        """
+        v = _real_record("v", v)
+        y0 = self.initial_state(v[0]) if state is None else \
+            check_finite_array("state", state, shape=(len(self.thresholds),))
+        return self.x0 + play_outputs(v, self.thresholds, y0) @ np.asarray(self.weights)
+
+    def inverse(self, v0=0.0):
+        """The exact inverse operator, for a forward model that starts at input ``v0``.
+
+        Returns
+        -------
+        model : PIModel
+            Thresholds r^_j and weights w^_j of the module docstring, x0 = 0:
+            it maps x - x0 back to v.
+        state : ndarray
+            Its play outputs before the first sample, from the forward
+            model's initial state y_i:
+            y^_j = W_j y_j + sum_{i>j} w_i y_i (for j = 0 this is x - x0 itself).
+
+        Raises
+        ------
+        NotInvertibleError
+            When w_0 <= 0 or a weight is negative.
+        """
+        if not self.invertible:
+            raise NotInvertibleError(
+                "the PI model is invertible only with w_0 > 0 and w_i >= 0, got weights "
+                f"{self.weights}")
+        r, w = np.asarray(self.thresholds), np.asarray(self.weights)
+        W = np.cumsum(w)
+        r_hat = np.array([np.sum(w[:j + 1] * (r[j] - r[:j + 1])) for j in range(r.size)])
+        w_hat = np.empty(r.size)
+        w_hat[0] = 1.0 / w[0]
+        w_hat[1:] = -w[1:] / (W[1:] * W[:-1])
+        y = self.initial_state(v0)
+        above = np.r_[np.cumsum((w * y)[::-1])[::-1][1:], 0.0]     # sum_{i>j} w_i y_i
+        state = W * y + above
+        return PIModel(tuple(np.maximum.accumulate(r_hat)), tuple(w_hat)), state
+
+    def feedforward(self, x_r):
+        """Input [v-unit] that makes the model follow ``x_r`` [x-unit] exactly.
+
+        The inverse operator driven by x_r - x0, started in the state that
+        matches the model's ``start`` at the input v_0 giving x_r[0].
+        """
+        x_r = _real_record("x_r", x_r)
+        w = np.asarray(self.weights)
+        if not self.invertible:
+            self.inverse()                      # raises the explanatory error
+        shift = float(w @ np.asarray(self.thresholds)) if self.start == "rest" else 0.0
+        v0 = (x_r[0] - self.x0 - shift) / float(w.sum())
+        inv, state = self.inverse(v0)
+        return inv.simulate(x_r - self.x0, state=state)
+
+
+def _real_record(name, v):
+    v = check_finite_array(name, v, ndim=1, min_length=2)
+    if np.iscomplexobj(v):
+        raise TypeError(f"{name} must be real, got complex values")
+    return v
+
+
+@dataclass(frozen=True)
+class PIFit:
+    """Result of :func:`fit_pi`.
+
+    Attributes
+    ----------
+    model : PIModel
+    x_model : list of ndarray
+        Model displacement for each loop's whole input record [x-unit].
+    residuals : list of ndarray
+        ``x_model - x`` per loop on the samples from ``discard`` on [x-unit].
+    rms, rms_percent, max_percent : ndarray
+        RMS residual per loop [x-unit], and RMS and largest |residual| in % of
+        that loop's output range.
+    parameters : tuple of ParameterEstimate
+        w_0 ... w_n (and x0) with 95 % confidence intervals; a weight on its
+        bound 0 is a play the data do not call for.
+    """
+
+    model: PIModel
+    x_model: list
+    residuals: list
+    rms: np.ndarray
+    rms_percent: np.ndarray
+    max_percent: np.ndarray
+    parameters: tuple = ()
+
+    def parameter_table(self):
+        """pandas DataFrame of :attr:`parameters`: value, unit, 95 % CI, at_bound, identifiable."""
+        return parameter_frame(self.parameters)
+
+    @property
+    def worst_rms_percent(self):
+        """Largest per-loop RMS error [% of range]."""
+        return float(np.max(self.rms_percent))
+
+    @property
+    def pooled_rms_percent(self):
+        """RMS over the loops of the per-loop RMS errors [% of range]."""
+        return float(np.sqrt(np.mean(self.rms_percent ** 2)))
+
+
+def fit_pi(loops, n_plays=10, offset=True, start="rest", discard=0, thresholds=None):
+    """Fit the play weights of a PI model to one or several loops jointly (NNLS).
+
+    With the thresholds fixed the output is linear in the weights and the
+    offset, so the fit is one bounded linear least-squares problem
+    (weights >= 0, offset free): no starting point, no iterations on the
+    model, any sampling rate and record length.  Each loop's residual is
+    divided by its output range and sqrt(samples used), as in
+    :func:`~piezolib.hysteresis.fit.fit_dahl`.
+
+    Parameters
+    ----------
+    loops : sequence of (v, x)
+        Input [v-unit] and measured output [x-unit] records (or one pair).
+    n_plays : int, optional
+        Number of play operators, including the linear one (r = 0).
+        Default thresholds r_i = i / n_plays * (largest input range) / 2.
+    offset : bool, optional
+        Fit the output offset x0 (default True).
+    start : {"rest", "virgin"}, optional
+        The model's initial play state (:data:`PI_STARTS`).
+    discard : int, optional
+        Samples at the start of each record left out of the residuals (the
+        plays still run through them).
+    thresholds : array_like, optional
+        Thresholds to use instead (first 0, non-decreasing) [v-unit].
+
+    Returns
+    -------
+    PIFit
+        A :class:`~piezolib.hysteresis.common.FitWarning` is issued when the
+        linear weight w_0 ends at 0 (the model then has no exact inverse).
+
+    Raises
+    ------
+    ValueError
+        For loops without an ascending and a descending stroke of v after
+        ``discard``, or with x not increasing with v.
+    """
+    data = check_loops(loops, discard, 1)
+    if start not in PI_STARTS:
+        raise ValueError(f"start must be one of {PI_STARTS}, got {start!r}")
+    if not isinstance(offset, (bool, np.bool_)):
+        raise TypeError(f"offset must be True or False, got {offset!r}")
+    if thresholds is None:
+        n_plays = check_integer("n_plays", n_plays, minimum=1)
+        half = max(float(np.ptp(v)) for v, x, used in data) / 2.0
+        thresholds = half * np.arange(n_plays) / n_plays
+    template = PIModel(tuple(np.asarray(thresholds, dtype=float)),
+                       tuple(np.ones(len(thresholds))), start=start)
+    r = np.asarray(template.thresholds)
+    rows, rhs = [], []
+    for v, x, used in data:
+        Y = play_outputs(v, r, template.initial_state(v[0]))[used]
+        weight = 1.0 / (np.ptp(x[used]) * math.sqrt(used.size))
+        cols = [Y] + ([np.ones((used.size, 1))] if offset else [])
+        rows.append(weight * np.hstack(cols))
+        rhs.append(weight * x[used])
+    A, b = np.vstack(rows), np.concatenate(rhs)
+    slope = np.linalg.lstsq(A[:, :1] - A[:, :1].mean(), b - b.mean(), rcond=None)[0][0] \
+        if offset else np.linalg.lstsq(A[:, :1], b, rcond=None)[0][0]
+    if not slope > 0:
+        raise ValueError("the loops must show x increasing with v (positive mean slope): "
+                         "the data cannot support a hysteresis model")
+    lower = np.r_[np.zeros(r.size), [-np.inf] if offset else []]
+    sol = opt.lsq_linear(A, b, bounds=(lower, np.inf), method="bvls")
+    theta = sol.x
+    x0 = float(theta[-1]) if offset else 0.0
+    model = PIModel(template.thresholds, tuple(theta[:r.size]), x0=x0, start=start)
+    w_fit = theta[:r.size]
+    tiny = 1e-12 * float(np.sum(w_fit))               # rounding of the active set
+    w_fit[w_fit <= tiny] = 0.0
+    at_bound = list(w_fit <= 0) + ([False] if offset else [])
+    cov = covariance(A, A @ theta - b, int(np.count_nonzero(~np.array(at_bound))))
+    names = [f"w_{i} (r = {ri:.4g})" for i, ri in enumerate(r)] + (["x0"] if offset else [])
+    units = ["x/v"] * r.size + (["x"] if offset else [])
+    parameters = estimates(names, units, theta, [False] * theta.size, cov, at_bound)
+    if at_bound[0]:
+        warn_about(parameters[:1], "fit_pi: the linear weight w_0 is 0 (no exact inverse)")
+    x_model = [model.simulate(np.asarray(pair[0], dtype=float))
+               for pair in _pairs(loops)]
+    res, rms, rms_pct, max_pct = loop_errors(x_model, _pairs(loops), discard)
+    return PIFit(model=model, x_model=x_model, residuals=res, rms=rms, rms_percent=rms_pct,
+                 max_percent=max_pct, parameters=tuple(parameters))
+
+
+def _pairs(loops):
+    """The (v, x) pairs of already validated ``loops`` (a single pair allowed)."""
+    if isinstance(loops, tuple) and len(loops) == 2 and np.ndim(loops[0]) == 1 \
+            and np.size(loops[0]) > 2:
+        return [loops]
+    return list(loops)

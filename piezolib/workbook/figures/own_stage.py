@@ -1,0 +1,315 @@
+"""Figures of notebook 08 (your own stage): records, identification, weight, hysteresis,
+mu verification and the Tables 4-5-style experiment.
+
+Every function takes the computed results with their units spelled out by
+the caller (nothing here assumes the paper's 3 um/V or x10 amplifier), draws
+one figure, saves it as ``figures/extra_own_stage_<what>.png`` and returns it.
+"""
+
+import numpy as np
+
+from piezolib._checks import check_finite_array, check_positive
+from piezolib.records import Record
+from piezolib.workbook import plotting
+from piezolib.workbook.figures.identification import bode_overlay
+
+__all__ = ["extra_own_stage_records", "extra_own_stage_identification",
+           "extra_own_stage_uncertainty", "extra_own_stage_hysteresis",
+           "extra_own_stage_mu", "extra_own_stage_experiments"]
+
+_COLORS = ("#1f77b4", "#c0504d", "#4f8f3a", "#8064a2")
+
+
+def extra_own_stage_records(records, marks=None):
+    """The raw records as loaded: input and output against time, one panel per record.
+
+    Parameters
+    ----------
+    records : dict
+        {label: piezolib.records.Record}.
+    marks : dict, optional
+        {label: [(t [s], text), ...]}: vertical lines drawn on that record's
+        panel (e.g. the operating-point window, the validation split).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Saved as ``extra_own_stage_records.png``.
+    """
+    if not records:
+        raise ValueError("records must hold at least one record")
+    for label, rec in records.items():
+        if not isinstance(rec, Record):
+            raise TypeError(f"records[{label!r}] must be a piezolib.records.Record, "
+                            f"got {type(rec).__name__}")
+    marks = {} if marks is None else dict(marks)
+    fig, axes = plotting.new_figure(len(records), 1, figsize=(9.0, 2.3 * len(records)),
+                                    squeeze=False)
+    for ax, (label, rec) in zip(axes[:, 0], records.items()):
+        ax.plot(rec.time, rec.input, lw=0.7, color=_COLORS[0])
+        ax.set_ylabel(f"{rec.input_name} [{rec.input_unit}]", color=_COLORS[0])
+        right = ax.twinx()
+        right.plot(rec.time, rec.output, lw=0.7, color=_COLORS[1])
+        right.set_ylabel(f"{rec.output_name} [{rec.output_unit}]", color=_COLORS[1])
+        mine = list(marks.get(label, ()))
+        for t, text in mine:
+            ax.axvline(t, color="0.3", ls="--", lw=0.8)
+        if mine:        # the marks' names as ticks of a top axis, clear of the curves
+            top = ax.secondary_xaxis("top")
+            top.set_xticks([t for t, _ in mine], [text for _, text in mine], fontsize=7)
+        ax.set_title(f"{label}: {len(rec)} samples at {rec.fs:g} Hz", fontsize=9,
+                     pad=14 if mine else 6)
+    axes[-1, 0].set_xlabel("time [s]")
+    plotting.save_figure(fig, None, "own_stage_records")
+    return fig
+
+
+def extra_own_stage_identification(t, y, y_model, models, omega, measured=None, y_truth=None,
+                                   output_label="y", zoom_s=None):
+    """Held-out validation in time and the identified model against the truth in frequency.
+
+    Parameters
+    ----------
+    t : array_like
+        Time of the held-out samples [s].
+    y, y_model : array_like
+        Measured output and the identified model's simulated output on them.
+    models : dict
+        {label: control.LTI}: the Bode panels (identified model, the true
+        plant where it is known).
+    omega : array_like
+        Bode grid [rad/s].
+    measured : tuple, optional
+        (omega [rad/s], complex response): empirical frequency response.
+    y_truth : array_like, optional
+        The true plant's simulated output on the same samples (known only on
+        the virtual stage), drawn for reference.
+    output_label : str
+        Name and unit of y, e.g. ``"v_y [V]"``.
+    zoom_s : (float, float), optional
+        Time window [s] of panel (a) (default: all of ``t``); panel (b)
+        always shows all of it.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Saved as ``extra_own_stage_identification.png``.
+    """
+    t = check_finite_array("t", t, ndim=1, min_length=2)
+    y = check_finite_array("y", y, ndim=1, min_length=2)
+    y_model = check_finite_array("y_model", y_model, ndim=1, min_length=2)
+    if not y.size == y_model.size == t.size:
+        raise ValueError("t, y and y_model must have equal lengths")
+    fig, axes = plotting.new_figure(2, 2, figsize=(11.0, 5.6))
+    axes[0, 0].plot(t, y, color="0.6", lw=1.2, label="measured (held out)")
+    axes[0, 0].plot(t, y_model, lw=0.8, color=_COLORS[0], label="identified model")
+    axes[1, 0].plot(t, y_model - y, lw=0.7, color=_COLORS[0], label="identified - measured")
+    if y_truth is not None:
+        y_truth = check_finite_array("y_truth", y_truth, ndim=1, min_length=2)
+        if y_truth.size != t.size:
+            raise ValueError("y_truth must have the length of t")
+        axes[0, 0].plot(t, y_truth, "--", lw=0.8, color=_COLORS[2], label="true plant")
+        axes[1, 0].plot(t, y_truth - y, lw=0.7, color=_COLORS[2], alpha=0.7,
+                        label="true plant - measured (noise)")
+    axes[0, 0].set(ylabel=output_label, xlabel="time [s]",
+                   title="(a) held-out part of the record" + ("" if zoom_s is None else ", zoom"))
+    if zoom_s is not None:
+        lo, hi = (float(z) for z in zoom_s)
+        if not hi > lo:
+            raise ValueError(f"zoom_s must be (start, stop) with stop > start, got {zoom_s!r}")
+        axes[0, 0].set_xlim(lo, hi)
+    axes[1, 0].set(xlabel="time [s]", ylabel=f"error, {output_label}",
+                   title="(b) simulation error on the held-out part")
+    shown = np.ones(t.size, bool) if zoom_s is None else (t >= zoom_s[0]) & (t <= zoom_s[1])
+    y_lo, y_hi = (float(f(y[shown] if shown.any() else y)) for f in (np.min, np.max))
+    if y_hi > y_lo:                                          # room for the legend on top
+        axes[0, 0].set_ylim(y_lo - 0.05 * (y_hi - y_lo), y_hi + 0.6 * (y_hi - y_lo))
+    axes[0, 0].legend(fontsize=7, loc="upper center", ncol=3)
+    axes[1, 0].legend(fontsize=7)
+    bode_overlay(models, omega, measured=measured, axes=(axes[0, 1], axes[1, 1]))
+    axes[0, 1].set_title("(c) frequency response")
+    axes[0, 1].legend(fontsize=7)
+    plotting.save_figure(fig, None, "own_stage_identification")
+    return fig
+
+
+def extra_own_stage_uncertainty(omega, envelope, weight, spread, true_error=None):
+    """Relative error envelope of the model set, the fitted weight and the true model error.
+
+    Parameters
+    ----------
+    omega : array_like
+        Frequencies [rad/s].
+    envelope : array_like
+        E_m(omega) of the coefficient set of the identified model.
+    weight : control.LTI
+        The covering weight.
+    spread : float
+        Relative coefficient spread of the set (e.g. 0.02).
+    true_error : array_like, optional
+        |G_true / G_identified - 1| where the truth is known.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Saved as ``extra_own_stage_uncertainty.png``.
+    """
+    omega = check_finite_array("omega", omega, ndim=1, min_length=2)
+    envelope = np.asarray(envelope, dtype=float)
+    if envelope.shape != omega.shape:
+        raise ValueError("envelope must have the shape of omega")
+    spread = check_positive("spread", spread)
+    fig, ax = plotting.new_figure(figsize=(7.5, 4.0))
+    ax.loglog(omega, envelope, color="0.55", lw=1.5,
+              label=f"E_m: coefficients +-{100 * spread:g} % (stable members)")
+    ax.loglog(omega, np.abs(np.ravel(weight(1j * omega))), color=_COLORS[0],
+              label="covering weight |W|")
+    if true_error is not None:
+        true_error = np.asarray(true_error, dtype=float)
+        if true_error.shape != omega.shape:
+            raise ValueError("true_error must have the shape of omega")
+        ax.loglog(omega, true_error, "--", color=_COLORS[1],
+                  label="|G_true / G_identified - 1| (known here)")
+    ax.set(xlabel="frequency [rad/s]", ylabel="relative error",
+           title="Uncertainty weight of the identified model")
+    ax.legend(fontsize=7)
+    plotting.save_figure(fig, None, "own_stage_uncertainty")
+    return fig
+
+
+def extra_own_stage_hysteresis(v, x, models, scores, first=0, input_scale=1.0,
+                               output_scale=1.0, input_label="v", output_label="x"):
+    """A validation loop (not fitted) against each hysteresis model: loops and errors.
+
+    Parameters
+    ----------
+    v, x : array_like
+        Validation input and measured output, in the models' units.
+    models : dict
+        {name: model with ``simulate(v) -> x``}.
+    scores : pandas.DataFrame
+        Validation table with an ``RMS %`` column indexed by model name
+        (first index level), e.g. from :func:`piezolib.hysteresis.validation_table`.
+    first : int
+        First sample drawn (the models still run from sample 0).
+    input_scale, output_scale : float
+        Factors from the models' units to the axes' units (e.g. amplifier
+        gain, um per sensor volt).
+    input_label, output_label : str
+        Axis labels with units.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Saved as ``extra_own_stage_hysteresis.png``.
+    """
+    v = check_finite_array("v", v, ndim=1, min_length=8)
+    x = check_finite_array("x", x, ndim=1, min_length=8)
+    if v.size != x.size:
+        raise ValueError("v and x must have equal lengths")
+    if not models:
+        raise ValueError("models must hold at least one model")
+    late = slice(int(first), None)
+    fig, (ax, bx) = plotting.new_figure(1, 2, figsize=(10.5, 4.0))
+    ax.plot(input_scale * v[late], output_scale * x[late], color="0.6", lw=2.0, label="measured")
+    for (name, model), color in zip(models.items(), _COLORS):
+        x_model = np.asarray(model.simulate(v), dtype=float)
+        rms = float(scores.xs(name, level=0)["RMS %"].iloc[0]) if scores.index.nlevels > 1 \
+            else float(scores.loc[name, "RMS %"])
+        ax.plot(input_scale * v[late], output_scale * x_model[late], lw=0.9, color=color,
+                label=f"{name}: RMS {rms:.2f} % of stroke")
+        bx.plot(input_scale * v[late], output_scale * (x_model[late] - x[late]), lw=0.8,
+                color=color, label=name)
+    ax.set(xlabel=input_label, ylabel=output_label, title="(a) validation loop (not fitted)")
+    bx.set(xlabel=input_label, ylabel=f"model - measured, {output_label}",
+           title="(b) model error along the loop")
+    ax.legend(fontsize=7)
+    bx.legend(fontsize=7)
+    plotting.save_figure(fig, None, "own_stage_hysteresis")
+    return fig
+
+
+def extra_own_stage_mu(omega, mu_bounds, loops, omega_loops, H_e, H_y):
+    """mu bounds of the designed loop and its sensitivities with the identified and true plants.
+
+    Parameters
+    ----------
+    omega : array_like
+        mu grid [rad/s].
+    mu_bounds : dict
+        {label: MussvResult-like with ``upper`` and ``lower`` arrays on omega}.
+    loops : dict
+        {label: LoopFunctions-like with ``S`` and ``T`` (control.LTI)}.
+    omega_loops : array_like
+        Grid of panel (b) [rad/s].
+    H_e, H_y : control.LTI
+        Error and output weights: 1/|H_e| and 1/|H_y| are the templates.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Saved as ``extra_own_stage_mu.png``.
+    """
+    omega = check_finite_array("omega", omega, ndim=1, min_length=2)
+    omega_loops = check_finite_array("omega_loops", omega_loops, ndim=1, min_length=2)
+    fig, (ax, bx) = plotting.new_figure(1, 2, figsize=(11.0, 4.2))
+    for (label, res), color in zip(mu_bounds.items(), _COLORS):
+        ax.semilogx(omega, res.upper, color=color, label=f"{label}: upper")
+        ax.semilogx(omega, res.lower, ":", color=color, lw=2.0, label=f"{label}: lower")
+    ax.axhline(1.0, color="0.3", lw=0.8)
+    ax.set(xlabel="frequency [rad/s]", ylabel="mu_RP", title="(a) mu bounds, robust performance")
+    ax.legend(fontsize=7)
+    s = 1j * omega_loops
+    bx.semilogx(omega_loops, plotting.db(1 / np.ravel(H_e(s))), color="0.5", ls="--",
+                label="1/|H_e|")
+    bx.semilogx(omega_loops, plotting.db(1 / np.ravel(H_y(s))), color="0.5", ls=":",
+                label="1/|H_y|")
+    for (label, lf), color in zip(loops.items(), _COLORS):
+        bx.semilogx(omega_loops, plotting.db(np.ravel(lf.S(s))), color=color,
+                    label=f"|S|, {label}")
+        bx.semilogx(omega_loops, plotting.db(np.ravel(lf.T(s))), color=color, ls="-.",
+                    label=f"|T|, {label}")
+    bx.set(xlabel="frequency [rad/s]", ylabel="magnitude [dB]", ylim=(-80, 20),
+           title="(b) sensitivity and complementary sensitivity")
+    bx.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.02, 0.5))
+    plotting.save_figure(fig, None, "own_stage_mu")
+    return fig
+
+
+def extra_own_stage_experiments(table4, table5, extra4=None, feedforward="feedforward"):
+    """The Tables 4-5-style experiment: hysteresis % and tracking error % per case.
+
+    Parameters
+    ----------
+    table4, table5 : pandas.DataFrame
+        Rows ``case_I``, ``case_II``, ``case_III`` (as in
+        :func:`piezolib.workbook.experiments.hysteresis_test` /
+        :func:`~piezolib.workbook.experiments.tracking_test`), columns the
+        amplitudes [V] and frequencies [Hz].
+    extra4 : dict, optional
+        {label: pandas.Series over table4's columns}: further hysteresis
+        rows (e.g. another feedforward), drawn dashed.
+    feedforward : str
+        Name of Cases II-III's feedforward in the legend (e.g. ``"Dahl feedforward"``).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Saved as ``extra_own_stage_experiments.png``.
+    """
+    fig, (ax, bx) = plotting.new_figure(1, 2, figsize=(10.5, 4.0))
+    labels = {"case_I": "I: open loop", "case_II": f"II: {feedforward}",
+              "case_III": f"III: {feedforward} + mu controller"}
+    for (row, label), color in zip(labels.items(), _COLORS):
+        ax.plot(table4.columns.astype(float), table4.loc[row], "o-", color=color, label=label)
+        bx.plot(table5.columns.astype(float), table5.loc[row], "o-", color=color, label=label)
+    for (label, series), color in zip((extra4 or {}).items(), _COLORS[3:] + _COLORS):
+        ax.plot(series.index.astype(float), series.values, "s--", color=color, label=label)
+    ax.set(xlabel="actuator amplitude [V]", ylabel="hysteresis [%]", yscale="log",
+           title="(a) Table 4-style: 10 Hz triangles")
+    bx.set(xlabel="triangle frequency [Hz]", ylabel="tracking error [%]", yscale="log",
+           title="(b) Table 5-style: tracking")
+    fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center",
+               ncol=min(4, len(ax.get_lines())), fontsize=7)
+    plotting.save_figure(fig, None, "own_stage_experiments")
+    return fig

@@ -1,0 +1,114 @@
+"""Fixed-order mu-synthesis (piezolib.robust.fixed_order) on a textbook problem."""
+
+import logging
+
+import control as ct
+import numpy as np
+import pytest
+
+from piezolib import robust
+from piezolib.robust.fixed_order import (FixedOrderResult, ModalController, fixed_order_musyn,
+                                         modal_controller)
+
+# Robust performance of a lag plant with multiplicative input uncertainty, in the
+# style of Skogestad & Postlethwaite: G = 200 / ((10 s + 1)(0.05 s + 1)^2),
+# W_I = (s + 0.2) / (0.5 s + 1), W_P = (s / 2 + 0.5) / (s + 5e-3), W_u = 0.1.
+BLK = [(1, 1), (1, 2)]
+OMEGA = np.logspace(-3, 3, 60)
+
+
+def textbook_problem():
+    s = ct.tf("s")
+    G = 200 / ((10 * s + 1) * (0.05 * s + 1) ** 2)
+    parts = [ct.ss(G, inputs="u_p", outputs="y"),
+             ct.ss((s + 0.2) / (0.5 * s + 1), inputs="u", outputs="y_Delta"),
+             ct.ss((s / 2 + 0.5) / (s + 5e-3), inputs="e", outputs="z1"),
+             ct.ss(ct.tf([0.1], [1]), inputs="u", outputs="z2"),
+             ct.summing_junction(["u", "u_Delta"], "u_p"),
+             ct.summing_junction(["w", "-y"], "e")]
+    P = ct.interconnect(parts, inputs=["u_Delta", "w", "u"], outputs=["y_Delta", "z1", "z2", "e"])
+    return G, ct.ss(P)
+
+
+@pytest.fixture(scope="module")
+def problem():
+    G, P = textbook_problem()
+    # a stabilising lag-lead start: stable, 3 states (odd order: one real pole)
+    K0 = ct.ss(ct.tf([1.0, 0.1], [1.0, 1e-3]) * ct.tf([0.05, 1.0], [0.01, 1.0])
+               * ct.tf([0.2], [0.002, 1.0]))
+    return G, P, K0
+
+
+@pytest.fixture(scope="module")
+def result(problem):
+    _, P, K0 = problem
+    return fixed_order_musyn(P, BLK, K0, OMEGA)
+
+
+def mu_peak(P, K, omega):
+    return robust.mussv(robust.lft_response(P, K, omega), BLK, omega).upper.max()
+
+
+def test_modal_form_reproduces_the_controller(problem):
+    _, _, K0 = problem
+    modal = modal_controller(K0)
+    assert modal.order == 3 and modal.log_wr is not None
+    w = np.logspace(-4, 4, 50)
+    ref = np.ravel(K0(1j * w))
+    np.testing.assert_allclose(modal.response(w), ref, rtol=1e-8)
+    np.testing.assert_allclose(np.ravel(modal.state_space()(1j * w)), ref, rtol=1e-8)
+    again = ModalController.from_theta(modal.theta, 3)
+    np.testing.assert_array_equal(again.theta, modal.theta)
+    # complex pole pair, even order
+    K2 = ct.tf([3.0, 1.0, 50.0], [1.0, 0.4, 100.0])
+    m2 = modal_controller(K2)
+    assert m2.order == 2 and m2.log_wr is None
+    np.testing.assert_allclose(np.exp(m2.log_w), [10.0], rtol=1e-10)
+    np.testing.assert_allclose(np.ravel(m2.state_space()(1j * w)), np.ravel(K2(1j * w)),
+                               rtol=1e-8)
+
+
+def test_fixed_order_improves_on_its_start_and_is_verified(problem, result):
+    G, P, K0 = problem
+    assert isinstance(result, FixedOrderResult)
+    assert result.K.nstates == 3 and result.K.input_labels == ["e"]
+    assert result.K.output_labels == ["u"]
+    start = mu_peak(P, K0, OMEGA)
+    assert result.start_mu_peak == pytest.approx(start, rel=1e-6)
+    assert result.mu_peak < 0.9 * start
+    # verification independent of the optimiser: closed loops rebuilt by python-control
+    assert np.all(ct.poles(ct.feedback(G * result.K, 1)).real < 0)
+    assert np.all(ct.poles(robust.lower_lft(P, result.K)).real < 0)
+    fine = np.logspace(-3, 3, 600)
+    M = robust.lft_response(P, result.K, fine)
+    bounds = robust.mussv(M, BLK, fine)
+    assert bounds.upper.max() <= result.mu_peak * 1.01      # no peak hidden between points
+    assert bounds.lower.max() <= bounds.upper.max() * (1 + 1e-9)
+    assert bounds.lower.max() > 0.99 * bounds.upper.max()   # two full blocks: bounds meet
+    hist = result.history
+    assert hist.mu_upper.is_monotonic_decreasing and hist.accepted.any()
+    assert np.all(np.abs(result.K.poles()).max() < 1e6)
+
+
+def test_fixed_order_is_deterministic_and_logs(problem, result, caplog):
+    _, P, K0 = problem
+    with caplog.at_level(logging.INFO, logger="piezolib.robust.fixed_order"):
+        again = fixed_order_musyn(P, BLK, K0, OMEGA)
+    assert any("fixed-order" in r.getMessage() for r in caplog.records)
+    np.testing.assert_array_equal(again.modal.theta, result.modal.theta)
+
+
+@pytest.mark.parametrize("change, match", [
+    (dict(K0=ct.tf([1.0], [1.0, -1.0])), "stable"),
+    (dict(K0=ct.tf([-50.0], [1.0, 1.0])), "does not stabilise"),
+    (dict(K0=ct.ss(ct.tf([[[1.0]], [[1.0]]], [[[1.0, 1.0]], [[1.0, 2.0]]]))), "SISO"),
+    (dict(blk=[(-1, 0), (1, 2)]), "complex"),
+    (dict(omega=np.logspace(2, -2, 40)), "omega"),
+    (dict(trust_radius=0.0), "trust_radius"),
+])
+def test_fixed_order_rejects_bad_arguments(problem, change, match):
+    _, P, K0 = problem
+    args = dict(P=P, blk=BLK, K0=K0, omega=OMEGA)
+    args.update(change)
+    with pytest.raises(ValueError, match=match):
+        fixed_order_musyn(**args)
