@@ -32,14 +32,19 @@ def extra_margins(G, controllers, fs, delays=(0, 1, 2, 3), omega=None):
         Saved as ``extra_margins.png``.
     """
     omega = frequency_grid(1.0, 1e6, 4000) if omega is None else np.asarray(omega, float)
-    fig, (ax, bx) = plotting.new_figure(1, 2, figsize=(10, 4.4))
+    fig, (ax, bx) = plotting.new_figure(1, 2, figsize=(10, 5.4))
+    # designs often coincide: wide solid, medium dashed, thin dotted keep each one visible
+    styles = [dict(ls="-", lw=3.0, alpha=0.55, marker="o", ms=9),
+              dict(ls="--", lw=1.6, alpha=1.0, marker="s", ms=6),
+              dict(ls=":", lw=1.2, alpha=1.0, marker="^", ms=5)]
     Gr = realize(G)
     theta = np.linspace(0, 2 * np.pi, 200)
     ax.plot(np.cos(theta), np.sin(theta), color="0.75", lw=0.8, label="unit circle")
     for k, (name, K) in enumerate(controllers.items()):
         L = np.ravel(Gr(1j * omega)) * np.ravel(realize(K)(1j * omega))
         m = loop_margins(G, K)
-        line, = ax.plot(L.real, L.imag, lw=1.2,
+        style = styles[k % len(styles)]
+        line, = ax.plot(L.real, L.imag, ls=style["ls"], lw=style["lw"], alpha=style["alpha"],
                         label=f"{name}: PM {m.phase_margin_deg:.0f} deg, disk alpha {m.disk_margin:.2f}")
         # the balanced disk margin: every f in the disk keeps the loop stable; -1/f is
         # the disk that L must avoid, centred on the real axis
@@ -50,7 +55,7 @@ def extra_margins(G, controllers, fs, delays=(0, 1, 2, 3), omega=None):
             ax.plot(c + r * np.cos(theta), r * np.sin(theta), ls="--", lw=0.8,
                     color=line.get_color())
         tol = delay_tolerance(G, discretize(K, fs).K, delays=delays)
-        bx.plot(tol.delays, tol.spectral_radius, "o-", color=line.get_color(),
+        bx.plot(tol.delays, tol.spectral_radius, color=line.get_color(), **style,
                 label=f"{name}: delay margin {tol.delay_margin_samples:.2f} samples")
     ax.plot([-1], [0], "k+", ms=10)
     ax.set_xlim(-3, 1.5)
@@ -59,12 +64,12 @@ def extra_margins(G, controllers, fs, delays=(0, 1, 2, 3), omega=None):
     ax.set_xlabel("Re L(jw)")
     ax.set_ylabel("Im L(jw)")
     ax.set_title("(a) Nyquist plot near -1 (dashed: disk the loop avoids)")
-    ax.legend(fontsize=7, loc="lower left")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0.0, -0.14))
     bx.axhline(1.0, color="k", lw=0.8, ls=":")
     bx.set_xticks(list(delays))
     bx.set_xlabel("computation delay [samples]")
     bx.set_ylabel("spectral radius of the sampled loop")
     bx.set_title(f"(b) sampled loop at {fs / 1e3:g} kHz (unstable above 1)")
-    bx.legend(fontsize=7)
+    bx.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0.0, -0.14))
     plotting.save_figure(fig, None, "margins")
     return fig
