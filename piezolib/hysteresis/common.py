@@ -18,7 +18,7 @@ import numpy as np
 
 from piezolib._checks import check_finite_array, check_integer
 
-__all__ = ["HysteresisModel", "FitWarning", "ParameterEstimate", "estimates",
+__all__ = ["HysteresisModel", "FitScores", "FitWarning", "ParameterEstimate", "estimates",
            "covariance", "parameter_frame", "warn_about", "check_loops", "loop_errors", "Z95"]
 
 #: Two-sided 95 % quantile of the normal distribution.
@@ -37,6 +37,25 @@ class HysteresisModel(Protocol):
     def simulate(self, v): ...
 
     def feedforward(self, x_r): ...
+
+
+class FitScores:
+    """Scores shared by every hysteresis fit result (needs ``rms_percent`` and ``parameters``)."""
+
+    def parameter_table(self):
+        """pandas DataFrame of :attr:`parameters`: value, unit, 95 % CI, at_bound, identifiable."""
+        return parameter_frame(self.parameters)
+
+    @property
+    def worst_rms_percent(self):
+        """Largest per-loop RMS error [% of range]."""
+        return float(np.max(self.rms_percent))
+
+    @property
+    def pooled_rms_percent(self):
+        """RMS over the loops of the per-loop RMS errors [% of range]: every loop weighs the
+        same (the criterion each fit minimises, and the workbook's selection rule)."""
+        return float(np.sqrt(np.mean(self.rms_percent ** 2)))
 
 
 class FitWarning(UserWarning):

@@ -20,8 +20,8 @@ import numpy as np
 import scipy.optimize as opt
 
 from piezolib._checks import check_finite_array, check_integer, check_positive
-from piezolib.hysteresis.common import (check_loops, covariance, estimates, loop_errors,
-                                        parameter_frame, warn_about)
+from piezolib.hysteresis.common import (FitScores, check_loops, covariance, estimates, loop_errors,
+                                        warn_about)
 from piezolib.hysteresis.dahl import (FORMS, STARTS, DahlModel, NotInvertibleError,
                                       dahl_hysteresis, simulate_dahl, simulate_dahl_records,
                                       strokes)
@@ -31,7 +31,7 @@ __all__ = ["DahlFit", "fit_dahl", "monotone_path", "choose_fit", "check_fit_opti
 
 
 @dataclass(frozen=True)
-class DahlFit:
+class DahlFit(FitScores):
     """Result of :func:`fit_dahl`.
 
     Attributes
@@ -73,24 +73,6 @@ class DahlFit:
     result: object
     offset: bool = False
     parameters: tuple = ()
-
-    def parameter_table(self):
-        """pandas DataFrame of :attr:`parameters`: value, unit, 95 % CI, at_bound, identifiable."""
-        return parameter_frame(self.parameters)
-
-    @property
-    def worst_rms_percent(self):
-        """Largest per-loop RMS error [% of range]."""
-        return float(np.max(self.rms_percent))
-
-    @property
-    def pooled_rms_percent(self):
-        """RMS over the loops of the per-loop RMS errors [% of range].
-
-        The fit's own criterion (every loop weighs the same), evaluated on
-        all samples: the workbook's model selection rule (:func:`choose_fit`).
-        """
-        return float(np.sqrt(np.mean(self.rms_percent ** 2)))
 
 
 def _check_loops(loops, discard, stride):

@@ -19,8 +19,8 @@ import numpy as np
 import scipy.optimize as opt
 
 from piezolib._checks import check_finite_array, check_integer
-from piezolib.hysteresis.common import (FitWarning, check_loops, covariance, estimates,
-                                        loop_errors, parameter_frame, warn_about)
+from piezolib.hysteresis.common import (FitScores, FitWarning, check_loops, covariance, estimates,
+                                        loop_errors, warn_about)
 from piezolib.hysteresis.dahl import NotInvertibleError, strokes
 
 __all__ = ["PI_STARTS", "PIModel", "PIFit", "play_outputs", "fit_pi", "FitWarning"]
@@ -182,7 +182,7 @@ def _real_record(name, v):
 
 
 @dataclass(frozen=True)
-class PIFit:
+class PIFit(FitScores):
     """Result of :func:`fit_pi`.
 
     Attributes
@@ -207,20 +207,6 @@ class PIFit:
     rms_percent: np.ndarray
     max_percent: np.ndarray
     parameters: tuple = ()
-
-    def parameter_table(self):
-        """pandas DataFrame of :attr:`parameters`: value, unit, 95 % CI, at_bound, identifiable."""
-        return parameter_frame(self.parameters)
-
-    @property
-    def worst_rms_percent(self):
-        """Largest per-loop RMS error [% of range]."""
-        return float(np.max(self.rms_percent))
-
-    @property
-    def pooled_rms_percent(self):
-        """RMS over the loops of the per-loop RMS errors [% of range]."""
-        return float(np.sqrt(np.mean(self.rms_percent ** 2)))
 
 
 def fit_pi(loops, n_plays=10, offset=True, start="rest", discard=0, thresholds=None):
