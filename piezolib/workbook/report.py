@@ -142,6 +142,7 @@ NOTEBOOK_TABLES = {
 #: paper = None): loaded by :func:`load_claims` only when asked for by name.
 OTHER_TABLES = {
     "own_stage": "08_your_own_stage",
+    "mixed_mu": "09_mixed_mu",
 }
 
 
