@@ -13,7 +13,8 @@ import numpy as np
 __all__ = [
     "check_positive", "check_nonnegative", "check_finite_array", "check_siso",
     "check_lti", "check_stable", "check_proper", "check_same_length",
-    "check_integer", "check_continuous", "check_finite_lti",
+    "check_integer", "check_continuous", "check_finite_lti", "check_signals",
+    "check_frequency_grid",
 ]
 
 
@@ -95,6 +96,26 @@ def check_same_length(**arrays):
     if len(set(lengths.values())) > 1:
         desc = ", ".join(f"{n} has {k}" for n, k in lengths.items())
         raise ValueError(f"arguments must have equal lengths: {desc}")
+
+
+def check_signals(min_length=2, **signals):
+    """Check named 1-D finite signals of one record; return them as arrays.
+
+    Each must be 1-D, finite and at least ``min_length`` long, and all must
+    have the same length; errors name the argument(s).
+    """
+    arrays = tuple(check_finite_array(name, x, ndim=1, min_length=min_length)
+                   for name, x in signals.items())
+    check_same_length(**dict(zip(signals, arrays)))
+    return arrays
+
+
+def check_frequency_grid(name, omega, min_length=2):
+    """Return a 1-D, finite, positive and strictly increasing frequency grid [rad/s]."""
+    omega = check_finite_array(name, omega, ndim=1, min_length=min_length)
+    if np.any(omega <= 0) or np.any(np.diff(omega) <= 0):
+        raise ValueError(f"{name} must be positive and increasing [rad/s]")
+    return omega
 
 
 def check_lti(name, sys):

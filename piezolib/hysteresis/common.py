@@ -16,7 +16,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from piezolib._checks import check_finite_array, check_integer
+from piezolib._checks import check_integer, check_signals
 
 __all__ = ["HysteresisModel", "FitScores", "FitWarning", "ParameterEstimate", "estimates",
            "covariance", "parameter_frame", "warn_about", "check_loops", "loop_errors", "Z95"]
@@ -194,13 +194,9 @@ def check_loops(loops, discard=0, stride=1, what="loops"):
         if not isinstance(pair, (tuple, list)) or len(pair) != 2:
             raise TypeError(f"{what}[{i}] must be a (v, x) pair of arrays, "
                             f"got {type(pair).__name__}")
-        v = check_finite_array(f"{what}[{i}] v", pair[0], ndim=1, min_length=8)
-        x = check_finite_array(f"{what}[{i}] x", pair[1], ndim=1, min_length=8)
+        v, x = check_signals(8, **{f"{what}[{i}] v": pair[0], f"{what}[{i}] x": pair[1]})
         if np.iscomplexobj(v) or np.iscomplexobj(x):
             raise TypeError(f"{what}[{i}]: v and x must be real")
-        if v.size != x.size:
-            raise ValueError(f"{what}[{i}]: v and x must have equal lengths "
-                             f"({v.size} and {x.size})")
         runs = strokes(v)
         late = [r for r in runs if r[1] > discard]
         if not any(r[2] > 0 for r in late) or not any(r[2] < 0 for r in late) \

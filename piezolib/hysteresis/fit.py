@@ -19,7 +19,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.optimize as opt
 
-from piezolib._checks import check_finite_array, check_integer, check_positive
+from piezolib._checks import check_integer, check_positive
 from piezolib.hysteresis.common import (FitScores, check_loops, covariance, estimates, loop_errors,
                                         warn_about)
 from piezolib.hysteresis.dahl import (FORMS, STARTS, DahlModel, NotInvertibleError,
@@ -73,11 +73,6 @@ class DahlFit(FitScores):
     result: object
     offset: bool = False
     parameters: tuple = ()
-
-
-def _check_loops(loops, discard, stride):
-    """Validated loops as (v, x, used): :func:`~piezolib.hysteresis.common.check_loops`."""
-    return check_loops(loops, discard, stride)
 
 
 def monotone_path(v, x):
@@ -327,7 +322,7 @@ def fit_dahl(loops, gamma_a, form="bliman_sorine", offset=False, start="virgin",
     """
     form, offset, start = check_fit_options(form, offset, start)
     gamma_a = check_positive("gamma_a", gamma_a)
-    data = _check_loops(loops, discard, stride)
+    data = check_loops(loops, discard, stride)
     slope = _mean_slope(data)
     g_bounds = (slope * G_A_BOUNDS[0], slope * G_A_BOUNDS[1])
     if initial is None:
@@ -385,7 +380,7 @@ def fit_dahl(loops, gamma_a, form="bliman_sorine", offset=False, start="virgin",
     model = _from_theta(result.x, form, gamma_a, start, x0)
     parameters = _parameter_estimates(output_error, result, r0, wv, offset, model, lower, upper)
     warn_about(parameters, f"fit_dahl ({form}, offset={offset}, start={start})")
-    full = _check_loops(loops, discard, 1)
+    full = check_loops(loops, discard, 1)
     x_model = [simulate_dahl(model, v).x for v, x, used in full]
     first = [int(used[0]) for v, x, used in full]
     res, rms, rms_pct, max_pct = loop_errors(

@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from piezolib._checks import check_finite_array, check_integer
+from piezolib._checks import check_finite_array, check_signals, check_integer
 from piezolib.hysteresis.common import HysteresisModel
 from piezolib.hysteresis.dahl import strokes
 from piezolib.hysteresis.measure import hysteresis_measure
@@ -42,10 +42,7 @@ def split_record(v, x, fraction=0.5):
         model runs through the fitting part (so its state at the cut is its
         own), and only samples from ``first`` on are scored.
     """
-    v = check_finite_array("v", v, ndim=1, min_length=8)
-    x = check_finite_array("x", x, ndim=1, min_length=8)
-    if v.size != x.size:
-        raise ValueError(f"v and x must have equal lengths ({v.size} and {x.size})")
+    v, x = check_signals(8, v=v, x=x)
     if not 0 < fraction < 1:
         raise ValueError(f"fraction must lie strictly between 0 and 1, got {fraction!r}")
     turns = np.array([stop for start, stop, s in strokes(v)][:-1], dtype=int)
@@ -60,10 +57,7 @@ def _triples(records, what):
     for i, rec in enumerate(records):
         if not isinstance(rec, (tuple, list)) or len(rec) not in (2, 3):
             raise TypeError(f"{what}[{i}] must be (v, x) or (v, x, first)")
-        v = check_finite_array(f"{what}[{i}] v", rec[0], ndim=1, min_length=8)
-        x = check_finite_array(f"{what}[{i}] x", rec[1], ndim=1, min_length=8)
-        if v.size != x.size:
-            raise ValueError(f"{what}[{i}]: v and x must have equal lengths")
+        v, x = check_signals(8, **{f"{what}[{i}] v": rec[0], f"{what}[{i}] x": rec[1]})
         first = check_integer(f"{what}[{i}] first", rec[2] if len(rec) == 3 else 0, minimum=0)
         if first > v.size - 8:
             raise ValueError(f"{what}[{i}]: first = {first} leaves fewer than 8 samples")

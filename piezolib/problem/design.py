@@ -3,7 +3,7 @@
 Synthesis plant (by default the delay-aware plant with a roll-off weight),
 DK-iteration, G S-weighted reduction, fixed-order mu-synthesis started from
 the reduced controller and Tustin discretisation; the chain, the delay model
-and the role of the roll-off weight are described in ``docs/design.md``.
+and the role of the roll-off weight are described in ``docs/controller_design.md``.
 """
 
 import logging

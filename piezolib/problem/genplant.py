@@ -5,7 +5,7 @@ Inputs ``u_Delta, v_r, u_b``; outputs ``y_Delta, y1, y2[, y_u], v_e``, all in
 volts, frequencies in rad/s.  The signal table, how H_y G is realised, why
 the synthesis plant carries an effort output and how the delay-aware plant
 models the sample-and-hold, the computation delay and the roll-off
-requirement are in ``docs/design.md``.
+requirement are in ``docs/controller_design.md``.
 """
 
 from dataclasses import dataclass
@@ -72,7 +72,7 @@ class RolloffWeight:
     order: int = 2
 
 
-#: Roll-off requirement of the delay-aware design (docs/design.md).
+#: Roll-off requirement of the delay-aware design (docs/controller_design.md).
 DESIGN_ROLLOFF = RolloffWeight()
 
 
@@ -124,7 +124,7 @@ def _plant_with_output_weight(G, H_y, omega_s):
 
     H_y's fastest poles (as many as G's relative degree allows) leave H_y as
     unit-DC low-pass factors F; the rest, H_y / F, is realised jointly with G
-    on G's states and y2 is that output filtered by F (docs/design.md).
+    on G's states and y2 is that output filtered by F (docs/controller_design.md).
     """
     g_num, g_den = _tf_coefficients(G)
     y_num, y_den = _tf_coefficients(H_y)

@@ -218,7 +218,7 @@ def write_experiment_files(directory=None):
 
 def _write(path, record, stage, meta):
     s = stage.settings
-    lines = [f"# piezolib virtual stage experiment, written by python -m piezolib data",
+    lines = ["# piezolib virtual stage experiment, written by python -m piezolib data",
              "# see data/README.md; stage settings are the VirtualStage defaults",
              f"# sample_rate_Hz = {stage.fs:g}"]
     lines += [f"# {k} = {v}" for k, v in meta.items()]

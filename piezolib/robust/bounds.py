@@ -46,8 +46,8 @@ import scipy.linalg as la
 
 from piezolib._checks import check_finite_array, check_integer, check_lti, check_positive
 from piezolib.robust.blocks import block_slices, parse_blk
-from piezolib.robust.hinf import HinfResult, HinfSynthesisError, hinfsyn
-from piezolib.robust.lti import frequency_grid, time_scale_of
+from piezolib.robust.hinf import HinfSynthesisError, hinfsyn
+from piezolib.robust.lti import frequency_grid
 
 __all__ = ["LowerBound", "performance_lower_bound", "pointwise_lower_bound",
            "structured_lower_bound", "achievable_range"]

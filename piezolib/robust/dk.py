@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import control as ct
 import numpy as np
 
-from piezolib._checks import check_finite_array, check_integer, check_lti, check_positive
+from piezolib._checks import check_frequency_grid, check_integer, check_lti, check_positive
 from piezolib.robust.blocks import parse_blk
 from piezolib.robust.dfit import fit_magnitude
 from piezolib.robust.hinf import HinfSynthesisError, hinfsyn
@@ -234,9 +234,7 @@ def musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=4, max_iter=8, rtol=5e
     blocks = _full_blocks(blk, p, q)
     if omega is None:
         omega = np.logspace(0, 6, 300)
-    omega = check_finite_array("omega", omega, ndim=1, min_length=16)
-    if np.any(omega <= 0) or np.any(np.diff(omega) <= 0):
-        raise ValueError("omega must be positive and increasing")
+    omega = check_frequency_grid("omega", omega, min_length=16)
     if not (d_order == "auto" or isinstance(d_order, (int, np.integer))):
         raise TypeError(f"d_order must be an integer or 'auto', got {d_order!r}")
     if d_order != "auto":

@@ -31,7 +31,7 @@ import control as ct
 import numpy as np
 from scipy import optimize
 
-from piezolib._checks import check_finite_array, check_integer, check_lti, check_positive
+from piezolib._checks import check_finite_array, check_frequency_grid, check_integer, check_lti, check_positive
 from piezolib.robust.blocks import parse_blk
 from piezolib.robust.lti import time_scale_of, to_scaled, with_signals
 from piezolib.robust.mu import MuResult, mussv
@@ -441,9 +441,7 @@ def fixed_order_musyn(P, blk, K0, omega, *, max_iter=20, rtol=1e-3, patience=2,
     check_lti("K0", K0)
     if K0.ninputs != 1 or K0.noutputs != 1:
         raise ValueError(f"K0 must be SISO, got {K0.noutputs}x{K0.ninputs}")
-    omega = check_finite_array("omega", omega, ndim=1, min_length=16)
-    if np.any(omega <= 0) or np.any(np.diff(omega) <= 0):
-        raise ValueError("omega must be positive and increasing")
+    omega = check_frequency_grid("omega", omega, min_length=16)
     blocks = parse_blk(blk, P.noutputs - 1, P.ninputs - 1)
     if any(b.is_real for b in blocks):
         raise ValueError("fixed_order_musyn supports complex blocks only")

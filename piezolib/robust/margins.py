@@ -37,7 +37,7 @@ import control as ct
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
-from piezolib._checks import check_finite_array, check_integer, check_siso
+from piezolib._checks import check_frequency_grid, check_integer, check_siso
 from piezolib.robust.lti import closed_loop_poles, frequency_grid, realize, time_scale_of
 
 __all__ = ["LoopMargins", "loop_margins", "sampled_loop_radius", "DelayTolerance",
@@ -172,10 +172,8 @@ def loop_margins(G, K, omega=None):
         check_siso(name, sys)
         if sys.isdtime(strict=True):
             raise ValueError(f"{name} must be a continuous-time model")
-    omega = _default_grid(G, K) if omega is None else check_finite_array(
-        "omega", omega, ndim=1, min_length=8)
-    if np.any(omega <= 0) or np.any(np.diff(omega) <= 0):
-        raise ValueError("omega must be positive and increasing [rad/s]")
+    omega = _default_grid(G, K) if omega is None else check_frequency_grid(
+        "omega", omega, min_length=8)
     ws = time_scale_of(G, K)
     L = _response(realize(G, ws), realize(K, ws))
     Lw = L(omega)

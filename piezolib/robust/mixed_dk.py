@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 import control as ct
 import numpy as np
 
-from piezolib._checks import check_finite_array, check_integer, check_lti, check_positive
+from piezolib._checks import check_finite_array, check_frequency_grid, check_integer, check_lti, check_positive
 from piezolib.robust.blocks import block_slices, parse_blk
 from piezolib.robust.dfit import fit_magnitude
 from piezolib.robust.hinf import HinfSynthesisError, hinfsyn
@@ -280,9 +280,7 @@ def mixed_musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=2, alpha_order=2
                          f"{nmeas} measurement(s) and {ncon} control(s)")
     blocks = _structure(blk, p, q)
     omega = np.logspace(0, 6, 100) if omega is None else omega
-    omega = check_finite_array("omega", omega, ndim=1, min_length=16)
-    if np.any(omega <= 0) or np.any(np.diff(omega) <= 0):
-        raise ValueError("omega must be positive and increasing")
+    omega = check_frequency_grid("omega", omega, min_length=16)
     d_order = check_integer("d_order", d_order, minimum=0)
     alpha_order = check_integer("alpha_order", alpha_order, minimum=0)
     max_iter = check_integer("max_iter", max_iter, minimum=1)

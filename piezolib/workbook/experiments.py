@@ -6,7 +6,7 @@ I–III; the cases themselves are run by :func:`run_case` on the loop of
 :mod:`piezolib.workbook.loop`).  :func:`hysteresis_test` and
 :func:`tracking_test` run the three cases on references built once and give
 the tables in the paper's layout.  What each case applies and why:
-``docs/design.md``.
+``docs/controller_design.md``.
 """
 
 import functools

@@ -5,7 +5,7 @@ first, then the discrete controller on v_e[k] = v_r[k] - v_y[k] sample by
 sample, its output applied ``d`` samples later (the computation delay,
 default :data:`COMPUTATION_DELAY_SAMPLES` = 1), each u_c held for one DAQ
 period.  Timing, signal flow and start-up are
-described in ``docs/design.md``; the experiments of Sec. V (Cases I-III,
+described in ``docs/controller_design.md``; the experiments of Sec. V (Cases I-III,
 Tables 4-5) are in :mod:`piezolib.workbook.experiments`.
 """
 

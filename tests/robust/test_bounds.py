@@ -1,7 +1,6 @@
 """Lower bounds on achievable mu / H-infinity norm: textbook values, validity against achieved designs."""
 
 import control as ct
-import numpy as np
 import pytest
 
 from piezolib.robust.bounds import (LowerBound, achievable_range, performance_lower_bound,

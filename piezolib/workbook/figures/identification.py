@@ -10,7 +10,7 @@ import control as ct
 import numpy as np
 
 from piezolib import identification
-from piezolib._checks import check_finite_array, check_siso
+from piezolib._checks import check_finite_array, check_signals, check_siso
 from piezolib.robust.lti import frequency_grid, realize
 from piezolib.workbook.plotting import db, new_figure, save_figure
 
@@ -124,10 +124,7 @@ def fig13_hysteresis_measure(v, x, measure, amplitude_V):
     matplotlib.figure.Figure
         Saved as ``fig13_hysteresis_measure.png``.
     """
-    v = check_finite_array("v", v, ndim=1, min_length=8)
-    x = check_finite_array("x", x, ndim=1, min_length=8)
-    if v.shape != x.shape:
-        raise ValueError(f"x must have the length of v ({v.size}), got {x.size}")
+    v, x = check_signals(8, v=v, x=x)
     x_up, x_lo = max(measure.x_up, measure.x_lo), min(measure.x_up, measure.x_lo)
     v_min, v_max = float(v.min()), float(v.max())
     fig, ax = new_figure(figsize=(6.4, 4.6))
@@ -252,10 +249,7 @@ def fig04_chirp_validation(y, y_sim, sweep_start, fs, zoom_s=(0.55, 0.57), windo
     matplotlib.figure.Figure
         Saved as ``fig04_chirp_validation.png``.
     """
-    y = check_finite_array("y", y, ndim=1, min_length=2)
-    y_sim = check_finite_array("y_sim", y_sim, ndim=1, min_length=2)
-    if y_sim.shape != y.shape:
-        raise ValueError(f"y_sim must have the length of y ({y.size}), got {y_sim.size}")
+    y, y_sim = check_signals(2, y=y, y_sim=y_sim)
     sweep = slice(sweep_start, None)
     fit = identification.fit_percent(y[sweep], y_sim[sweep])
     t = (np.arange(len(y)) - sweep_start) / fs

@@ -8,7 +8,7 @@ one figure, saves it as ``figures/extra_own_stage_<what>.png`` and returns it.
 
 import numpy as np
 
-from piezolib._checks import check_finite_array, check_positive
+from piezolib._checks import check_finite_array, check_signals, check_positive
 from piezolib.records import Record
 from piezolib.workbook import plotting
 from piezolib.workbook.figures.identification import bode_overlay
@@ -95,19 +95,13 @@ def extra_own_stage_identification(t, y, y_model, models, omega, measured=None, 
     matplotlib.figure.Figure
         Saved as ``extra_own_stage_identification.png``.
     """
-    t = check_finite_array("t", t, ndim=1, min_length=2)
-    y = check_finite_array("y", y, ndim=1, min_length=2)
-    y_model = check_finite_array("y_model", y_model, ndim=1, min_length=2)
-    if not y.size == y_model.size == t.size:
-        raise ValueError("t, y and y_model must have equal lengths")
+    t, y, y_model = check_signals(2, t=t, y=y, y_model=y_model)
     fig, axes = plotting.new_figure(2, 2, figsize=(11.0, 5.6))
     axes[0, 0].plot(t, y, color="0.6", lw=1.2, label="measured (held out)")
     axes[0, 0].plot(t, y_model, lw=0.8, color=_COLORS[0], label="identified model")
     axes[1, 0].plot(t, y_model - y, lw=0.7, color=_COLORS[0], label="identified - measured")
     if y_truth is not None:
-        y_truth = check_finite_array("y_truth", y_truth, ndim=1, min_length=2)
-        if y_truth.size != t.size:
-            raise ValueError("y_truth must have the length of t")
+        t, y_truth = check_signals(2, t=t, y_truth=y_truth)
         axes[0, 0].plot(t, y_truth, "--", lw=0.8, color=_COLORS[2], label="true plant")
         axes[1, 0].plot(t, y_truth - y, lw=0.7, color=_COLORS[2], alpha=0.7,
                         label="true plant - measured (noise)")
@@ -203,10 +197,7 @@ def extra_own_stage_hysteresis(v, x, models, scores, first=0, input_scale=1.0,
     matplotlib.figure.Figure
         Saved as ``extra_own_stage_hysteresis.png``.
     """
-    v = check_finite_array("v", v, ndim=1, min_length=8)
-    x = check_finite_array("x", x, ndim=1, min_length=8)
-    if v.size != x.size:
-        raise ValueError("v and x must have equal lengths")
+    v, x = check_signals(8, v=v, x=x)
     if not models:
         raise ValueError("models must hold at least one model")
     late = slice(int(first), None)
