@@ -33,7 +33,7 @@ import scipy.signal as sig
 from piezolib._checks import check_finite_array, check_positive, check_siso
 
 __all__ = ["SOSController", "controller_sos", "SectionFilter", "sos_filter", "write_json",
-           "read_json", "write_c_header"]
+           "read_json", "write_c_header", "export_controller"]
 
 _DTYPES = {"float64": np.float64, "float32": np.float32}
 
@@ -351,3 +351,32 @@ static inline float {controller.name.lower()}_step_f32(float state[{n}][2], floa
     path = Path(path)
     path.write_text(text)
     return path
+
+
+def export_controller(Kd, directory, name, meta=None, dtype="float32"):
+    """Export a discrete controller as ``<name>.json`` and ``<name>.h``; read it back.
+
+    Parameters
+    ----------
+    Kd : control.StateSpace or control.TransferFunction
+        Discrete SISO controller.
+    directory : str or Path
+        Folder of the two files (created if missing).
+    name : str
+        Base name of the files and of the C identifiers.
+    meta : dict, optional
+        Extra fields of the JSON file (e.g. the discretisation used).
+    dtype : {"float32", "float64"}
+        Precision of the controller returned, as the target would run it.
+
+    Returns
+    -------
+    SOSController
+        The sections read back from the JSON file in ``dtype``: what is deployed.
+    """
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    sos = controller_sos(Kd, name)
+    path = write_json(sos, directory / f"{name}.json", meta=meta)
+    write_c_header(sos, directory / f"{name}.h")
+    return read_json(path, dtype)

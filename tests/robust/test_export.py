@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from piezolib.robust.discrete import discretize
-from piezolib.robust.export import (SectionFilter, SOSController, controller_sos, read_json,
-                                    sos_filter, write_c_header, write_json)
+from piezolib.robust.export import (SectionFilter, SOSController, controller_sos,
+                                    export_controller, read_json, sos_filter, write_c_header,
+                                    write_json)
 from piezolib.robust.margins import delay_tolerance
 
 FS = 10e3
@@ -90,3 +91,13 @@ def test_section_filter_bad_input():
     with pytest.raises(ValueError, match="name"):
         controller_sos(ct.tf([1], [1, -0.5], 1e-4), "1bad")
     assert isinstance(controller_sos(ct.tf([1], [1, -0.5], 1e-4)), SOSController)
+
+
+def test_export_controller_writes_both_files_and_returns_what_is_deployed(exported, tmp_path):
+    Kd, sos = exported
+    deployed = export_controller(Kd, tmp_path / "out", "K_test", meta={"note": "test"})
+    assert (tmp_path / "out" / "K_test.json").exists() and (tmp_path / "out" / "K_test.h").exists()
+    assert json.loads((tmp_path / "out" / "K_test.json").read_text())["meta"]["note"] == "test"
+    np.testing.assert_array_equal(deployed.sos, read_json(tmp_path / "out" / "K_test.json",
+                                                          "float32").sos)
+    np.testing.assert_allclose(deployed.sos, sos.sos, rtol=1e-6, atol=1e-7)   # float32 rounding
