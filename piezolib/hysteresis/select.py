@@ -20,7 +20,7 @@ from piezolib.hysteresis.common import HysteresisModel
 from piezolib.hysteresis.dahl import strokes
 from piezolib.hysteresis.measure import hysteresis_measure
 
-__all__ = ["split_record", "loop_scores", "validation_table", "cross_check"]
+__all__ = ["split_record", "loop_scores", "validation_table", "pooled_rms", "cross_check"]
 
 
 def split_record(v, x, fraction=0.5):
@@ -133,6 +133,17 @@ def validation_table(models, records, names=None):
             rows.append({**s, "pooled RMS %": pooled})
             index.append((mname, label))
     return pd.DataFrame(rows, index=pd.MultiIndex.from_tuples(index, names=["model", "record"]))
+
+
+def pooled_rms(table):
+    """Pooled validation RMS [% of stroke] per model of a :func:`validation_table`.
+
+    Returns
+    -------
+    pandas.Series
+        Indexed by model, in the table's order; ``.idxmin()`` is the model chosen.
+    """
+    return table["pooled RMS %"].groupby(level="model", sort=False).first()
 
 
 def cross_check(compensators, plants, x_r, first=0):

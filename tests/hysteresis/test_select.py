@@ -38,6 +38,9 @@ def test_validation_prefers_the_true_model():
     assert table.loc[("PI", 0), "hysteresis % model"] == pytest.approx(
         table.loc[("PI", 0), "hysteresis % data"], abs=1e-8)
     assert set(table.columns) >= {"max %", "loop width data", "loop width model", "pooled RMS %"}
+    pooled = hy.pooled_rms(table)
+    assert list(pooled.index) == ["PI", "Dahl"] and pooled.idxmin() == "PI"
+    assert pooled["Dahl"] == pytest.approx(np.sqrt(np.mean(table.loc["Dahl", "RMS %"] ** 2)))
     with pytest.raises(TypeError, match="simulate"):
         hy.validation_table({"bad": object()}, [validation])
 
