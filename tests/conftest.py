@@ -4,3 +4,17 @@ import os
 os.environ.setdefault("MPLBACKEND", "Agg")
 # one BLAS thread: on 2 shared cores threaded small solves run many times slower
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+# interactive controls draw their static figure: no widget frontend in tests
+os.environ.setdefault("PIEZOLIB_STATIC", "1")
+
+import pytest  # noqa: E402
+
+
+@pytest.fixture(autouse=True)
+def _reference_study_outputs():
+    """Every test starts and ends writing to the reference study's folders."""
+    from piezolib.workbook import paths, study
+
+    yield
+    paths.set_output_study(study.REFERENCE)
+    study._active = None

@@ -23,8 +23,56 @@ def _parser():
                      help="run the remaining notebooks after a failure")
     rep.add_argument("--no-data", action="store_true",
                      help="do not regenerate the experiment files first")
+    rep.add_argument("--study", metavar="STUDY",
+                     help="a study in studies/ (name) or a .toml file: its outputs go to "
+                          "runs/<name>/ (default: reference, which writes figures/ and "
+                          "data/results/)")
+    rep.add_argument("--list", action="store_true", help="list the studies and exit")
     sub.add_parser("data", help="regenerate the virtual-stage experiment files in data/")
+    ctl = sub.add_parser("controllers",
+                         help="the reference controllers (data/controllers/reference_design.json)")
+    ctl.add_argument("--write-reference", action="store_true",
+                     help="re-derive them (DK-iteration, fixed order) and rewrite the file")
+    cmp_ = sub.add_parser("compare", help="key numbers of two studies side by side")
+    cmp_.add_argument("first", help="study name (e.g. reference)")
+    cmp_.add_argument("second", help="study name")
     return parser
+
+
+def _list_studies(stream):
+    from piezolib.workbook import study as studies
+
+    for name, s in studies.list_studies().items():
+        print(f"{name:<24s} {s.description}", file=stream)
+        print(f"{'':<24s} outputs: {s.output_dir}", file=stream)
+    return 0
+
+
+def _controllers(args, stream):
+    from piezolib.workbook import pipeline
+
+    if args.write_reference:
+        path = pipeline.write_reference_design()
+        print(f"wrote {path}", file=stream)
+    found = pipeline.read_controllers(pipeline.reference_design_path())
+    print(f"{found.source}: designed for choices {found.digest}; mu_RP "
+          + ", ".join(f"{k} {v:.4f}" for k, v in found.mu.items()), file=stream)
+    return 0
+
+
+def _compare(args, stream):
+    import pandas as pd
+
+    from piezolib.workbook import report
+
+    table = report.compare_studies(args.first, args.second).reset_index()
+    table["source"] = table["source"].str[:2]        # the notebook's number
+    columns = ["source", "quantity", "unit", "paper", args.first, args.second,
+               f"verdict ({args.second})"]
+    with pd.option_context("display.width", 250, "display.max_colwidth", 64):
+        print(table[columns].to_string(index=False), file=stream)
+    print(f"{len(table)} numbers differ between {args.first} and {args.second}", file=stream)
+    return 0
 
 
 def _data(stream):
@@ -48,13 +96,23 @@ def main(argv=None, stream=sys.stdout):
     args = _parser().parse_args(argv)
     if args.command == "data":
         return _data(stream)
+    if args.command == "controllers":
+        return _controllers(args, stream)
+    if args.command == "compare":
+        return _compare(args, stream)
+    if args.list:
+        return _list_studies(stream)
     from piezolib.workbook import reproduce
+    from piezolib.workbook import study as studies
 
     try:
         reproduce.list_notebooks(args.notebooks or None)     # fail early on a bad prefix
-    except ValueError as exc:
+        if args.study is not None:
+            studies.load(args.study)                        # ... and on a bad study
+    except (ValueError, studies.StudyError) as exc:
         print(f"python -m piezolib reproduce: {exc}", file=sys.stderr)
         return 2
     failures = reproduce.run(args.notebooks or None, timeout=args.timeout,
-                             keep_going=args.keep_going, data=not args.no_data, stream=stream)
+                             keep_going=args.keep_going, data=not args.no_data, stream=stream,
+                             study=args.study)
     return 1 if failures else 0

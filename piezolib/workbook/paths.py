@@ -1,22 +1,65 @@
-"""Where the workbook reads its inputs and writes its outputs."""
+"""Where the workbook reads its inputs and writes its outputs.
+
+The reference study writes the committed outputs (``figures/``,
+``data/results/``, ``data/controllers/``); any other study writes the same
+files under ``runs/<study>/`` (git-ignored), chosen by
+:func:`set_output_study` (called by :func:`piezolib.workbook.study.use`).
+"""
 
 from piezolib.problem.paths import data_dir, project_root
 
-__all__ = ["project_root", "data_dir", "results_dir", "figures_dir", "notebooks_dir"]
+__all__ = ["project_root", "data_dir", "results_dir", "figures_dir", "controllers_dir",
+           "notebooks_dir", "runs_dir", "study_output_dir", "set_output_study", "output_study"]
+
+_REFERENCE = "reference"
+_output_study = _REFERENCE
+
+
+def set_output_study(name):
+    """Send this process's figures and tables to the folder of study ``name``."""
+    global _output_study
+    if not isinstance(name, str) or not name:
+        raise ValueError(f"name must be a study name, got {name!r}")
+    _output_study = name
+
+
+def output_study():
+    """Name of the study whose folder receives the outputs (default ``reference``)."""
+    return _output_study
+
+
+def runs_dir():
+    """``runs/``: outputs of every study but the reference, and the cache (git-ignored)."""
+    return project_root() / "runs"
+
+
+def study_output_dir(name):
+    """Root of study ``name``'s outputs: the checkout for the reference, else ``runs/<name>/``."""
+    return project_root() if name == _REFERENCE else runs_dir() / name
+
+
+def _made(path):
+    path.mkdir(parents=True, exist_ok=True)
+    return path
 
 
 def results_dir():
-    """``data/results/``: paper-versus-reproduced CSV tables (created on demand)."""
-    path = data_dir() / "results"
-    path.mkdir(parents=True, exist_ok=True)
-    return path
+    """Paper-versus-reproduced CSV tables: ``data/results/`` or ``runs/<study>/results/``."""
+    if _output_study == _REFERENCE:
+        return _made(data_dir() / "results")
+    return _made(study_output_dir(_output_study) / "results")
 
 
 def figures_dir():
-    """``figures/``: regenerated figures (created on demand)."""
-    path = project_root() / "figures"
-    path.mkdir(parents=True, exist_ok=True)
-    return path
+    """Regenerated figures: ``figures/`` or ``runs/<study>/figures/``."""
+    return _made(study_output_dir(_output_study) / "figures")
+
+
+def controllers_dir():
+    """Exported controllers: ``data/controllers/`` or ``runs/<study>/controllers/``."""
+    if _output_study == _REFERENCE:
+        return _made(data_dir() / "controllers")
+    return _made(study_output_dir(_output_study) / "controllers")
 
 
 def notebooks_dir():

@@ -1,7 +1,8 @@
 """Paper-versus-reproduced comparison tables.
 
 Every notebook states the paper's claims it checks as rows of a
-:class:`ClaimTable` and writes them to ``data/results/<name>.csv``.  A row
+:class:`ClaimTable` and writes them to ``data/results/<name>.csv`` (for a
+study other than the reference: ``runs/<study>/results/<name>.csv``).  A row
 holds the section, the quantity, its unit, the paper's value, the workbook's
 value, the tolerance of the comparison, the verdict and a note.  A numeric
 claim *agrees* when ``|ours - paper| <= max(atol, rtol * |paper|)``.
@@ -14,10 +15,14 @@ import pandas as pd
 
 from piezolib._checks import check_nonnegative
 from piezolib.records import atomic_write
+from piezolib.workbook import paths
 from piezolib.workbook.paths import results_dir
 
-__all__ = ["COLUMNS", "REASONS", "NOTEBOOK_TABLES", "OTHER_TABLES", "verdict", "ClaimTable",
-           "save_results", "load_claims", "reproduction_table", "verdict_counts"]
+__all__ = ["COLUMNS", "REASONS", "NOTEBOOK_TABLES", "OTHER_TABLES", "SIGNIFICANT_DIGITS",
+           "verdict", "ClaimTable", "save_results", "load_claims", "compare_studies",
+           "reproduction_table", "inconsistent_verdicts", "verdict_counts"]
+
+REFERENCE_STUDY = "reference"
 
 COLUMNS = ["section", "quantity", "unit", "paper", "ours", "tolerance",
            "verdict", "reason", "note"]
@@ -29,6 +34,7 @@ REASONS = {
     "model mismatch": "the workbook's model differs from the one the paper used",
     "virtual stage": "the virtual stage stands in for hardware the workbook does not have",
     "method": "the quantity was computed by a different, documented method",
+    "study": "the study changes one of the paper's choices (studies/<name>.toml)",
 }
 
 
@@ -86,6 +92,8 @@ class ClaimTable:
             result, tol = "not published", ""
         else:
             result, tol = verdict(paper, ours, rtol=rtol, atol=atol)
+        if result == "differs" and not reason and paths.output_study() != REFERENCE_STUDY:
+            reason = "study"      # the study changed one of the paper's choices
         self.rows.append(dict(section=section, quantity=quantity, unit=unit,
                               paper=paper, ours=_plain(ours), tolerance=tol,
                               verdict=result,
@@ -101,16 +109,27 @@ class ClaimTable:
         return save_results(self.frame(), self.name)
 
 
+#: Significant digits of the numbers in the committed tables (the reproducibility
+#: rule, README "Reproducible results"): every number downstream of the committed
+#: reference controller is deterministic up to floating-point rounding (relative
+#: 1e-12), which never reaches the 4th digit except at a rounding boundary.
+SIGNIFICANT_DIGITS = 4
+
+
 def save_results(frame, name):
-    """Write a DataFrame to ``data/results/<name>.csv`` atomically (floats to 6 significant
-    digits so that reruns on other machines give the same file)."""
+    """Write a DataFrame to ``<results>/<name>.csv`` atomically, floats rounded to
+    :data:`SIGNIFICANT_DIGITS` so that reruns on other machines give the same file.
+
+    ``<results>`` is ``data/results/`` for the reference study and
+    ``runs/<study>/results/`` for any other (:func:`piezolib.workbook.paths.results_dir`).
+    """
     if not isinstance(frame, pd.DataFrame):
         raise TypeError(f"frame must be a pandas DataFrame, got {type(frame).__name__}")
     path = results_dir() / f"{name}.csv"
     # object columns mix numbers and text; round their floats like the rest
-    frame = frame.apply(lambda col: col.map(_six_digits) if col.dtype == object else col)
+    frame = frame.apply(lambda col: col.map(_rounded) if col.dtype == object else col)
     # one string, then a temporary file and a rename: a reader never sees a partial file
-    return atomic_write(path, frame.to_csv(index=False, float_format="%.6g",
+    return atomic_write(path, frame.to_csv(index=False, float_format=f"%.{SIGNIFICANT_DIGITS}g",
                                            lineterminator="\n"))
 
 
@@ -118,8 +137,8 @@ def _is_number(x):
     return isinstance(x, numbers.Real) and not isinstance(x, bool)
 
 
-def _six_digits(x):
-    return float(f"{x:.6g}") if isinstance(x, float) else x
+def _rounded(x):
+    return float(f"{x:.{SIGNIFICANT_DIGITS}g}") if isinstance(x, float) else x
 
 
 def _plain(x):
@@ -146,7 +165,7 @@ OTHER_TABLES = {
 }
 
 
-def load_claims(names=None):
+def load_claims(names=None, study=None):
     """Concatenate the comparison tables written by the notebooks.
 
     Parameters
@@ -154,11 +173,17 @@ def load_claims(names=None):
     names : sequence of str, optional
         Table names (keys of :data:`NOTEBOOK_TABLES` or :data:`OTHER_TABLES`);
         default all of :data:`NOTEBOOK_TABLES`.
+    study : str, optional
+        Name of the study whose tables to read (default: the study this
+        process writes, :func:`piezolib.workbook.paths.output_study`).  A
+        table the study has not written yet is read from the reference
+        study's ``data/results/``, and the ``study`` column says so.
 
     Returns
     -------
     pandas.DataFrame
-        :data:`COLUMNS` plus ``source``, the notebook that wrote each row.
+        :data:`COLUMNS` plus ``source``, the notebook that wrote each row,
+        and ``study``, the study whose run it comes from.
 
     Raises
     ------
@@ -167,11 +192,12 @@ def load_claims(names=None):
     """
     names = list(NOTEBOOK_TABLES) if names is None else list(names)
     tables = {**NOTEBOOK_TABLES, **OTHER_TABLES}
+    study = paths.output_study() if study is None else study
     frames = []
     for name in names:
         if name not in tables:
             raise ValueError(f"unknown table {name!r}; expected one of {list(tables)}")
-        path = results_dir() / f"{name}.csv"
+        path, origin = _study_table(study, name)
         if not path.exists():
             raise FileNotFoundError(
                 f"{path} is missing: run notebook {tables[name]} "
@@ -181,8 +207,57 @@ def load_claims(names=None):
         if missing:
             raise ValueError(f"{path.name} lacks column(s) {sorted(missing)}")
         frame.insert(0, "source", tables[name])
-        frames.append(frame[["source"] + COLUMNS])
+        frame.insert(1, "study", origin)
+        frames.append(frame[["source", "study"] + COLUMNS])
     return pd.concat(frames, ignore_index=True)
+
+
+def _study_table(study, name):
+    """Path of table ``name`` of ``study`` and the study it belongs to (the
+    reference's when the study has not written it)."""
+    reference = paths.data_dir() / "results" / f"{name}.csv"
+    if study == REFERENCE_STUDY:
+        return reference, study
+    own = paths.study_output_dir(study) / "results" / f"{name}.csv"
+    return (own, study) if own.exists() else (reference, REFERENCE_STUDY)
+
+
+def compare_studies(first, second, names=None, changed_only=True):
+    """Key numbers of two studies side by side, from their result tables.
+
+    Parameters
+    ----------
+    first, second : str
+        Study names (e.g. ``"reference"`` and ``"wide_error_weight"``); each
+        must have been run (``python -m piezolib reproduce --study ...``).
+    names : sequence of str, optional
+        Tables to compare (default: every notebook table).
+    changed_only : bool
+        Keep only the rows whose value differs between the two studies.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Index (source, quantity); columns ``unit``, ``paper``, the two
+        studies' values and verdicts.
+    """
+    if first == second:
+        raise ValueError(f"first and second name the same study {first!r}")
+    key = ["source", "section", "quantity"]
+    frames = []
+    for name in (first, second):
+        claims = load_claims(names, study=name)
+        claims = claims.drop_duplicates(key)
+        frames.append(claims.set_index(key)[["unit", "paper", "ours", "verdict", "study"]])
+    a, b = frames
+    table = a[["unit", "paper"]].copy()
+    table[first], table[second] = a["ours"], b["ours"].reindex(a.index)
+    table[f"verdict ({first})"] = a["verdict"]
+    table[f"verdict ({second})"] = b["verdict"].reindex(a.index)
+    table[f"from ({second})"] = b["study"].reindex(a.index)
+    if changed_only:
+        table = table[table[first] != table[second]]
+    return table
 
 
 def reproduction_table(claims):
@@ -195,6 +270,44 @@ def reproduction_table(claims):
     unexplained = (published["verdict"] == "differs") & (published["reason"] == "")
     published.loc[unexplained, "reason"] = "unexplained"
     return published.reset_index(drop=True)
+
+
+def inconsistent_verdicts(table):
+    """Rows whose stored verdict does not follow from their stored values and tolerance.
+
+    Recomputes each numeric verdict from the table as written (``paper``,
+    ``ours`` rounded to :data:`SIGNIFICANT_DIGITS`, ``tolerance`` as
+    ``+-x%`` or ``+-x``): a value that sits on the edge of its tolerance band
+    can change its verdict when rounded, and this finds it.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        Rows of :func:`load_claims` (string columns).
+
+    Returns
+    -------
+    pandas.DataFrame
+        The offending rows (empty when every verdict is consistent).
+    """
+    bad = []
+    for index, row in table.iterrows():
+        tol = str(row["tolerance"])
+        if row["verdict"] not in ("agrees", "differs") or not tol.startswith("+-"):
+            continue
+        try:
+            paper_value, ours = float(row["paper"]), float(row["ours"])
+        except ValueError:
+            continue
+        width = (float(tol[2:-1]) / 100 * abs(paper_value) if tol.endswith("%")
+                 else float(tol[2:]))
+        # the stored tolerance text is itself rounded: allow its last printed digit
+        slack = 1e-9 + 0.5e-2 * width
+        expected = abs(ours - paper_value) <= width
+        borderline = abs(abs(ours - paper_value) - width) <= slack
+        if not borderline and expected != (row["verdict"] == "agrees"):
+            bad.append(index)
+    return table.loc[bad]
 
 
 def verdict_counts(table):

@@ -6,6 +6,10 @@ figures into ``figures/`` and the paper-versus-reproduced tables into
 ``data/results/``), prints one progress line per step and exits non-zero,
 naming the notebook and the cell, when a step fails.  The notebooks on disk
 are never modified: they are executed in memory.
+
+With ``--study``, the study's name or file is injected after each notebook's
+cell tagged ``parameters`` (as papermill does), the figures and tables go to
+``runs/<study>/`` and the executed notebooks to ``runs/<study>/notebooks/``.
 """
 
 import importlib
@@ -13,10 +17,13 @@ import os
 import subprocess
 import sys
 import time
+from pathlib import Path
 
+from piezolib.workbook import study as studies
 from piezolib.workbook.paths import notebooks_dir, project_root
 
-__all__ = ["DATA_STEPS", "DATA_CHECKS", "check_data", "list_notebooks", "run_notebook", "run", "NotebookFailure"]
+__all__ = ["DATA_STEPS", "DATA_CHECKS", "check_data", "list_notebooks", "inject_study",
+           "run_notebook", "run", "NotebookFailure"]
 
 #: Data-generating steps run before the notebooks, as "module:function" names
 #: of functions that take no arguments and return the list of files written.
@@ -49,8 +56,40 @@ def list_notebooks(selection=None):
     return paths
 
 
-def run_notebook(path, timeout=600):
+def inject_study(nb, study):
+    """Insert ``study = <spec>`` after the cell tagged ``parameters`` (papermill's
+    convention: the new cell is tagged ``injected-parameters``); return ``nb``.
+
+    Raises
+    ------
+    ValueError
+        When the notebook has no cell tagged ``parameters``.
+    """
+    import nbformat
+
+    for index, cell in enumerate(nb.cells):
+        if "parameters" in cell.get("metadata", {}).get("tags", []):
+            break
+    else:
+        raise ValueError("the notebook has no cell tagged 'parameters'")
+    injected = nbformat.v4.new_code_cell(f"study = {str(study)!r}  # injected by reproduce")
+    injected.metadata["tags"] = ["injected-parameters"]
+    nb.cells.insert(index + 1, injected)
+    return nb
+
+
+def run_notebook(path, timeout=600, study=None, save_to=None):
     """Execute one notebook in memory with the current interpreter.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+    timeout : float
+        Per-cell time limit [s].
+    study : str or pathlib.Path, optional
+        Study to inject (:func:`inject_study`); default: the notebook's own.
+    save_to : pathlib.Path, optional
+        Folder to write the executed notebook to (also when it fails).
 
     Raises
     ------
@@ -62,6 +101,8 @@ def run_notebook(path, timeout=600):
     from nbclient.exceptions import CellExecutionError
 
     nb = nbformat.read(path, as_version=4)
+    if study is not None:
+        inject_study(nb, study)
     client = NotebookClient(nb, timeout=timeout, kernel_name="python3",
                             resources={"metadata": {"path": str(path.parent)}})
     try:
@@ -72,12 +113,28 @@ def run_notebook(path, timeout=600):
         index, source = _failed_cell(nb)
         raise NotebookFailure(path.name, index, source,
                               f"{exc.ename}: {exc.evalue}") from None
+    finally:
+        if save_to is not None:
+            save_to.mkdir(parents=True, exist_ok=True)
+            nbformat.write(nb, save_to / path.name)
     return nb
 
 
-def run(selection=None, timeout=600, keep_going=False, data=True, stream=sys.stdout):
-    """Regenerate data, then execute the notebooks; return the number of failures."""
+def run(selection=None, timeout=600, keep_going=False, data=True, stream=sys.stdout,
+        study=None):
+    """Regenerate data, then execute the notebooks; return the number of failures.
+
+    ``study`` (a name in ``studies/`` or a path to a TOML file) is injected
+    into every notebook; its outputs and the executed notebooks go to
+    ``runs/<name>/`` unless it is the reference study.
+    """
+    chosen = studies.load(studies.REFERENCE if study is None else study)
+    spec = None if study is None else (str(Path(study).resolve()) if str(study).endswith(".toml")
+                                       else str(study))
+    save_to = chosen.output_dir / "notebooks" if not chosen.is_reference else None
     os.environ.setdefault("MPLBACKEND", "Agg")
+    # widgets have no frontend here: controls draw their static figure
+    os.environ.setdefault("PIEZOLIB_STATIC", "1")
     # kernels inherit this: threaded BLAS on small problems is slower on 2 cores
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     os.environ.setdefault("PIEZOLIB_ROOT", str(project_root()))
@@ -107,7 +164,7 @@ def run(selection=None, timeout=600, keep_going=False, data=True, stream=sys.std
         k += 1
         start = time.perf_counter()
         try:
-            run_notebook(path, timeout=timeout)
+            run_notebook(path, timeout=timeout, study=spec, save_to=save_to)
             status = "ok"
         except NotebookFailure as exc:
             failures += 1
@@ -119,10 +176,12 @@ def run(selection=None, timeout=600, keep_going=False, data=True, stream=sys.std
             print("\n".join("      " + line for line in detail), file=stream, flush=True)
         if failures and not keep_going:
             break
+    out = chosen.output_dir
+    tables = out / "data" / "results" if chosen.is_reference else out / "results"
     print(f"{'all done' if not failures else f'{failures} step(s) failed'} in "
-          f"{time.perf_counter() - start_all:.1f} s; figures in "
-          f"{project_root() / 'figures'}, tables in {project_root() / 'data' / 'results'}",
-          file=stream, flush=True)
+          f"{time.perf_counter() - start_all:.1f} s; study {chosen.name}: figures in "
+          f"{out / 'figures'}, tables in {tables}"
+          + (f", executed notebooks in {save_to}" if save_to else ""), file=stream, flush=True)
     return failures
 
 

@@ -1,5 +1,6 @@
 """The command line: ``python -m piezolib {reproduce,data}``."""
 
+import io
 import subprocess
 import sys
 
@@ -46,3 +47,14 @@ def test_data_writes_the_experiment_files(tmp_path, monkeypatch):
     assert "chirp_identification.csv" in written and "hysteresis_loop_40V.csv" in written
     text = "".join(lines)
     assert "Case I hysteresis at   40 V" in text and text.rstrip().splitlines()[-1].startswith("done")
+
+
+def test_list_studies_and_bad_study(capsys):
+    buf = io.StringIO()
+    assert cli.main(["reproduce", "--list"], stream=buf) == 0
+    out = buf.getvalue()
+    for name in ("reference", "uncertainty_3pct", "wide_error_weight"):
+        assert name in out
+    assert out.splitlines()[0].startswith("reference")
+    assert cli.main(["reproduce", "--study", "no_such_study"]) == 2
+    assert "no study named 'no_such_study'" in capsys.readouterr().err

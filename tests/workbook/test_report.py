@@ -3,7 +3,7 @@
 import pandas as pd
 import pytest
 
-from piezolib.workbook import report
+from piezolib.workbook import paths, report
 
 
 def test_verdict_relative_and_absolute():
@@ -42,11 +42,11 @@ def test_reasons_are_kept_only_on_differing_rows():
         report.ClaimTable("not a name")
 
 
-def test_saved_floats_have_six_significant_digits(tmp_path, monkeypatch):
+def test_saved_floats_have_four_significant_digits(tmp_path, monkeypatch):
     monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
     frame = pd.DataFrame({"x": [1.0 / 3.0], "mixed": [2.0 / 3.0]}).astype({"mixed": object})
     text = report.save_results(frame, "digits").read_text().splitlines()
-    assert text[1] == "0.333333,0.666667"
+    assert report.SIGNIFICANT_DIGITS == 4 and text[1] == "0.3333,0.6667"
     with pytest.raises(TypeError, match="DataFrame"):
         report.save_results([1, 2], "digits")
 
@@ -64,7 +64,8 @@ def test_load_claims_and_reproduction_table(tmp_path, monkeypatch):
     table.add("IV-C", "not published", None, 1.0)
     table.save()
     claims = report.load_claims(["audit"])
-    assert list(claims.columns) == ["source"] + report.COLUMNS
+    assert list(claims.columns) == ["source", "study"] + report.COLUMNS
+    assert set(claims.study) == {"reference"}
     assert set(claims.source) == {report.NOTEBOOK_TABLES["audit"]}
     published = report.reproduction_table(claims)
     assert len(published) == 3
@@ -85,3 +86,46 @@ def test_other_tables_load_only_by_name(tmp_path, monkeypatch):
     assert claims.source.tolist() == ["08_your_own_stage"]
     with pytest.raises(FileNotFoundError, match="reproduce 00"):
         report.load_claims()                          # the default set does not include it
+
+
+def test_study_tables_fall_back_to_the_reference_and_compare(tmp_path, monkeypatch):
+    monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
+    for name, value in (("reference", 0.80), ("other", 0.95)):
+        paths.set_output_study(name)
+        table = report.ClaimTable("mu_synthesis")
+        table.add("IV-B", "mu_RP", 0.71, value, rtol=0.05)
+        table.add("IV-B", "order", 6, 6)
+        table.save()
+    paths.set_output_study("reference")
+    table = report.ClaimTable("weights")
+    table.add("eq. 15", "M_e", 2.0, 2.0)
+    table.save()
+    assert (tmp_path / "runs" / "other" / "results" / "mu_synthesis.csv").is_file()
+    assert (tmp_path / "data" / "results" / "mu_synthesis.csv").is_file()
+    paths.set_output_study("other")
+    changed = report.ClaimTable("x")
+    changed.add("IV-B", "unexplained in a study", 0.71, 0.9, rtol=0.05)
+    changed.add("IV-B", "explained", 0.71, 0.9, rtol=0.05, reason="method")
+    assert changed.frame().reason.tolist() == ["study", "method"]
+    paths.set_output_study("reference")
+    claims = report.load_claims(["mu_synthesis", "weights"], study="other")
+    assert dict(zip(claims.quantity, claims.study)) == {"mu_RP": "other", "order": "other",
+                                                        "M_e": "reference"}
+    both = report.compare_studies("reference", "other", names=["mu_synthesis", "weights"])
+    assert both.index.get_level_values("quantity").tolist() == ["mu_RP"]
+    assert both.iloc[0][["reference", "other"]].tolist() == ["0.8", "0.95"]
+    assert both.iloc[0]["verdict (other)"] == "differs"
+    everything = report.compare_studies("reference", "other", ["mu_synthesis"], changed_only=False)
+    assert len(everything) == 2
+    with pytest.raises(ValueError, match="same study"):
+        report.compare_studies("other", "other")
+
+
+def test_inconsistent_verdicts_finds_a_verdict_the_numbers_contradict():
+    table = pd.DataFrame({
+        "paper": ["1.0", "1.0", "2", "x", "1.0"], "ours": ["1.04", "1.2", "2.5", "x", "1.05"],
+        "tolerance": ["+-5%", "+-5%", "+-1", "equal", "+-5%"],
+        "verdict": ["agrees", "agrees", "agrees", "agrees", "differs"]})
+    bad = report.inconsistent_verdicts(table)
+    # row 1 lies outside its band; row 4 sits on the edge (rounding can go either way)
+    assert bad.index.tolist() == [1]

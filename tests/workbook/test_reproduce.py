@@ -65,3 +65,30 @@ def test_reproduce_says_when_it_regenerates_a_file_that_failed_its_check(workboo
     assert len(regenerated) == 1 and "chirp_validation.csv" in regenerated[0]
     assert "line 501" in regenerated[0]
     assert reproduce.check_data() == {}                          # regenerated and intact again
+
+
+def test_study_is_injected_after_the_parameters_cell(workbook):
+    nb = nbformat.v4.new_notebook(cells=[
+        nbformat.v4.new_markdown_cell("# title"),
+        nbformat.v4.new_code_cell('study = "reference"'),
+        nbformat.v4.new_code_cell("result = study")])
+    nb.cells[1].metadata["tags"] = ["parameters"]
+    path = workbook / "notebooks" / "00_param.ipynb"
+    nbformat.write(nb, path)
+    out = reproduce.run_notebook(path, study="other", save_to=workbook / "runs" / "x")
+    assert [c.metadata.get("tags") for c in out.cells[1:3]] == [["parameters"],
+                                                               ["injected-parameters"]]
+    assert (workbook / "runs" / "x" / "00_param.ipynb").is_file()
+    assert nbformat.read(path, as_version=4).cells[2].source == "result = study"   # untouched
+    with pytest.raises(ValueError, match="no cell tagged 'parameters'"):
+        reproduce.inject_study(nbformat.v4.new_notebook(), "other")
+
+
+def test_every_workbook_notebook_has_a_parameters_cell_naming_the_study():
+    from piezolib.workbook.paths import notebooks_dir
+
+    for path in sorted(notebooks_dir().glob("[0-9][0-9]_*.ipynb")):
+        nb = nbformat.read(path, as_version=4)
+        tagged = [c for c in nb.cells if "parameters" in c.metadata.get("tags", [])]
+        assert len(tagged) == 1 and 'study = "reference"' in tagged[0].source, path.name
+        assert "studies.use(study)" in "".join(c.source for c in nb.cells), path.name

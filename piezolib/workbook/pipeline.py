@@ -1,0 +1,291 @@
+"""The pipeline's products, computed once per study and reused by later notebooks.
+
+The expensive and machine-sensitive product is the controller design (the
+DK-iteration follows a path that depends on floating-point details).  It is
+
+* for the ``reference`` study, the committed artifact
+  ``data/controllers/reference_design.json`` (state-space matrices written
+  with full precision): notebooks 04-06 use it, notebook 05 re-derives it and
+  compares the mu values, so downstream numbers do not depend on the machine;
+* for any other study, derived on first use and cached on disk with joblib
+  (``runs/cache/``, keyed by the study's weights, design and loop choices and
+  by the library's source), and written to ``runs/<study>/artifacts/`` with
+  the choices it came from — so a change made for notebook 04 flows into 05,
+  06 and 07, and re-running 06 does not redo the DK-iteration.
+
+``PIEZOLIB_CACHE=off`` disables the disk cache; ``PIEZOLIB_CACHE=<folder>``
+moves it.
+"""
+
+import copyreg
+import hashlib
+import json
+import logging
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import control as ct
+import numpy as np
+
+from piezolib import paper
+from piezolib.problem.design import design_controller
+from piezolib.records import atomic_write
+from piezolib.workbook import paths
+from piezolib.workbook import study as studies
+
+__all__ = ["StudyControllers", "study_problem", "study_controllers", "derive_controllers",
+           "design_digest", "memory", "library_fingerprint", "reference_design_path",
+           "write_controllers", "read_controllers", "write_reference_design",
+           "ArtifactError", "CACHE_ENV"]
+
+logger = logging.getLogger(__name__)
+
+#: Environment variable: ``off`` disables the disk cache, a folder moves it.
+CACHE_ENV = "PIEZOLIB_CACHE"
+#: Format version of the controller artifact files.
+ARTIFACT_FORMAT = 1
+_DESIGN_SECTIONS = ("weights", "design", "loop")
+_CONTROLLERS = ("K_full", "K_reduced", "K_fixed", "K_nodelay_full", "K_nodelay_reduced")
+
+
+class ArtifactError(RuntimeError):
+    """A committed or cached artifact that does not fit the study asking for it."""
+
+
+@dataclass(frozen=True)
+class StudyControllers:
+    """The mu controllers of one study (continuous time, v_e [V] -> u_b [V]).
+
+    Attributes
+    ----------
+    study : str
+        Name of the study.
+    digest : str
+        :func:`design_digest` of the choices they were designed for.
+    source : str
+        Where they came from (the committed file, the cache or a fresh run).
+    K_full, K_reduced, K_fixed : control.StateSpace
+        Delay-aware design: DK-iteration, its reduction, and the fixed-order
+        controller that is deployed.
+    K_nodelay_full, K_nodelay_reduced : control.StateSpace
+        The design for the paper's problem as printed (no delay).
+    mu : dict
+        mu_RP upper bounds reported by the syntheses: ``"delay-aware DK"``,
+        ``"fixed order"``, ``"no-delay DK"``.
+    design, nodelay : piezolib.problem.design.ControllerDesign or None
+        The full design records (DK history, D-fits, reduction) when derived
+        in this process or read from the cache; None when read from a file.
+    """
+
+    study: str
+    digest: str
+    source: str
+    K_full: ct.StateSpace
+    K_reduced: ct.StateSpace
+    K_fixed: ct.StateSpace
+    K_nodelay_full: ct.StateSpace
+    K_nodelay_reduced: ct.StateSpace
+    mu: dict
+    design: object = field(default=None, repr=False)
+    nodelay: object = field(default=None, repr=False)
+
+    @property
+    def K_deployed(self):
+        """The controller to implement (the fixed-order one)."""
+        return self.K_fixed
+
+
+def _rebuild_statespace(A, B, C, D, dt, inputs, outputs, states, name):
+    return ct.ss(A, B, C, D, dt, inputs=inputs, outputs=outputs, states=states, name=name)
+
+
+def _reduce_statespace(sys):
+    # python-control's StateSpace holds lambdas (update/output functions) that pickle
+    # cannot store; the matrices, the time base and the signal names are the whole model
+    return _rebuild_statespace, (sys.A, sys.B, sys.C, sys.D, sys.dt, sys.input_labels,
+                                 sys.output_labels, sys.state_labels, sys.name)
+
+
+# the disk cache pickles the design records, which hold state-space models
+copyreg.pickle(ct.StateSpace, _reduce_statespace)
+
+
+def study_problem(study):
+    """The design problem of ``study``: published G, H_m and K, the study's H_e and H_y.
+
+    Returns
+    -------
+    piezolib.paper.DesignProblem
+    """
+    study = studies.load(study)
+    published = paper.problem()
+    return published._replace(H_e=paper.error_weight(study.weights.error),
+                              H_y=paper.output_weight(study.weights.output))
+
+
+def design_digest(study):
+    """Digest of the choices a controller design depends on (weights, design, loop)."""
+    return studies.load(study).digest(*_DESIGN_SECTIONS)
+
+
+def library_fingerprint():
+    """SHA-256 (16 hex digits) of every ``piezolib`` source file: part of each cache key,
+    so a change anywhere in the library invalidates the cached products."""
+    root = Path(__file__).resolve().parents[1]
+    h = hashlib.sha256()
+    for path in sorted(root.rglob("*.py")):
+        h.update(str(path.relative_to(root)).encode())
+        h.update(path.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def memory():
+    """The joblib disk cache of the pipeline (``runs/cache/`` unless :data:`CACHE_ENV` says)."""
+    import joblib
+
+    setting = os.environ.get(CACHE_ENV, "")
+    if setting.lower() in {"0", "off", "no", "false"}:
+        return joblib.Memory(location=None, verbose=0)
+    location = Path(setting) if setting else paths.runs_dir() / "cache"
+    return joblib.Memory(location=location, verbose=0)
+
+
+def _design_pair(weights, design, loop, fingerprint):
+    """Both designs for the given choices (the cached computation; ``fingerprint``
+    only keys the cache)."""
+    choice = studies.Study().replace(name="cache_key", weights=weights, design=design, loop=loop)
+    G, H_m, H_e, H_y, _ = study_problem(choice)
+    options = dict(order=choice.design.order, d_order=choice.design.d_order,
+                   max_iter=choice.design.max_iter, fs=choice.loop.fs_hz)
+    logger.info("designing the delay-aware controllers (%s)", json.dumps(choice.choices(
+        *_DESIGN_SECTIONS)))
+    delay_aware = design_controller(G, H_m, H_e, H_y, delay_samples=choice.design.delay_samples,
+                                    **options)
+    logger.info("designing the no-delay controllers")
+    nodelay = design_controller(G, H_m, H_e, H_y, delay_samples=None, fixed_order=False,
+                                **options)
+    return delay_aware, nodelay
+
+
+def derive_controllers(study, cache=True):
+    """Design the study's controllers (DK-iteration, reduction, fixed order), cached on disk.
+
+    Parameters
+    ----------
+    study : Study, str or path
+    cache : bool
+        Use the disk cache (:func:`memory`); False always recomputes.
+
+    Returns
+    -------
+    StudyControllers
+        With ``design`` and ``nodelay`` set.
+    """
+    study = studies.load(study)
+    args = (*(study.choices(s)[s] for s in _DESIGN_SECTIONS), library_fingerprint())
+    if cache:
+        cached = memory().cache(_design_pair)
+        hit = cached.check_call_in_cache(*args)
+        delay_aware, nodelay = cached(*args)
+        source = "disk cache" if hit else "derived (now cached)"
+    else:
+        delay_aware, nodelay = _design_pair(*args)
+        source = "derived"
+    return StudyControllers(
+        study=study.name, digest=design_digest(study), source=source,
+        K_full=delay_aware.K_full, K_reduced=delay_aware.K_reduced, K_fixed=delay_aware.K_fixed,
+        K_nodelay_full=nodelay.K_full, K_nodelay_reduced=nodelay.K_reduced,
+        mu={"delay-aware DK": float(delay_aware.musyn.mu_peak),
+            "fixed order": float(delay_aware.fixed_order.mu_peak),
+            "no-delay DK": float(nodelay.musyn.mu_peak)},
+        design=delay_aware, nodelay=nodelay)
+
+
+def reference_design_path():
+    """``data/controllers/reference_design.json``: the committed reference controllers."""
+    return paths.data_dir() / "controllers" / "reference_design.json"
+
+
+def study_controllers(study, cache=True):
+    """The controllers every notebook of ``study`` uses.
+
+    The reference study reads the committed artifact (:func:`reference_design_path`)
+    and checks that it was designed for the reference's current choices; any
+    other study derives them (:func:`derive_controllers`) and writes them to
+    ``runs/<study>/artifacts/controllers.json``.
+
+    Raises
+    ------
+    ArtifactError
+        The committed artifact is missing or was designed for other choices.
+    """
+    study = studies.load(study)
+    if study.is_reference:
+        path = reference_design_path()
+        if not path.is_file():
+            raise ArtifactError(f"{path} is missing: run `python -m piezolib controllers "
+                                "--write-reference` to derive and commit it")
+        found = read_controllers(path)
+        if found.digest != design_digest(study):
+            raise ArtifactError(
+                f"{path} was designed for other choices (digest {found.digest}, the reference "
+                f"study's is {design_digest(study)}): re-derive it with `python -m piezolib "
+                "controllers --write-reference`")
+        return found
+    found = derive_controllers(study, cache=cache)
+    write_controllers(found, study.output_dir / "artifacts" / "controllers.json", study)
+    return found
+
+
+def write_reference_design(cache=False):
+    """Re-derive the reference study's controllers and write the committed artifact."""
+    reference = studies.load(studies.REFERENCE)
+    found = derive_controllers(reference, cache=cache)
+    return write_controllers(found, reference_design_path(), reference)
+
+
+def write_controllers(controllers, path, study):
+    """Write ``controllers`` as JSON (matrices with full float precision); return the path."""
+    study = studies.load(study)
+    doc = {"format": ARTIFACT_FORMAT, "study": study.name, "digest": controllers.digest,
+           "choices": study.choices(*_DESIGN_SECTIONS),
+           "library": library_fingerprint(),
+           "versions": {"numpy": np.__version__, "control": ct.__version__},
+           "mu": controllers.mu,
+           "controllers": {name: _ss_to_dict(getattr(controllers, name))
+                           for name in _CONTROLLERS}}
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    # json writes floats with repr: they read back bit for bit
+    return atomic_write(path, json.dumps(doc, indent=1) + "\n")
+
+
+def read_controllers(path):
+    """Read a file of :func:`write_controllers` back into :class:`StudyControllers`."""
+    path = Path(path)
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+        if doc.get("format") != ARTIFACT_FORMAT:
+            raise ArtifactError(f"{path}: format {doc.get('format')!r}, expected "
+                                f"{ARTIFACT_FORMAT}")
+        systems = {name: _ss_from_dict(doc["controllers"][name]) for name in _CONTROLLERS}
+        return StudyControllers(study=doc["study"], digest=doc["digest"], source=str(path),
+                                mu={k: float(v) for k, v in doc["mu"].items()}, **systems)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ArtifactError(f"{path}: not a controller artifact ({exc})") from None
+
+
+def _ss_to_dict(sys):
+    return {"name": sys.name, "inputs": list(sys.input_labels),
+            "outputs": list(sys.output_labels),
+            **{m: np.asarray(getattr(sys, m), dtype=float).tolist() for m in "ABCD"}}
+
+
+def _ss_from_dict(d):
+    n = len(d["A"])
+    A = np.array(d["A"], dtype=float).reshape(n, n)
+    B = np.array(d["B"], dtype=float).reshape(n, len(d["inputs"]))
+    C = np.array(d["C"], dtype=float).reshape(len(d["outputs"]), n)
+    D = np.array(d["D"], dtype=float).reshape(len(d["outputs"]), len(d["inputs"]))
+    return ct.ss(A, B, C, D, inputs=d["inputs"], outputs=d["outputs"], name=d["name"])

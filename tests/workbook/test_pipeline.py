@@ -1,0 +1,85 @@
+"""The pipeline's controller artifacts: committed for the reference, cached for other studies."""
+
+import json
+
+import control as ct
+import numpy as np
+import pytest
+
+from piezolib import paper
+from piezolib.problem import analysis
+from piezolib.workbook import pipeline, study
+
+
+def test_study_problem_takes_the_study_weights():
+    wide = study.Study().replace(name="wide", weights={"omega_e": 2500.0})
+    G, H_m, H_e, H_y, K = pipeline.study_problem(wide)
+    published = paper.problem()
+    assert np.allclose(H_e.num[0][0], paper.error_weight(omega_e=2500.0).num[0][0])
+    assert np.allclose(H_y.den[0][0], published.H_y.den[0][0])
+    assert np.allclose(G.den[0][0], published.G.den[0][0])
+
+
+def test_committed_reference_controllers_match_their_recorded_mu():
+    found = pipeline.study_controllers("reference")
+    assert found.digest == pipeline.design_digest(study.Study())
+    assert found.K_fixed.nstates == 6 and found.K_nodelay_reduced.nstates == 6
+    G, H_m, H_e, H_y, _ = paper.problem()
+    # independent recomputation: mu_RP of eq. 18 of the committed no-delay full-order K is at most
+    # the DK value recorded with it (its synthesis plant adds an effort output)
+    result = analysis.analyze(found.K_nodelay_full, G, H_m, H_e, H_y)
+    assert result.nominal_stability
+    assert result.mu_RP <= found.mu["no-delay DK"] + 2e-3
+    assert result.mu_RP >= found.mu["no-delay DK"] - 0.02
+
+
+def test_write_read_round_trip_is_bit_exact(tmp_path):
+    K = ct.ss([[-1.0 / 3.0, 1e-17], [2.0, -7.0]], [[1.0], [np.pi]], [[np.e, 1e300]], [[0.1]],
+              inputs=["v_e"], outputs=["u_b"], name="K")
+    fake = pipeline.StudyControllers(
+        study="reference", digest="abc", source="test", K_full=K, K_reduced=K, K_fixed=K,
+        K_nodelay_full=K, K_nodelay_reduced=K, mu={"fixed order": 0.1 + 0.2})
+    path = pipeline.write_controllers(fake, tmp_path / "k.json", "reference")
+    back = pipeline.read_controllers(path)
+    for m in "ABCD":
+        assert np.array_equal(getattr(back.K_fixed, m), getattr(K, m))
+    assert back.mu == {"fixed order": 0.1 + 0.2} and back.K_full.input_labels == ["v_e"]
+    doc = json.loads(path.read_text())
+    doc["format"] = 99
+    path.write_text(json.dumps(doc))
+    with pytest.raises(pipeline.ArtifactError, match="format 99"):
+        pipeline.read_controllers(path)
+    path.write_text('{"format": 1}')
+    with pytest.raises(pipeline.ArtifactError, match="not a controller artifact"):
+        pipeline.read_controllers(path)
+
+
+def test_reference_artifact_for_other_choices_is_refused(tmp_path, monkeypatch):
+    monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
+    with pytest.raises(pipeline.ArtifactError, match="missing.*--write-reference"):
+        pipeline.study_controllers("reference")
+    K = ct.ss([[-1.0]], [[1.0]], [[1.0]], [[0.0]], inputs=["v_e"], outputs=["u_b"], name="K")
+    stale = pipeline.StudyControllers(
+        study="reference", digest="0000", source="test", K_full=K, K_reduced=K, K_fixed=K,
+        K_nodelay_full=K, K_nodelay_reduced=K, mu={})
+    pipeline.write_controllers(stale, pipeline.reference_design_path(), "reference")
+    with pytest.raises(pipeline.ArtifactError, match="designed for other choices"):
+        pipeline.study_controllers("reference")
+
+
+def test_derived_controllers_are_cached_on_disk(tmp_path, monkeypatch):
+    monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
+    monkeypatch.setenv(pipeline.CACHE_ENV, str(tmp_path / "cache"))
+    small = study.Study().replace(name="small", design={"max_iter": 2, "d_order": 1})
+    first = pipeline.study_controllers(small)
+    assert first.source == "derived (now cached)"
+    again = pipeline.derive_controllers(small)
+    assert again.source == "disk cache"
+    assert np.array_equal(again.K_fixed.A, first.K_fixed.A) and again.mu == first.mu
+    written = pipeline.read_controllers(tmp_path / "runs" / "small" / "artifacts" / "controllers.json")
+    assert written.digest == pipeline.design_digest(small)
+    assert np.array_equal(written.K_fixed.A, first.K_fixed.A)
+    # the design honours the study: D-fits of order 1, so at most 14 + 2 x 1 states
+    history = first.nodelay.musyn.history
+    assert len(history) <= 2 and history.d_order.max() == 1
+    assert first.K_nodelay_full.nstates <= 14 + 2 * 1

@@ -1,0 +1,82 @@
+"""Studies: a serialisable description of every choice, derived studies, output folders."""
+
+import pytest
+
+from piezolib import paper
+from piezolib.workbook import paths, study
+
+
+@pytest.fixture
+def checkout(tmp_path, monkeypatch):
+    monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
+    (tmp_path / "studies").mkdir()
+    return tmp_path
+
+
+def test_reference_defaults_are_the_published_choices():
+    ref = study.Study()
+    assert ref.is_reference and ref.name == "reference"
+    assert ref.uncertainty.spread == paper.UNCERTAINTY_SPREAD
+    assert ref.weights.error == paper.ERROR_WEIGHT and ref.weights.output == paper.OUTPUT_WEIGHT
+    assert ref.loop.fs_hz == paper.SAMPLING_FREQUENCY_HZ
+    assert ref.experiments.frequencies_Hz == paper.TRACKING_TEST["frequencies_Hz"]
+
+
+def test_the_committed_reference_file_is_the_default_study():
+    # studies/reference.toml of the checkout must say what the code's defaults say
+    assert study.load("reference") == study.Study()
+
+
+def test_toml_round_trip_and_replace(checkout):
+    wide = study.Study().replace(name="wide", description="wider H_e",
+                                 weights={"omega_e": 2500}, design={"max_iter": 3})
+    path = wide.save(checkout / "studies" / "wide.toml")
+    back = study.load("wide")
+    assert back == study.load(path) == wide
+    assert back.weights.omega_e == 2500 and back.design.max_iter == 3
+    assert back.weights.M_e == paper.ERROR_WEIGHT.M_e                  # untouched
+    assert list(study.list_studies()) == ["wide"]
+    # the digest depends only on the sections asked for, and not on int vs float
+    ref = study.Study()
+    assert wide.digest("uncertainty", "experiments") == ref.digest("uncertainty", "experiments")
+    assert wide.digest("weights") != ref.digest("weights")
+    assert wide.digest("weights") == study.Study().replace(
+        name="x", weights={"omega_e": 2500.0}).digest("weights")
+
+
+def test_bad_studies_name_the_field(checkout):
+    ref = study.Study()
+    with pytest.raises(study.StudyError, match="weights.omega_e"):
+        ref.replace(name="bad", weights={"omega_e": -1.0})
+    with pytest.raises(study.StudyError, match="unknown field.*omega_z"):
+        ref.replace(name="bad", weights={"omega_z": 1.0})
+    with pytest.raises(study.StudyError, match="unknown study section"):
+        ref.replace(name="bad", plant={"a": 1})
+    with pytest.raises(study.StudyError, match="own name"):
+        ref.replace(uncertainty={"spread": 0.03})
+    with pytest.raises(study.StudyError, match="design.order"):
+        ref.replace(name="bad", design={"order": 2.5})
+    with pytest.raises(study.StudyError, match="uncertainty.spread"):
+        ref.replace(name="bad", uncertainty={"spread": float("nan")})
+    with pytest.raises(study.StudyError, match="name"):
+        ref.replace(name="has space")
+    with pytest.raises(study.StudyError, match="no study named 'nope'"):
+        study.load("nope")
+    (checkout / "studies" / "broken.toml").write_text("name = 'broken'\n[weights\n")
+    with pytest.raises(study.StudyError, match="broken.toml: not valid TOML"):
+        study.load("broken")
+    (checkout / "studies" / "typo.toml").write_text("name = 'typo'\n[loop]\nfs = 5000.0\n")
+    with pytest.raises(study.StudyError, match=r"typo.toml: unknown field.*\[loop\]"):
+        study.load("typo")
+
+
+def test_use_sends_outputs_to_the_study_folder(checkout):
+    assert paths.figures_dir() == checkout / "figures"
+    s = study.use(study.Study().replace(name="explore", uncertainty={"spread": 0.03}))
+    assert study.active() is s
+    assert paths.figures_dir() == checkout / "runs" / "explore" / "figures"
+    assert paths.results_dir() == checkout / "runs" / "explore" / "results"
+    assert paths.controllers_dir() == checkout / "runs" / "explore" / "controllers"
+    study.use("reference")
+    assert paths.results_dir() == checkout / "data" / "results"
+    assert paths.controllers_dir() == checkout / "data" / "controllers"
