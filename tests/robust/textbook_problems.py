@@ -1,0 +1,409 @@
+"""Textbook robust-control problems with published or closed-form answers (test data).
+
+Shared by ``tests/robust/test_textbook.py`` and ``benchmarks/bench_textbook.py``; nothing
+in ``piezolib`` imports it.  Every builder is written from the textbook definition of the
+problem; every closed form is derived in the docstring or comment next to it.  Only
+``numpy``, ``scipy`` and python-control are used here, so the references are independent
+of ``piezolib.robust``.  Frequencies are in rad/s (rad/min for the distillation column,
+as in the book), time in seconds (minutes).
+
+Sources of the published numbers:
+
+* [SP05] S. Skogestad and I. Postlethwaite, *Multivariable Feedback Control*, 2nd ed.,
+  Wiley 2005: Sec. 2.8.3 (S/KS design of the disturbance process, gamma_min = 1.37),
+  Sec. 3.7.1 (spinning satellite), Sec. 8.12 / Table 8.1 (distillation column with the
+  inverse-based controller), Sec. 8.12.4 (DK-iteration).  The mu values of Table 8.1
+  and of the DK-iteration are those printed by the book's own MATLAB programs
+  (``Fig8_15.m``: mu_RP 5.7726, mu_RS 0.5242, mu_NP 0.500 on ``logspace(-3, 3, 61)``;
+  ``Sec8_124.m``: mu 1.1798, 1.0275, 1.0207 for DK iterations 1-3 and 0.9740 with
+  Lundstrom's optimal scaling ``D_OPT_NUM``/``D_OPT_DEN`` below).
+* [Y94] P. M. Young, "The rank one mixed mu problem and 'Kharitonov-type' analysis",
+  Automatica 30(12), 1994: mu of a rank-one matrix in closed form (re-derived in
+  :func:`rank_one_mu`).
+"""
+
+import warnings
+from fractions import Fraction
+from typing import NamedTuple
+
+import control as ct
+import numpy as np
+
+__all__ = [
+    "MixedSensitivity", "disturbance_process", "MIXSENS_GAMMA_BOOK",
+    "Satellite", "spinning_satellite", "satellite_T", "satellite_mu_complex",
+    "satellite_mu_real",
+    "rank_one_mu",
+    "TwoMass", "two_mass_spring",
+    "Distillation", "distillation_column", "distillation_N", "distillation_mu",
+    "G0", "BLK_RP", "SP_GRID", "SP_MU_RP", "SP_MU_RS", "SP_MU_NP", "SP_DK_MU", "SP_DOPT_MU",
+    "lundstrom_scaling",
+    "pointwise_lft", "exact_response",
+]
+
+
+# --- 1. S/KS mixed sensitivity of the disturbance process [SP05, Sec. 2.8.3] -------------
+
+MIXSENS_GAMMA_BOOK = 1.37        # gamma_min printed in [SP05] (three significant digits)
+
+
+class MixedSensitivity(NamedTuple):
+    """The S/KS problem: plant G, weights W1 (on S) and Wu (on KS), generalized plant P."""
+    G: ct.TransferFunction
+    W1: ct.TransferFunction
+    Wu: ct.TransferFunction
+    P: ct.StateSpace
+
+
+def disturbance_process(M=1.5, omega_b=10.0, A=1e-4):
+    """G = 200/((10 s + 1)(0.05 s + 1)^2), W1 = (s/M + w_B)/(s + w_B A), Wu = 1.
+
+    P (``control.augw``) has inputs [w, u] and outputs [z1 = W1 S w, z2 = Wu K S w, v],
+    so ||F_l(P, K)||_inf = sup_w sqrt(|W1 S|^2 + |K S|^2).
+    """
+    s = ct.tf("s")
+    G = 200 / ((10 * s + 1) * (0.05 * s + 1) ** 2)
+    W1 = (s / M + omega_b) / (s + omega_b * A)
+    Wu = ct.tf(1, 1)
+    with warnings.catch_warnings():       # augw itself calls python-control's deprecated connect()
+        warnings.simplefilter("ignore", FutureWarning)
+        P = ct.ss(ct.augw(G, W1, Wu))
+    return MixedSensitivity(G, W1, Wu, P)
+
+
+# --- 2. Spinning satellite [SP05, Sec. 3.7.1] -------------------------------------------
+
+class Satellite(NamedTuple):
+    """Plant G, controller K = I and P for input uncertainty: F_l(P, K) = T_I."""
+    a: float
+    G: ct.StateSpace
+    K: ct.StateSpace
+    P: ct.StateSpace
+
+
+def spinning_satellite(a=10.0):
+    """G(s) = [[s - a^2, a (s + 1)], [-a (s + 1), s - a^2]] / (s^2 + a^2), K = I.
+
+    Realisation (A, B, C) = ([[0, a], [-a, 0]], I, [[1, a], [-a, 1]]).  P has inputs
+    [w1, w2, u1, u2] (w enters at the plant input) and outputs [z1, z2, e1, e2] with
+    z = -u and e = -G (u + w), so that F_l(P, K) = K G (I + K G)^-1 = T_I, the map
+    seen by a multiplicative input perturbation.
+    """
+    A = np.array([[0.0, a], [-a, 0.0]])
+    C = np.array([[1.0, a], [-a, 1.0]])
+    I2, Z2 = np.eye(2), np.zeros((2, 2))
+    G = ct.ss(A, I2, C, Z2)
+    P = ct.ss(A, np.hstack([I2, I2]), np.vstack([Z2, -C]), np.block([[Z2, -I2], [Z2, Z2]]))
+    return Satellite(a, G, ct.ss([], [], [], I2), P)
+
+
+def satellite_T(omega, a=10.0):
+    """T_I(j omega) = (I + a J)/(1 + j omega), J = [[0, 1], [-1, 0]]: shape (nf, 2, 2).
+
+    With K = I the closed-loop state matrix is A - B C = -I, so T = C/(s + 1).
+    """
+    R = np.array([[1.0, a], [-a, 1.0]])
+    return R[None] / (1 + 1j * np.asarray(omega, float))[:, None, None]
+
+
+def satellite_mu_complex(omega, a=10.0):
+    """mu of T_I for diagonal, full or repeated-scalar complex Delta: sqrt(1 + a^2)/|1 + j w|.
+
+    I + a J is normal with eigenvalues 1 +- j a, so rho(T_I) = sigma_max(T_I); rho is a
+    lower bound (delta I is in each structure) and sigma_max an upper bound.
+    """
+    return np.sqrt(1 + a * a) / np.abs(1 + 1j * np.asarray(omega, float))
+
+
+def satellite_mu_real(omega, a=10.0):
+    """mu of T_I for two independent real input-gain errors (diagonal real Delta).
+
+    det(I - T_I diag(d1, d2)) = 0 with c = 1/(1 + j w) reads
+    1 - c (d1 + d2) + c^2 (1 + a^2) d1 d2 = 0; times (1 + j w)^2 its imaginary part is
+    w (2 - d1 - d2) and its real part 1 - w^2 - (d1 + d2) + (1 + a^2) d1 d2.  For w > 0:
+    d1 + d2 = 2 and d1 d2 = q = (1 + w^2)/(1 + a^2), so real d exist only for w <= a,
+    the smaller max |d| is 1 + sqrt(1 - q) and mu = 1/(1 + sqrt(1 - q)); mu = 0 for
+    w > a.  At w = 0 the imaginary condition is void, d1 = -d2 = 1/sqrt(1 + a^2) is the
+    smallest solution and mu = sqrt(1 + a^2) (mu jumps at w = 0).
+    """
+    omega = np.asarray(omega, float)
+    q = (1 + omega ** 2) / (1 + a * a)
+    mu = np.where(q <= 1, 1 / (1 + np.sqrt(np.clip(1 - q, 0, None))), 0.0)
+    return np.where(omega == 0, np.sqrt(1 + a * a), mu)
+
+
+# --- 3. Rank-one matrices [Y94] ----------------------------------------------------------
+
+def _block_slices(blk):
+    """(output slice, input slice, kind) of each MATLAB blk row; kind: real/scalar/full."""
+    rows, p, q = [], 0, 0
+    for r, c in blk:
+        if c == 0:
+            k = abs(int(r))
+            kind, nr, nc = ("real" if r < 0 else "scalar"), k, k
+        else:
+            kind, nr, nc = "full", int(r), int(c)
+        rows.append((slice(p, p + nc), slice(q, q + nr), kind))
+        p, q = p + nc, q + nr
+    return rows
+
+
+def rank_one_mu(a, b, blk):
+    """Exact mu of the rank-one matrix M = a b^H for the structure ``blk``.
+
+    det(I - M Delta) = 1 - sum_i b_i^H Delta_i a_i (a_i: the entries of a on block i's
+    outputs, b_i on its inputs).  With |Delta_i| <= 1 a complex full block makes
+    b_i^H Delta_i a_i fill the disc of radius |a_i| |b_i|, a complex repeated scalar the
+    disc of radius z_i = |b_i^H a_i|, a real repeated scalar the segment [-z_i, z_i] with
+    z_i = b_i^H a_i.  mu = the largest t on the positive real axis inside this convex
+    Minkowski sum, i.e. min over directions of the support function divided by
+    cos(theta); with x = tan(theta):
+
+        mu = min_x  sum_real |Re z_i + x Im z_i| + sqrt(1 + x^2) sum_complex r_i.
+
+    The function is convex; between the kinks x_i = -Re z_i / Im z_i it is
+    alpha + beta x + C sqrt(1 + x^2), stationary at x = -beta / sqrt(C^2 - beta^2) when
+    |beta| < C, so the minimum is found exactly among the kinks and these points.
+    """
+    a = np.asarray(a, complex).ravel()
+    b = np.asarray(b, complex).ravel()
+    z_real, radius = [], 0.0
+    for out, inp, kind in _block_slices(blk):
+        if kind == "full":
+            radius += np.linalg.norm(a[out]) * np.linalg.norm(b[inp])
+        elif kind == "scalar":
+            radius += abs(np.vdot(b[inp], a[out]))
+        else:
+            z_real.append(np.vdot(b[inp], a[out]))
+    z = np.array(z_real, complex)
+
+    def f(x):
+        return np.sum(np.abs(z.real + x * z.imag)) + np.sqrt(1 + x * x) * radius
+
+    slopes = z.imag[z.imag != 0]
+    kinks = np.sort(-z.real[z.imag != 0] / slopes)
+    candidates = [f(x) for x in kinks] or [f(0.0)]
+    edges = np.concatenate([[-np.inf], kinks, [np.inf]])
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        # any interior point: the signs of the real terms are constant between kinks
+        if np.isfinite(lo) and np.isfinite(hi):
+            inside = (lo + hi) / 2
+        else:
+            inside = hi - 1 if np.isfinite(hi) else lo + 1 if np.isfinite(lo) else 0.0
+        beta = np.sum(np.sign(z.real + inside * z.imag) * z.imag)   # slope of the linear part
+        if radius > abs(beta):
+            x = -beta / np.sqrt(radius ** 2 - beta ** 2)
+            if lo <= x <= hi:
+                candidates.append(f(x))
+    return float(min(candidates))
+
+
+# --- 4. Two-mass spring (ACC benchmark plant) --------------------------------------------
+
+class TwoMass(NamedTuple):
+    """Plant G (u -> x2) and the H-infinity generalized plant P."""
+    G: ct.StateSpace
+    P: ct.StateSpace
+
+
+def two_mass_spring(m1=1.0, m2=1.0, k=1.0, rho=0.1, sigma=0.1):
+    """Two masses on a spring; force u on m1, disturbance force w on m2, x2 measured.
+
+    G(s) = k / (s^2 (m1 m2 s^2 + k (m1 + m2))) from u to x2 (a rigid-body double
+    integrator and the undamped mode sqrt(k (m1 + m2) / (m1 m2)) rad/s).  P has inputs
+    [w, n, u] and outputs [z1 = x2, z2 = rho u, y = x2 + sigma n] with states
+    [x1, x2, v1, v2].  D12 = [0; rho] and D21 = [0, sigma] have full rank and the
+    imaginary-axis modes are controllable from u and w and observable in x2, so the
+    standard H-infinity assumptions hold.
+    """
+    A = np.array([[0, 0, 1, 0], [0, 0, 0, 1],
+                  [-k / m1, k / m1, 0, 0], [k / m2, -k / m2, 0, 0]], float)
+    b_u = np.array([[0], [0], [1 / m1], [0]])
+    b_w = np.array([[0], [0], [0], [1 / m2]])
+    c_x2 = np.array([[0.0, 1, 0, 0]])
+    B = np.hstack([b_w, np.zeros((4, 1)), b_u])
+    C = np.vstack([c_x2, np.zeros((1, 4)), c_x2])
+    D = np.array([[0, 0, 0], [0, 0, rho], [0, sigma, 0]], float)
+    return TwoMass(ct.ss(A, b_u, c_x2, 0), ct.ss(A, B, C, D))
+
+
+# --- 5. Distillation column, LV configuration [SP05, Sec. 8.12] -------------------------
+
+G0 = np.array([[87.8, -86.4], [108.2, -109.6]])   # steady-state gains, G = G0/(75 s + 1)
+SP_GRID = np.logspace(-3, 3, 61)                   # the book's frequency grid [rad/min]
+SP_MU_RP, SP_MU_RS, SP_MU_NP = 5.7726, 0.5242, 0.500   # Table 8.1 / Fig8_15.m, on SP_GRID
+SP_DK_MU = (1.1798, 1.0275, 1.0207)                # Sec8_124.m: DK iterations 1-3, on SP_GRID
+SP_DOPT_MU = 0.9740                                # Sec8_124.m: K-step with Lundstrom's d_opt
+D_OPT_NUM = ((0.001, 1.0), (1.0, 0.25), (1.0, 0.054))   # 2 (0.001 s + 1)(s + 0.25)(s + 0.054)
+D_OPT_DEN = ((1.0, 2 * 0.67, 0.67 ** 2 + 0.56 ** 2), (1.0, 0.013))  # ((s+0.67)^2+0.56^2)(s+0.013)
+
+
+class Distillation(NamedTuple):
+    """Plant, inverse-based controller and the generalized plant of the RP problem.
+
+    P: inputs [d_I1, d_I2 (from Delta_I), w1, w2 (disturbance on y), u1, u2], outputs
+    [z_I1, z_I2 (W_I u), z_P1, z_P2 (W_P (y + w)), v1, v2 (-(y + w))]; the structure
+    is ``BLK_RP`` = two 1 x 1 input-uncertainty blocks and a 2 x 2 performance block.
+    """
+    G: ct.StateSpace
+    K: ct.StateSpace
+    P: ct.StateSpace
+    c: float
+    eps_k: float
+    eps_p: float
+
+
+BLK_RP = [(1, 1), (1, 1), (2, 2)]
+
+
+def distillation_column(c=0.7, eps_k=1e-5, eps_p=1e-6):
+    """G = G0/(75 s + 1), K = c (75 s + 1)/(s + eps_k) G0^-1, W_I = (s + 0.2)/(0.5 s + 1) I,
+    W_P = (s/2 + 0.05)/(s + eps_p) I (the book's programs move the integrators of K and
+    W_P to -eps_k and -eps_p).  Time in minutes.
+    """
+    s = ct.tf("s")
+    G = ct.ss(1 / (75 * s + 1)) * ct.ss([], [], [], G0)
+    K = ct.ss(c * (75 * s + 1) / (s + eps_k)) * ct.ss([], [], [], np.linalg.inv(G0))
+    w_P = (s / 2 + 0.05) / (s + eps_p)
+    w_I = (s + 0.2) / (0.5 * s + 1)
+
+    def diag2(h, inputs, outputs, name):
+        return ct.ss(ct.append(ct.ss(h), ct.ss(h)), inputs=inputs, outputs=outputs, name=name)
+
+    parts = [
+        ct.ss(G, inputs=["up1", "up2"], outputs=["y1", "y2"], name="G"),
+        diag2(w_P, ["yw1", "yw2"], ["z_P1", "z_P2"], "W_P"),
+        diag2(w_I, ["u1", "u2"], ["z_I1", "z_I2"], "W_I"),
+        ct.summing_junction(["u1", "d_I1"], "up1"), ct.summing_junction(["u2", "d_I2"], "up2"),
+        ct.summing_junction(["y1", "w1"], "yw1"), ct.summing_junction(["y2", "w2"], "yw2"),
+        ct.summing_junction(["-yw1"], "v1"), ct.summing_junction(["-yw2"], "v2"),
+    ]
+    P = ct.interconnect(parts, inputs=["d_I1", "d_I2", "w1", "w2", "u1", "u2"],
+                        outputs=["z_I1", "z_I2", "z_P1", "z_P2", "v1", "v2"])
+    return Distillation(G, K, ct.ss(P), c, eps_k, eps_p)
+
+
+def _distillation_ab(omega, c, eps_k, eps_p):
+    """a = w_I tau and b = w_P eps of the decoupled loop L = c/(s + eps_k) I."""
+    s = 1j * np.asarray(omega, float)
+    tau = c / (s + eps_k + c)
+    eps = (s + eps_k) / (s + eps_k + c)
+    return (s + 0.2) / (0.5 * s + 1) * tau, (s / 2 + 0.05) / (s + eps_p) * eps
+
+
+def distillation_N(omega, c=0.7, eps_k=1e-5, eps_p=1e-6):
+    """Closed form of F_l(P, K) for the inverse-based controller, shape (nf, 4, 4).
+
+    K G = G K = c/(s + eps_k) I, so T_I = tau I, K S = tau G^-1, S G = eps G, S = eps I
+    and N = [[-a I, -a G^-1], [b G, b I]] with a = w_I tau, b = w_P eps.
+    """
+    a, b = _distillation_ab(omega, c, eps_k, eps_p)
+    g = 1 / (75j * np.asarray(omega, float) + 1)
+    G0inv = np.linalg.inv(G0)
+    N = np.zeros((len(a), 4, 4), complex)
+    N[:, :2, :2] = -a[:, None, None] * np.eye(2)
+    N[:, :2, 2:] = -(a / g)[:, None, None] * G0inv
+    N[:, 2:, :2] = (b * g)[:, None, None] * G0
+    N[:, 2:, 2:] = b[:, None, None] * np.eye(2)
+    return N
+
+
+def distillation_mu(omega, structure="diagonal", c=0.7, eps_k=1e-5, eps_p=1e-6):
+    """Closed-form mu of :func:`distillation_N`: 'diagonal' or 'full' RP, 'RS', 'NP'.
+
+    With G = U Sigma V^H, diag(V, U)^H N diag(V, U) splits into 2 x 2 rank-one blocks
+    [[a, a x], [b / x, b]] (x = d / sigma_i), so with a scaling d on the performance
+    block sigma_max^2 = |a|^2 + |b|^2 + |a|^2 x^2 + |b|^2 / x^2; balancing the two
+    singular values gives mu^2 = |a|^2 + |b|^2 + |a||b| (k + 1/k), k = cond(G), for a
+    full 2 x 2 input block (2 full blocks: the D-bound is exact).  Diagonal input
+    uncertainty adds a diagonal input scaling D_I (three blocks, 2S + F = 3: exact
+    again), replacing k + 1/k by its minimum over D_I.  For 2 x 2 matrices
+    k + 1/k = ||G||_F^2 / |det G|, minimised over D_I = diag(1, d) at
+    2 ||g_1|| ||g_2|| / |det G| (g_j the columns of G0).  RS: mu = |a|; NP: |b|.
+    """
+    a, b = (np.abs(x) for x in _distillation_ab(omega, c, eps_k, eps_p))
+    det = abs(np.linalg.det(G0))
+    if structure == "RS":
+        return a
+    if structure == "NP":
+        return b
+    if structure == "full":
+        k = np.sum(G0 ** 2) / det
+    elif structure == "diagonal":
+        k = 2 * np.linalg.norm(G0[:, 0]) * np.linalg.norm(G0[:, 1]) / det
+    else:
+        raise ValueError(f"structure must be 'diagonal', 'full', 'RS' or 'NP', not {structure!r}")
+    return np.sqrt(a ** 2 + b ** 2 + a * b * k)
+
+
+def lundstrom_scaling():
+    """d_opt(s) of [SP05, Sec. 8.12.4] (Lundstrom's mu-optimal D-scaling) as a tf."""
+    num = np.polymul(np.polymul(*D_OPT_NUM[:2]), D_OPT_NUM[2]) * 2
+    den = np.polymul(*D_OPT_DEN)
+    return ct.tf(num, den)
+
+
+# --- independent evaluation of closed loops -----------------------------------------------
+
+def pointwise_lft(P, K, omega):
+    """F_l(P, K)(j omega) from P(j omega) and K(j omega), frequency by frequency.
+
+    P11 + P12 K (I - P22 K)^-1 P21 needs no closed-loop realisation, so it is as
+    accurate as the responses of P and K themselves.  Shape (nf, p1, m1).
+    """
+    omega = np.asarray(omega, float)
+    ny, nu = K.ninputs, K.noutputs
+    Pw = np.moveaxis(np.asarray(P(1j * omega, squeeze=False)), -1, 0)
+    Kw = np.moveaxis(np.asarray(K(1j * omega, squeeze=False)), -1, 0)
+    P11, P12 = Pw[:, :-ny, :-nu], Pw[:, :-ny, -nu:]
+    P21, P22 = Pw[:, -ny:, :-nu], Pw[:, -ny:, -nu:]
+    closed = np.linalg.solve(np.eye(ny) - P22 @ Kw, P21)
+    return P11 + P12 @ Kw @ closed
+
+
+def exact_response(sys, omega):
+    """C (j omega I - A)^-1 B + D of a state-space model in exact rational arithmetic.
+
+    The stored floating-point matrices are exact binary fractions, so this is the true
+    response of the realisation as stored (rounded once at the end): a reference for
+    closed loops whose floating-point evaluation is ill-conditioned.  Gaussian
+    elimination on Gaussian rationals; fine for a few dozen states and a few frequencies.
+    """
+    A, B, C, D = (np.asarray(m, float) for m in (sys.A, sys.B, sys.C, sys.D))
+    n, m = B.shape
+    w = Fraction(float(omega))
+    # complex numbers as (re, im) pairs of Fractions; rows of [j w I - A, B]
+    rows = [[(Fraction(-A[i, j]), w if i == j else Fraction(0)) for j in range(n)]
+            + [(Fraction(B[i, k]), Fraction(0)) for k in range(m)] for i in range(n)]
+
+    def mul(x, y):
+        return (x[0] * y[0] - x[1] * y[1], x[0] * y[1] + x[1] * y[0])
+
+    def div(x, y):
+        den = y[0] * y[0] + y[1] * y[1]
+        return ((x[0] * y[0] + x[1] * y[1]) / den, (x[1] * y[0] - x[0] * y[1]) / den)
+
+    for col in range(n):
+        pivot = max(range(col, n), key=lambda r: abs(rows[r][col][0]) + abs(rows[r][col][1]))
+        rows[col], rows[pivot] = rows[pivot], rows[col]
+        for r in range(col + 1, n):
+            if rows[r][col] == (0, 0):
+                continue
+            f = div(rows[r][col], rows[col][col])
+            rows[r] = rows[r][:col] + [(x[0] - y[0], x[1] - y[1]) for x, y in
+                                       zip(rows[r][col:], (mul(f, v) for v in rows[col][col:]))]
+    X = [[None] * m for _ in range(n)]
+    for k in range(m):
+        for i in reversed(range(n)):
+            acc = rows[i][n + k]
+            for j in range(i + 1, n):
+                t = mul(rows[i][j], X[j][k])
+                acc = (acc[0] - t[0], acc[1] - t[1])
+            X[i][k] = div(acc, rows[i][i])
+    out = np.zeros((C.shape[0], m), complex)
+    for i in range(C.shape[0]):
+        for k in range(m):
+            re = Fraction(D[i, k]) + sum(Fraction(C[i, j]) * X[j][k][0] for j in range(n))
+            im = sum(Fraction(C[i, j]) * X[j][k][1] for j in range(n))
+            out[i, k] = float(re) + 1j * float(im)
+    return out
