@@ -13,7 +13,7 @@ import piezolib
 PACKAGE = pathlib.Path(piezolib.__file__).parent
 
 TOOLKIT = ("robust", "hysteresis", "uncertainty", "identification", "signals", "metrics",
-           "records", "_checks")
+           "records", "_checks", "progress")
 PROBLEM = ("paper", "problem")
 WORKBOOK = ("workbook", "__main__")
 # what each layer may not import (at any depth of the module)

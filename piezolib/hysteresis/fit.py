@@ -25,6 +25,7 @@ from piezolib.hysteresis.common import (FitScores, check_loops, covariance, esti
 from piezolib.hysteresis.dahl import (FORMS, STARTS, DahlModel, NotInvertibleError,
                                       dahl_hysteresis, simulate_dahl, simulate_dahl_records,
                                       strokes)
+from piezolib.progress import postfix, progress
 
 __all__ = ["DahlFit", "fit_dahl", "monotone_path", "choose_fit", "check_fit_options", "ALPHA1_BOUNDS",
            "ALPHA2_BOUNDS", "G_A_BOUNDS"]
@@ -274,7 +275,11 @@ def fit_dahl(loops, gamma_a, form="bliman_sorine", offset=False, start="virgin",
     local minima of a log grid over (alpha1, alpha2) on which g_a,
     beta2*gamma_a (and x0) solve the linear equation-error problem
     x = g_a v - beta2 gamma_a z1(x) [+ x0] (z1 driven by the measured x).
-    Each start is solved to a loose tolerance and the best one polished.
+    Each start is solved to a loose tolerance and the best one polished;
+    a transient progress bar counts these solves
+    (:func:`piezolib.progress.progress`; ``PIEZOLIB_PROGRESS=0`` hides it).
+    The work is bounded by counts (``starts`` solves of scipy's
+    ``least_squares`` with its default evaluation limit), not by time.
 
     Parameters
     ----------
@@ -326,14 +331,9 @@ def fit_dahl(loops, gamma_a, form="bliman_sorine", offset=False, start="virgin",
     slope = _mean_slope(data)
     g_bounds = (slope * G_A_BOUNDS[0], slope * G_A_BOUNDS[1])
     if initial is None:
-        candidates = _initial_guesses(form, data, gamma_a, g_bounds,
-                                      check_integer("starts", starts, minimum=1), offset,
-                                      start)
-    else:
-        if not isinstance(initial, DahlModel):
-            raise TypeError(f"initial must be a DahlModel, got {type(initial).__name__}")
-        candidates = [replace(initial, form=form, beta1=0.0, start=start,
-                              beta2=initial.beta2 * initial.gamma_a / gamma_a, gamma_a=gamma_a)]
+        starts = check_integer("starts", starts, minimum=1)
+    elif not isinstance(initial, DahlModel):
+        raise TypeError(f"initial must be a DahlModel, got {type(initial).__name__}")
     R = max(float(np.ptp(x[used])) for v, x, used in data)
     weights = _loop_weights(data)
     wv = np.concatenate([np.full(used.size, w) for (v, x, used), w in zip(data, weights)])
@@ -358,19 +358,20 @@ def fit_dahl(loops, gamma_a, form="bliman_sorine", offset=False, start="virgin",
             return np.full(n_res, 10.0 / math.sqrt(n_res))  # far worse than any loop fit
         return r + _project_offset(r, wv) * wv if offset else r
 
-    result, initial = None, None
     def solve(theta0, tol):
         theta0 = np.clip(theta0, lower + 1e-9 * (upper - lower), upper - 1e-9 * (upper - lower))
         return opt.least_squares(residuals, theta0, bounds=(lower, upper), x_scale="jac",
                                  method="trf", xtol=tol, ftol=tol, gtol=tol)
 
-    # every start to a loose tolerance, the best one polished
-    for candidate in candidates:
-        trial = solve(_to_theta(candidate), 1e-4 if len(candidates) > 1 else 1e-10)
-        if result is None or trial.cost < result.cost:
-            result, initial = trial, candidate
-    if len(candidates) > 1:
-        result = solve(result.x, 1e-10)
+    with progress(desc=f"fit_dahl {form}", unit="solve") as bar:
+        if initial is None:
+            postfix(bar, "grid search for starting points", refresh=True)
+            candidates = _initial_guesses(form, data, gamma_a, g_bounds, starts, offset, start)
+        else:
+            candidates = [replace(initial, form=form, beta1=0.0, start=start,
+                                  beta2=initial.beta2 * initial.gamma_a / gamma_a,
+                                  gamma_a=gamma_a)]
+        result, initial = _multistart(solve, candidates, len(data), bar)
     r0 = output_error(result.x)
     if r0 is None:
         raise ValueError(f"no invertible {form} Dahl model fits these loops (every candidate "
@@ -388,6 +389,35 @@ def fit_dahl(loops, gamma_a, form="bliman_sorine", offset=False, start="virgin",
     return DahlFit(model=model, x_model=x_model, residuals=res, rms=rms,
                    rms_percent=rms_pct, max_percent=max_pct,
                    initial=initial, result=result, offset=offset, parameters=tuple(parameters))
+
+
+def _multistart(solve, candidates, n_loops, bar):
+    """Every start solved to a loose tolerance, the best one polished; (result, its start).
+
+    One step of ``bar`` per least-squares solve; its status names the solve
+    running and the best RMS error so far in % of the output range (each
+    loop's weighted residuals sum to its squared relative RMS error, so the
+    pooled value is sqrt(2 cost / n_loops)).
+    """
+    bar.reset(total=len(candidates) + (len(candidates) > 1))   # known once the grid is searched
+    result = initial = None
+
+    def status(text):
+        if result is not None:
+            text += f", best rms {100 * math.sqrt(2 * result.cost / n_loops):.3g} % of range"
+        postfix(bar, text, refresh=True)      # shown while the solve runs
+
+    for k, candidate in enumerate(candidates):
+        status(f"start {k + 1}/{len(candidates)}")
+        trial = solve(_to_theta(candidate), 1e-4 if len(candidates) > 1 else 1e-10)
+        if result is None or trial.cost < result.cost:
+            result, initial = trial, candidate
+        bar.update()
+    if len(candidates) > 1:
+        status("polishing the best start")
+        result = solve(result.x, 1e-10)
+        bar.update()
+    return result, initial
 
 
 def _parameter_estimates(output_error, result, r0, wv, offset, model, lower, upper):

@@ -6,14 +6,17 @@ complex full blocks.  The iteration, its time scaling and stopping rules
 are described in ``docs/robust.md``.
 """
 
+import inspect
 import logging
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import control as ct
 import numpy as np
 
 from piezolib._checks import check_frequency_grid, check_integer, check_lti, check_positive
+from piezolib.progress import postfix, progress
 from piezolib.robust.blocks import parse_blk
 from piezolib.robust.dfit import fit_magnitude
 from piezolib.robust.hinf import HinfSynthesisError, hinfsyn
@@ -61,7 +64,7 @@ class MusynResult:
         mu bounds and optimal scalings on ``omega`` for ``K``; ``mu_upper``
         and ``mu_lower`` are its bounds.
     elapsed : float
-        Wall time [s].
+        Wall time [s] (information only: no stopping rule uses time).
     time_scale : float
         Internal time scale omega_s [rad/s].
     regularization : str
@@ -178,11 +181,18 @@ def _fit_scalings(omega_s, mu_res, blocks, order, prev_fits):
 
 
 def musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=4, max_iter=8, rtol=5e-3,
-          patience=2, time_budget=120.0, hinf_options=None, time_scale=None):
+          patience=2, hinf_options=None, time_scale=None):
     """mu-synthesis of a controller for P by DK-iteration.
 
     Progress goes to the logger ``piezolib.robust.dk`` at INFO level, one
-    line per iteration (``logging.basicConfig(level=logging.INFO)`` shows it).
+    line per iteration (``logging.basicConfig(level=logging.INFO)`` shows it),
+    and to a transient progress bar with the current mu peak
+    (:func:`piezolib.progress.progress`; ``PIEZOLIB_PROGRESS=0`` hides it).
+
+    The iteration stops on counts and on the mu peaks only (``max_iter``
+    K-steps, each a :func:`~piezolib.robust.hinf.hinfsyn` search of at most
+    its ``max_iter`` gamma trials; ``rtol``/``patience``), never on wall
+    time, so the controller does not depend on the machine's speed or load.
 
     Parameters
     ----------
@@ -202,14 +212,13 @@ def musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=4, max_iter=8, rtol=5e
         Order of the fitted D-scalings; 'auto' takes, among orders 0 ... 6,
         the lowest whose weighted log-error is within 0.02 of the best.
     max_iter : int
-        Maximum number of DK iterations (K-steps).
+        Maximum number of DK iterations (K-steps), at least 1.
     rtol, patience : float, int
         Stop when the mu peak has not improved by more than ``rtol``
         (relative) for ``patience`` consecutive iterations.
-    time_budget : float
-        Wall-time budget [s] of the whole iteration.
     hinf_options : dict, optional
-        Extra keyword arguments of :func:`piezolib.robust.hinf.hinfsyn`.
+        Extra keyword arguments of :func:`piezolib.robust.hinf.hinfsyn` for
+        every K-step (e.g. ``{"max_iter": 80}`` gamma trials).
     time_scale : float, optional
         Internal time scale [rad/s]; default :func:`piezolib.robust.lti.time_scale_of` of P.
 
@@ -242,55 +251,53 @@ def musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=4, max_iter=8, rtol=5e
     max_iter = check_integer("max_iter", max_iter, minimum=1)
     patience = check_integer("patience", patience, minimum=1)
     rtol = check_positive("rtol", rtol)
-    time_budget = check_positive("time_budget", time_budget)
-    options = {"time_budget": max(time_budget / 4, 5.0)}
-    options.update(hinf_options or {})
+    options = _hinf_options(hinf_options)
 
     ws = time_scale_of(P) if time_scale is None else check_positive("time_scale", time_scale)
     Ps = to_scaled(P, ws)
     omega_s = omega / ws
     rows, best, fits, stall, reason = [], None, [], 0, "max_iter reached"
     regularization = set()
-    for it in range(max_iter):
-        t_it = time.perf_counter()
-        d_tfs = [f.tf for f in fits]
-        plant = scaled_plant(Ps, blocks, d_tfs, nmeas, ncon) if fits else Ps
-        try:
-            hinf = hinfsyn(plant, nmeas, ncon, **options)
-        except HinfSynthesisError as exc:
-            if best is None:
-                raise
-            reason = f"K-step failed: {exc}"
-            break
-        if hinf.regularization:
-            regularization.add(hinf.regularization)
-        K = hinf.K
-        resp = lft_response(Ps, K, omega_s, omega_s=1.0)
-        mu_res = mussv(resp, blk, omega)
-        k = int(np.argmax(mu_res.upper))
-        row = {"iteration": it, "d_order": sum(f.order for f in fits),
-               "gamma": hinf.gamma, "mu_upper": float(mu_res.upper[k]),
-               "mu_lower": float(mu_res.lower.max()), "omega_peak": float(omega[k]),
-               "K_order": K.nstates, "seconds": time.perf_counter() - t_it}
-        rows.append(row)
-        logger.info("DK %2d: gamma %7.4f  mu %.4f (lower %.4f) at %9.4g rad/s  K order %3d  "
-                    "D order %d  %.2f s", it, hinf.gamma, row["mu_upper"], row["mu_lower"],
-                    row["omega_peak"], K.nstates, row["d_order"], row["seconds"])
-        if best is None or row["mu_upper"] < best["row"]["mu_upper"] * (1 - rtol):
-            stall = 0
-        else:
-            stall += 1
-        if best is None or row["mu_upper"] < best["row"]["mu_upper"]:
-            best = {"row": row, "K": K, "mu": mu_res, "fits": fits, "iteration": it}
-        if stall >= patience:
-            reason = f"no improvement > {rtol:g} in {patience} iterations"
-            break
-        if time.perf_counter() - t0 > time_budget:
-            reason = "time budget spent"
-            break
-        if it == max_iter - 1:
-            break
-        fits = _fit_scalings(omega_s, mu_res, blocks, d_order, fits)
+    with progress(total=max_iter, desc="musyn DK", unit="iter") as bar:
+        for it in range(max_iter):
+            t_it = time.perf_counter()
+            d_tfs = [f.tf for f in fits]
+            plant = scaled_plant(Ps, blocks, d_tfs, nmeas, ncon) if fits else Ps
+            try:
+                hinf = hinfsyn(plant, nmeas, ncon, **options)
+            except HinfSynthesisError as exc:
+                if best is None:
+                    raise
+                reason = f"K-step failed: {exc}"
+                break
+            if hinf.regularization:
+                regularization.add(hinf.regularization)
+            K = hinf.K
+            resp = lft_response(Ps, K, omega_s, omega_s=1.0)
+            mu_res = mussv(resp, blk, omega)
+            k = int(np.argmax(mu_res.upper))
+            row = {"iteration": it, "d_order": sum(f.order for f in fits),
+                   "gamma": hinf.gamma, "mu_upper": float(mu_res.upper[k]),
+                   "mu_lower": float(mu_res.lower.max()), "omega_peak": float(omega[k]),
+                   "K_order": K.nstates, "seconds": time.perf_counter() - t_it}
+            rows.append(row)
+            logger.info("DK %2d: gamma %7.4f  mu %.4f (lower %.4f) at %9.4g rad/s  K order %3d  "
+                        "D order %d  %.2f s", it, hinf.gamma, row["mu_upper"], row["mu_lower"],
+                        row["omega_peak"], K.nstates, row["d_order"], row["seconds"])
+            postfix(bar, mu=row["mu_upper"], gamma=hinf.gamma)
+            bar.update()
+            if best is None or row["mu_upper"] < best["row"]["mu_upper"] * (1 - rtol):
+                stall = 0
+            else:
+                stall += 1
+            if best is None or row["mu_upper"] < best["row"]["mu_upper"]:
+                best = {"row": row, "K": K, "mu": mu_res, "fits": fits, "iteration": it}
+            if stall >= patience:
+                reason = f"no improvement > {rtol:g} in {patience} iterations"
+                break
+            if it == max_iter - 1:
+                break
+            fits = _fit_scalings(omega_s, mu_res, blocks, d_order, fits)
 
     K = from_scaled(best["K"], ws, P.output_labels[-nmeas:], P.input_labels[-ncon:], name="K")
     d_scalings = [scale_time(ct.tf(f.tf), 1.0 / ws) for f in best["fits"]]
@@ -301,3 +308,18 @@ def musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=4, max_iter=8, rtol=5e
         d_scalings=d_scalings, omega=omega, mu=best["mu"],
         elapsed=time.perf_counter() - t0, time_scale=ws,
         regularization="; ".join(sorted(regularization)))
+
+
+def _hinf_options(hinf_options):
+    """Checked copy of the extra :func:`~piezolib.robust.hinf.hinfsyn` arguments of a K-step."""
+    if hinf_options is None:
+        return {}
+    if not isinstance(hinf_options, Mapping):
+        raise TypeError(f"hinf_options must be a dict of hinfsyn arguments, got {hinf_options!r}")
+    allowed = [name for name, par in inspect.signature(hinfsyn).parameters.items()
+               if par.kind is inspect.Parameter.KEYWORD_ONLY]
+    unknown = sorted(set(hinf_options) - set(allowed))
+    if unknown:
+        raise TypeError(f"hinf_options has arguments hinfsyn does not take: {unknown}; "
+                        f"allowed: {allowed}")
+    return dict(hinf_options)

@@ -27,8 +27,10 @@ import control as ct
 import numpy as np
 
 from piezolib._checks import check_finite_array, check_frequency_grid, check_integer, check_lti, check_positive
+from piezolib.progress import postfix, progress
 from piezolib.robust.blocks import block_slices, parse_blk
 from piezolib.robust.dfit import fit_magnitude
+from piezolib.robust.dk import _hinf_options
 from piezolib.robust.hinf import HinfSynthesisError, hinfsyn
 from piezolib.robust.lft import lft_response, lower_lft
 from piezolib.robust.lti import balance, from_scaled, time_scale_of, to_scaled
@@ -75,7 +77,7 @@ class MixedMusynResult:
     closed_loop_poles : ndarray
         Poles of F_l(P, K) [rad/s], recomputed from P and K.
     elapsed : float
-        Wall time [s].
+        Wall time [s] (information only: no stopping rule uses time).
     time_scale : float
         Internal time scale omega_s [rad/s].
     """
@@ -221,8 +223,8 @@ def _fit(omega_s, data, order, weight, prev):
 
 
 def mixed_musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=2, alpha_order=2, max_iter=6,
-                complex_iter=2, alpha_power=0.5, rtol=5e-3, patience=2, time_budget=120.0,
-                hinf_options=None, time_scale=None):
+                complex_iter=2, alpha_power=0.5, rtol=5e-3, patience=2, hinf_options=None,
+                time_scale=None):
     """mu-synthesis for structures with real scalar blocks (scaled-complex D,G-K iteration).
 
     Each iteration: K-step (:func:`~piezolib.robust.hinf.hinfsyn` on the
@@ -231,7 +233,9 @@ def mixed_musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=2, alpha_order=2
     the D-step: alpha and D from :func:`real_block_shrink`, fitted by stable
     minimum-phase transfer functions (``alpha_order``, ``d_order``).  The
     controller with the lowest mixed peak is returned, with the lower bound
-    computed on the grid and its closed-loop poles recomputed.
+    computed on the grid and its closed-loop poles recomputed.  As in
+    :func:`~piezolib.robust.dk.musyn`, only counts (``max_iter``, the K-steps'
+    gamma trials) and the mu peaks stop the iteration, never wall time.
 
     Parameters
     ----------
@@ -255,7 +259,7 @@ def mixed_musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=2, alpha_order=2
     alpha_power : float
         The K-step uses alpha ** alpha_power (0 < power <= 1): a damped shrink,
         because alpha is exact only for the controller it was computed from.
-    max_iter, rtol, patience, time_budget, hinf_options, time_scale
+    max_iter, rtol, patience, hinf_options, time_scale
         As in :func:`piezolib.robust.dk.musyn`.
 
     Returns
@@ -290,9 +294,7 @@ def mixed_musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=2, alpha_order=2
     alpha_power = check_positive("alpha_power", alpha_power)
     if alpha_power > 1:
         raise ValueError(f"alpha_power must be in (0, 1], got {alpha_power}")
-    time_budget = check_positive("time_budget", time_budget)
-    options = {"time_budget": max(time_budget / 4, 5.0)}
-    options.update(hinf_options or {})
+    options = _hinf_options(hinf_options)
 
     ws = time_scale_of(P) if time_scale is None else check_positive("time_scale", time_scale)
     Ps = to_scaled(P, ws)
@@ -301,59 +303,59 @@ def mixed_musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=2, alpha_order=2
     has_real = any(b.is_real for b in blocks)
     rows, best, stall, reason = [], None, 0, "max_iter reached"
     alpha_fit, d_fits = None, []
-    for it in range(max_iter):
-        t_it = time.perf_counter()
-        plant = (_scaled_plant(Ps, blocks, alpha_fit and alpha_fit.tf, [f.tf for f in d_fits],
-                               nmeas, ncon) if it else Ps)
-        try:
-            hinf = hinfsyn(plant, nmeas, ncon, **options)
-        except HinfSynthesisError as exc:
-            if best is None:
-                raise
-            reason = f"K-step failed: {exc}"
-            break
-        K = hinf.K
-        poles = lower_lft(Ps, K, omega_s=1.0).poles()
-        M = lft_response(Ps, K, omega_s, omega_s=1.0)
-        mixed = mussv(M, blocks, omega, lower=False)
-        cplx = mussv(M, relaxed, omega, lower=False) if has_real else mixed
-        k = int(np.argmax(mixed.upper))
-        row = {"iteration": it, "gamma": hinf.gamma, "mu_upper": float(mixed.upper[k]),
-               "mu_complex": float(cplx.upper.max()), "omega_peak": float(omega[k]),
-               "K_order": K.nstates, "alpha_min": np.nan, "seconds": 0.0}
-        rows.append(row)
-        stable = bool(np.all(poles.real < 0))
-        improved = best is None or row["mu_upper"] < best["row"]["mu_upper"] * (1 - rtol)
-        stall = 0 if improved or it < complex_iter else stall + 1
-        if stable and (best is None or row["mu_upper"] < best["row"]["mu_upper"]):
-            best = {"row": row, "K": K, "M": M, "iteration": it, "poles": poles}
-        last = (stall >= patience or time.perf_counter() - t0 > time_budget
-                or it == max_iter - 1)
-        if not last:
-            if it + 1 < complex_iter or not has_real:
-                alpha = np.ones(omega.size)
-                Dl = mussv(M, relaxed, lower=False).Dl
-            else:
-                alpha, Dl, _ = real_block_shrink(M, blocks, mixed.upper)
-                alpha = alpha ** alpha_power
-            row["alpha_min"] = float(alpha.min())
-            weight = (mixed.upper / mixed.upper.max()) ** 4 + 1e-3
-            alpha_fit = _fit(omega_s, alpha, alpha_order, weight, alpha_fit) if has_real else None
-            slots = block_slices(blocks)
-            d_fits = [_fit(omega_s, Dl[:, out.start, out.start].real, d_order, weight,
-                           d_fits[i] if i < len(d_fits) else None)
-                      for i, (_, out) in enumerate(slots[:-1])]
-        row["seconds"] = time.perf_counter() - t_it
-        logger.info("mixed DK %2d: gamma %7.4f  mixed mu %.4f (complex %.4f) at %9.4g rad/s  "
-                    "K order %3d  alpha_min %.3g  %.2f s", it, hinf.gamma, row["mu_upper"],
-                    row["mu_complex"], row["omega_peak"], K.nstates, row["alpha_min"],
-                    row["seconds"])
-        if stall >= patience:
-            reason = f"no improvement > {rtol:g} in {patience} iterations"
-            break
-        if time.perf_counter() - t0 > time_budget:
-            reason = "time budget spent"
-            break
+    with progress(total=max_iter, desc="mixed_musyn DK", unit="iter") as bar:
+        for it in range(max_iter):
+            t_it = time.perf_counter()
+            plant = (_scaled_plant(Ps, blocks, alpha_fit and alpha_fit.tf, [f.tf for f in d_fits],
+                                   nmeas, ncon) if it else Ps)
+            try:
+                hinf = hinfsyn(plant, nmeas, ncon, **options)
+            except HinfSynthesisError as exc:
+                if best is None:
+                    raise
+                reason = f"K-step failed: {exc}"
+                break
+            K = hinf.K
+            poles = lower_lft(Ps, K, omega_s=1.0).poles()
+            M = lft_response(Ps, K, omega_s, omega_s=1.0)
+            mixed = mussv(M, blocks, omega, lower=False)
+            cplx = mussv(M, relaxed, omega, lower=False) if has_real else mixed
+            k = int(np.argmax(mixed.upper))
+            row = {"iteration": it, "gamma": hinf.gamma, "mu_upper": float(mixed.upper[k]),
+                   "mu_complex": float(cplx.upper.max()), "omega_peak": float(omega[k]),
+                   "K_order": K.nstates, "alpha_min": np.nan, "seconds": 0.0}
+            rows.append(row)
+            stable = bool(np.all(poles.real < 0))
+            improved = best is None or row["mu_upper"] < best["row"]["mu_upper"] * (1 - rtol)
+            stall = 0 if improved or it < complex_iter else stall + 1
+            if stable and (best is None or row["mu_upper"] < best["row"]["mu_upper"]):
+                best = {"row": row, "K": K, "M": M, "iteration": it, "poles": poles}
+            last = stall >= patience or it == max_iter - 1
+            if not last:
+                if it + 1 < complex_iter or not has_real:
+                    alpha = np.ones(omega.size)
+                    Dl = mussv(M, relaxed, lower=False).Dl
+                else:
+                    alpha, Dl, _ = real_block_shrink(M, blocks, mixed.upper)
+                    alpha = alpha ** alpha_power
+                row["alpha_min"] = float(alpha.min())
+                weight = (mixed.upper / mixed.upper.max()) ** 4 + 1e-3
+                alpha_fit = (_fit(omega_s, alpha, alpha_order, weight, alpha_fit)
+                             if has_real else None)
+                slots = block_slices(blocks)
+                d_fits = [_fit(omega_s, Dl[:, out.start, out.start].real, d_order, weight,
+                               d_fits[i] if i < len(d_fits) else None)
+                          for i, (_, out) in enumerate(slots[:-1])]
+            row["seconds"] = time.perf_counter() - t_it
+            logger.info("mixed DK %2d: gamma %7.4f  mixed mu %.4f (complex %.4f) at %9.4g rad/s  "
+                        "K order %3d  alpha_min %.3g  %.2f s", it, hinf.gamma, row["mu_upper"],
+                        row["mu_complex"], row["omega_peak"], K.nstates, row["alpha_min"],
+                        row["seconds"])
+            postfix(bar, mu=row["mu_upper"], gamma=hinf.gamma)
+            bar.update()
+            if stall >= patience:
+                reason = f"no improvement > {rtol:g} in {patience} iterations"
+                break
     if best is None:
         raise HinfSynthesisError("no K-step gave a stable closed loop F_l(P, K)")
 

@@ -19,6 +19,7 @@ import sys
 import time
 from pathlib import Path
 
+from piezolib import progress
 from piezolib.workbook import study as studies
 from piezolib.workbook.paths import notebooks_dir, project_root
 
@@ -143,39 +144,46 @@ def run(selection=None, timeout=600, keep_going=False, data=True, stream=sys.std
     total = len(steps) + len(list_notebooks(selection))
     k = 0
     start_all = time.perf_counter()
-    if steps:
-        for path, problem in check_data().items():
-            print(f"regenerating {path}: it failed its check ({problem})", file=stream,
-                  flush=True)
-    for step in steps:
-        k += 1
-        start = time.perf_counter()
-        module, func = step.split(":")
-        try:
-            written = getattr(importlib.import_module(module), func)()
-            status = f"ok ({len(written)} files)"
-        except Exception as exc:  # report and continue or stop, like a notebook
-            failures += 1
-            status = f"FAILED: {type(exc).__name__}: {exc}"
-        _line(stream, k, total, step, time.perf_counter() - start, status)
-        if failures and not keep_going:
-            return failures
-    for path in list_notebooks(selection):
-        k += 1
-        start = time.perf_counter()
-        try:
-            run_notebook(path, timeout=timeout, study=spec, save_to=save_to)
-            status = "ok"
-        except NotebookFailure as exc:
-            failures += 1
-            lines = exc.error.strip().splitlines() or [""]
-            status = f"FAILED at cell {exc.cell_index}: {lines[0][:160]}"
-        _line(stream, k, total, path.name, time.perf_counter() - start, status)
-        if status != "ok" and len(lines) > 1:   # the rest of a long error, indented
-            detail = lines[1:21] + ([f"... ({len(lines) - 21} more lines)"] if len(lines) > 21 else [])
-            print("\n".join("      " + line for line in detail), file=stream, flush=True)
-        if failures and not keep_going:
-            break
+    # a bar on stderr (a terminal), beside the one line per step on stream
+    bar = progress.progress(total=total, desc="reproduce", unit="step")
+    try:
+        if steps:
+            for path, problem in check_data().items():
+                print(f"regenerating {path}: it failed its check ({problem})", file=stream,
+                      flush=True)
+        for step in steps:
+            k += 1
+            start = time.perf_counter()
+            module, func = step.split(":")
+            try:
+                written = getattr(importlib.import_module(module), func)()
+                status = f"ok ({len(written)} files)"
+            except Exception as exc:  # report and continue or stop, like a notebook
+                failures += 1
+                status = f"FAILED: {type(exc).__name__}: {exc}"
+            _line(stream, k, total, step, time.perf_counter() - start, status)
+            bar.update()
+            if failures and not keep_going:
+                return failures
+        for path in list_notebooks(selection):
+            k += 1
+            start = time.perf_counter()
+            try:
+                run_notebook(path, timeout=timeout, study=spec, save_to=save_to)
+                status = "ok"
+            except NotebookFailure as exc:
+                failures += 1
+                lines = exc.error.strip().splitlines() or [""]
+                status = f"FAILED at cell {exc.cell_index}: {lines[0][:160]}"
+            _line(stream, k, total, path.name, time.perf_counter() - start, status)
+            bar.update()
+            if status != "ok" and len(lines) > 1:   # the rest of a long error, indented
+                detail = lines[1:21] + ([f"... ({len(lines) - 21} more lines)"] if len(lines) > 21 else [])
+                print("\n".join("      " + line for line in detail), file=stream, flush=True)
+            if failures and not keep_going:
+                break
+    finally:
+        bar.close()
     out = chosen.output_dir
     tables = out / "data" / "results" if chosen.is_reference else out / "results"
     print(f"{'all done' if not failures else f'{failures} step(s) failed'} in "
@@ -195,7 +203,8 @@ def check_data():
 
 
 def _line(stream, k, total, name, seconds, status):
-    print(f"[{k}/{total}] {name:<40s} {seconds:7.1f} s  {status}", file=stream, flush=True)
+    # through the progress module: the line does not break a bar drawn on the terminal
+    progress.write(f"[{k}/{total}] {name:<40s} {seconds:7.1f} s  {status}", file=stream)
 
 
 def _failed_cell(nb):

@@ -126,3 +126,31 @@ def test_fit_rejects_records_without_a_full_cycle():
         hy.fit_dahl([(v, 0.9 * v)], gamma_a=GAMMA_A, offset="yes")
     with pytest.raises(ValueError, match="start must be one of"):
         hy.fit_dahl([(v, 0.9 * v)], gamma_a=GAMMA_A, start="lowered")
+
+
+def test_fit_progress_bar_counts_the_solves_and_changes_nothing(monkeypatch, capsys):
+    from piezolib.hysteresis import fit as fit_module
+    from piezolib.progress import progress
+
+    bars = []
+
+    def recording_progress(*args, **kwargs):
+        bars.append(progress(*args, **kwargs))
+        return bars[-1]
+
+    true = model("bliman_sorine", alpha1=2.0, alpha2=2.5, beta2=0.3 * 2.5 / 30.0, g_a=0.9)
+    loops = [(v, hy.simulate_dahl(true, v).x) for v in (triangle(A)[1] for A in (1.0, 3.0))]
+    monkeypatch.setattr(fit_module, "progress", recording_progress)
+    monkeypatch.setenv("PIEZOLIB_PROGRESS", "0")
+    off = hy.fit_dahl(loops, gamma_a=GAMMA_A, stride=5, starts=2)
+    assert capsys.readouterr().err == ""
+    monkeypatch.setenv("PIEZOLIB_PROGRESS", "1")
+    on = hy.fit_dahl(loops, gamma_a=GAMMA_A, stride=5, starts=2)
+    assert on.model == off.model and on.initial == off.initial
+    np.testing.assert_array_equal(on.result.x, off.result.x)
+    assert "fit_dahl bliman_sorine" in capsys.readouterr().err
+    bar = bars[-1]
+    assert bar.total == 3 and bar.n == 3                  # two starts, then the polish
+    assert bar.postfix.startswith("polishing the best start, best rms")
+    single = hy.fit_dahl(loops, gamma_a=GAMMA_A, stride=5, initial=on.model)
+    assert bars[-1].total == 1 and bars[-1].n == 1 and single.model.alpha1 > 0

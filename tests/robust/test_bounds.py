@@ -80,3 +80,23 @@ def test_bad_input_named():
         pointwise_lower_bound(P, 1, 1, [-1.0])
     with pytest.raises(ValueError, match="nmeas"):
         performance_lower_bound(P, 2, 1, ["z"], ["r"])
+
+
+def test_gamma_trial_limit_is_a_validated_count():
+    W = 0.5 * (s + 1) / (s + 0.01)
+    P = sensitivity_plant(W, (1 - s / 3) / (s + 1) ** 2)
+    exact = abs(complex(W(3.0)))                  # inf_K ||W S||, as in the RHP-zero test
+    full = performance_lower_bound(P, 1, 1, [0], [0])
+    few = performance_lower_bound(P, 1, 1, [0], [0], max_iter=3)
+    assert full.hinf.converged and full.hinf.iterations > 3
+    assert few.hinf.iterations == 3 and not few.hinf.converged
+    # fewer gamma trials: a wider bracket, but still a valid (lower) bound
+    assert few.value < full.value <= exact * (1 + 1e-6)
+    best, _ = structured_lower_bound(P, [(1, 1)], 1, 1, max_iter=3)
+    assert best.value == few.value
+    with pytest.raises(ValueError, match="max_iter must be >= 2"):
+        performance_lower_bound(P, 1, 1, ["z"], ["r"], max_iter=1)
+    with pytest.raises(TypeError, match="max_iter must be an integer"):
+        performance_lower_bound(P, 1, 1, ["z"], ["r"], max_iter=60.0)
+    with pytest.raises(TypeError, match="time_budget"):
+        structured_lower_bound(P, [(1, 1)], 1, 1, time_budget=60.0)

@@ -11,6 +11,7 @@ import pytest
 
 from piezolib import robust
 from piezolib.problem import genplant
+from piezolib.progress import progress
 from piezolib.robust.dk import MusynResult, musyn, scaled_plant
 from piezolib.robust.mu import mussv
 
@@ -199,3 +200,76 @@ def test_musyn_progress_is_logged(textbook, caplog, capsys):
     with caplog.at_level(logging.WARNING, logger="piezolib.robust.dk"):
         musyn(P, blk, 1, 1, omega, max_iter=1)
     assert not [r for r in caplog.records if r.name == "piezolib.robust.dk"]
+
+
+class SlowClock:
+    """Stands in for the ``time`` module: every reading is 1000 s after the last one."""
+
+    def __init__(self):
+        self.now = 0.0
+
+    def perf_counter(self):
+        self.now += 1000.0
+        return self.now
+
+
+def _same_design(a, b):
+    assert [r["mu_upper"] for r in a.records] == [r["mu_upper"] for r in b.records]
+    assert [r["gamma"] for r in a.records] == [r["gamma"] for r in b.records]
+    assert a.stop_reason == b.stop_reason and a.mu_peak == b.mu_peak
+    for name in "ABCD":
+        np.testing.assert_array_equal(getattr(a.K, name), getattr(b.K, name))
+
+
+def test_musyn_result_does_not_depend_on_the_clock(textbook, monkeypatch):
+    """Every K-step and D-step seeming to take 1000 s changes nothing: no wall-time stop."""
+    P, blk, omega = textbook["P"], textbook["blk"], textbook["omega"]
+    clock = SlowClock()
+    monkeypatch.setattr(robust.dk, "time", clock)
+    monkeypatch.setattr(robust.hinf, "time", clock)
+    slow = musyn(P, blk, 1, 1, omega, **TEXTBOOK["MUSYN_OPTIONS"])
+    _same_design(slow, textbook["mu"])
+    assert len(slow.records) > 1 and slow.elapsed > 1000.0
+
+
+def test_musyn_same_result_with_progress_bar_on_and_off(textbook, monkeypatch, capsys):
+    P, blk, omega = textbook["P"], textbook["blk"], textbook["omega"]
+    bars = []
+
+    def recording_progress(*args, **kwargs):
+        bars.append(progress(*args, **kwargs))
+        return bars[-1]
+
+    monkeypatch.setattr(robust.dk, "progress", recording_progress)
+    monkeypatch.setenv("PIEZOLIB_PROGRESS", "0")
+    off = musyn(P, blk, 1, 1, omega, **TEXTBOOK["MUSYN_OPTIONS"])
+    quiet = capsys.readouterr()
+    monkeypatch.setenv("PIEZOLIB_PROGRESS", "1")
+    on = musyn(P, blk, 1, 1, omega, **TEXTBOOK["MUSYN_OPTIONS"])
+    shown = capsys.readouterr()
+    _same_design(on, off)
+    _same_design(on, textbook["mu"])
+    assert quiet.err == "" and quiet.out == "" and shown.out == ""
+    max_iter = TEXTBOOK["MUSYN_OPTIONS"]["max_iter"]
+    assert "musyn DK" in shown.err and f"0/{max_iter}" in shown.err
+    # one step per K-step, the status the last mu and gamma
+    bar = bars[-1]
+    assert bar.n == len(on.records) and bar.total == max_iter
+    last = on.records[-1]
+    assert bar.postfix == f"mu {last['mu_upper']:.4g}, gamma {last['gamma']:.4g}"
+
+
+def test_musyn_limits_are_counts_and_validated(textbook):
+    P, blk = textbook["P"], textbook["blk"]
+    with pytest.raises(ValueError, match="max_iter must be >= 1"):
+        musyn(P, blk, max_iter=0)
+    with pytest.raises(TypeError, match="max_iter must be an integer"):
+        musyn(P, blk, max_iter=2.0)
+    with pytest.raises(TypeError, match="time_budget"):
+        musyn(P, blk, time_budget=120.0)
+    with pytest.raises(TypeError, match=r"hinfsyn does not take: \['time_budget'\]"):
+        musyn(P, blk, hinf_options={"time_budget": 30.0})
+    with pytest.raises(TypeError, match="hinf_options must be a dict"):
+        musyn(P, blk, hinf_options=[("max_iter", 10)])
+    with pytest.raises(ValueError, match="max_iter must be >= 2"):
+        musyn(P, blk, hinf_options={"max_iter": 1})

@@ -105,6 +105,9 @@ def test_fixed_order_is_deterministic_and_logs(problem, result, caplog):
     (dict(blk=[(-1, 0), (1, 2)]), "complex"),
     (dict(omega=np.logspace(2, -2, 40)), "omega"),
     (dict(trust_radius=0.0), "trust_radius"),
+    (dict(max_iter=0), "max_iter must be >= 1"),
+    (dict(k_step_iterations=0), "k_step_iterations must be >= 1"),
+    (dict(refinements=-1), "refinements must be >= 0"),
 ])
 def test_fixed_order_rejects_bad_arguments(problem, change, match):
     _, P, K0 = problem
@@ -112,3 +115,39 @@ def test_fixed_order_rejects_bad_arguments(problem, change, match):
     args.update(change)
     with pytest.raises(ValueError, match=match):
         fixed_order_musyn(**args)
+
+
+class SlowClock:
+    """Stands in for the ``time`` module: every reading is 1000 s after the last one."""
+
+    def __init__(self):
+        self.now = 0.0
+
+    def perf_counter(self):
+        self.now += 1000.0
+        return self.now
+
+
+def test_fixed_order_result_does_not_depend_on_the_clock_or_the_bar(problem, result,
+                                                                   monkeypatch, capsys):
+    """Steps that seem to take 1000 s each, with the bar shown: the same controller."""
+    _, P, K0 = problem
+    monkeypatch.setattr(robust.fixed_order, "time", SlowClock())
+    monkeypatch.setenv("PIEZOLIB_PROGRESS", "1")
+    slow = fixed_order_musyn(P, BLK, K0, OMEGA)
+    np.testing.assert_array_equal(slow.modal.theta, result.modal.theta)
+    assert slow.mu_peak == result.mu_peak and slow.stop_reason == result.stop_reason
+    assert len(slow.records) == len(result.records) and slow.elapsed >= 1000.0
+    err = capsys.readouterr().err
+    assert "fixed-order 3" in err and "/60" in err     # max_iter 20 x (refinements 2 + 1)
+
+
+@pytest.mark.parametrize("change, exc, match", [
+    (dict(max_iter=2.5), TypeError, "max_iter must be an integer"),
+    (dict(k_step_iterations="60"), TypeError, "k_step_iterations must be an integer"),
+    (dict(time_budget=60.0), TypeError, "time_budget"),
+])
+def test_fixed_order_limits_are_integer_counts(problem, change, exc, match):
+    _, P, K0 = problem
+    with pytest.raises(exc, match=match):
+        fixed_order_musyn(P, BLK, K0, OMEGA, **change)

@@ -179,6 +179,40 @@ def test_budget_stops_the_search_and_says_so():
     assert res.gamma >= scalar_optimum(1.0)
 
 
+class SlowClock:
+    """Stands in for the ``time`` module: every reading is 1000 s after the last one."""
+
+    def __init__(self):
+        self.now = 0.0
+
+    def perf_counter(self):
+        self.now += 1000.0
+        return self.now
+
+
+def test_result_does_not_depend_on_the_clock(monkeypatch):
+    """A machine so slow that every step seems to take 1000 s gets the same controller."""
+    P = genplant.design_plant(*paper.problem()[:4])
+    normal = hinfsyn(P, 1, 1)
+    monkeypatch.setattr(robust.hinf, "time", SlowClock())
+    slow = hinfsyn(P, 1, 1)
+    assert slow.attempts == normal.attempts and slow.gamma == normal.gamma
+    assert slow.converged == normal.converged and slow.iterations == normal.iterations
+    for name in "ABCD":
+        np.testing.assert_array_equal(getattr(slow.K, name), getattr(normal.K, name))
+    assert slow.elapsed >= 1000.0                        # the time is still reported
+
+
+def test_trial_limit_is_validated_and_wall_time_is_not_an_option():
+    P = scalar_plant(1.0)
+    with pytest.raises(ValueError, match="max_iter must be >= 2"):
+        hinfsyn(P, 1, 1, max_iter=1)
+    with pytest.raises(TypeError, match="max_iter must be an integer"):
+        hinfsyn(P, 1, 1, max_iter=10.0)
+    with pytest.raises(TypeError, match="time_budget"):
+        hinfsyn(P, 1, 1, time_budget=30.0)
+
+
 # --- regressions of issue 15: false verdicts from scale-dependent thresholds ---
 
 def _s_ks_plant(G, W1):

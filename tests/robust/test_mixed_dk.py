@@ -83,3 +83,9 @@ def test_bad_structures_and_options():
         mixed_musyn(P, BLK, omega=OMEGA[::-1])
     with pytest.raises(ValueError, match="target"):
         real_block_shrink(np.ones((2, 3, 2)), BLK, [1.0, -1.0])
+    with pytest.raises(ValueError, match="max_iter must be >= 1"):
+        mixed_musyn(P, BLK, omega=OMEGA, max_iter=0)
+    with pytest.raises(TypeError, match="time_budget"):
+        mixed_musyn(P, BLK, omega=OMEGA, time_budget=120.0)
+    with pytest.raises(TypeError, match=r"hinfsyn does not take: \['time_budget'\]"):
+        mixed_musyn(P, BLK, omega=OMEGA, hinf_options={"time_budget": 30.0})
