@@ -13,8 +13,7 @@ import pytest  # noqa: E402
 @pytest.fixture(autouse=True)
 def _reference_study_outputs():
     """Every test starts and ends writing to the reference study's folders."""
-    from piezolib.workbook import paths, study
+    from piezolib.workbook import study
 
     yield
-    paths.set_output_study(study.REFERENCE)
-    study._active = None
+    study.use(study.REFERENCE)

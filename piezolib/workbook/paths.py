@@ -8,11 +8,13 @@ files under ``runs/<study>/`` (git-ignored), chosen by
 
 from piezolib.problem.paths import data_dir, project_root
 
-__all__ = ["project_root", "data_dir", "results_dir", "figures_dir", "controllers_dir",
-           "notebooks_dir", "runs_dir", "study_output_dir", "set_output_study", "output_study"]
+__all__ = ["REFERENCE_STUDY", "project_root", "data_dir", "results_dir", "figures_dir",
+           "controllers_dir", "notebooks_dir", "runs_dir", "study_output_dir",
+           "study_results_dir", "set_output_study", "output_study"]
 
-_REFERENCE = "reference"
-_output_study = _REFERENCE
+#: Name of the paper's reproduction: the one study that writes the committed outputs.
+REFERENCE_STUDY = "reference"
+_output_study = REFERENCE_STUDY
 
 
 def set_output_study(name):
@@ -35,7 +37,7 @@ def runs_dir():
 
 def study_output_dir(name):
     """Root of study ``name``'s outputs: the checkout for the reference, else ``runs/<name>/``."""
-    return project_root() if name == _REFERENCE else runs_dir() / name
+    return project_root() if name == REFERENCE_STUDY else runs_dir() / name
 
 
 def _made(path):
@@ -43,11 +45,16 @@ def _made(path):
     return path
 
 
+def study_results_dir(name):
+    """Where study ``name``'s tables are: ``data/results/`` or ``runs/<name>/results/``."""
+    if name == REFERENCE_STUDY:
+        return data_dir() / "results"
+    return study_output_dir(name) / "results"
+
+
 def results_dir():
-    """Paper-versus-reproduced CSV tables: ``data/results/`` or ``runs/<study>/results/``."""
-    if _output_study == _REFERENCE:
-        return _made(data_dir() / "results")
-    return _made(study_output_dir(_output_study) / "results")
+    """Paper-versus-reproduced CSV tables of this process's study (created on demand)."""
+    return _made(study_results_dir(_output_study))
 
 
 def figures_dir():
@@ -57,7 +64,7 @@ def figures_dir():
 
 def controllers_dir():
     """Exported controllers: ``data/controllers/`` or ``runs/<study>/controllers/``."""
-    if _output_study == _REFERENCE:
+    if _output_study == REFERENCE_STUDY:
         return _made(data_dir() / "controllers")
     return _made(study_output_dir(_output_study) / "controllers")
 

@@ -16,13 +16,11 @@ import pandas as pd
 from piezolib._checks import check_nonnegative
 from piezolib.records import atomic_write
 from piezolib.workbook import paths
-from piezolib.workbook.paths import results_dir
+from piezolib.workbook.paths import REFERENCE_STUDY, results_dir
 
 __all__ = ["COLUMNS", "REASONS", "NOTEBOOK_TABLES", "OTHER_TABLES", "SIGNIFICANT_DIGITS",
            "verdict", "ClaimTable", "save_results", "load_claims", "compare_studies",
            "reproduction_table", "inconsistent_verdicts", "verdict_counts"]
-
-REFERENCE_STUDY = "reference"
 
 COLUMNS = ["section", "quantity", "unit", "paper", "ours", "tolerance",
            "verdict", "reason", "note"]
@@ -215,11 +213,10 @@ def load_claims(names=None, study=None):
 def _study_table(study, name):
     """Path of table ``name`` of ``study`` and the study it belongs to (the
     reference's when the study has not written it)."""
-    reference = paths.data_dir() / "results" / f"{name}.csv"
-    if study == REFERENCE_STUDY:
-        return reference, study
-    own = paths.study_output_dir(study) / "results" / f"{name}.csv"
-    return (own, study) if own.exists() else (reference, REFERENCE_STUDY)
+    own = paths.study_results_dir(study) / f"{name}.csv"
+    if study == REFERENCE_STUDY or own.exists():
+        return own, study
+    return paths.study_results_dir(REFERENCE_STUDY) / f"{name}.csv", REFERENCE_STUDY
 
 
 def compare_studies(first, second, names=None, changed_only=True):

@@ -21,7 +21,7 @@ from pathlib import Path
 
 from piezolib import progress
 from piezolib.workbook import study as studies
-from piezolib.workbook.paths import notebooks_dir, project_root
+from piezolib.workbook.paths import notebooks_dir, project_root, study_results_dir
 
 __all__ = ["DATA_STEPS", "DATA_CHECKS", "check_data", "list_notebooks", "inject_study",
            "run_notebook", "run", "NotebookFailure"]
@@ -185,7 +185,7 @@ def run(selection=None, timeout=600, keep_going=False, data=True, stream=sys.std
     finally:
         bar.close()
     out = chosen.output_dir
-    tables = out / "data" / "results" if chosen.is_reference else out / "results"
+    tables = study_results_dir(chosen.name)
     print(f"{'all done' if not failures else f'{failures} step(s) failed'} in "
           f"{time.perf_counter() - start_all:.1f} s; study {chosen.name}: figures in "
           f"{out / 'figures'}, tables in {tables}"

@@ -33,7 +33,7 @@ __all__ = ["Study", "UncertaintyChoice", "WeightChoice", "DesignChoice", "LoopCh
            "active", "studies_dir"]
 
 #: Name of the paper's reproduction; only this study writes the committed outputs.
-REFERENCE = "reference"
+REFERENCE = paths.REFERENCE_STUDY
 
 
 class StudyError(ValueError):

@@ -202,17 +202,6 @@ def test_musyn_progress_is_logged(textbook, caplog, capsys):
     assert not [r for r in caplog.records if r.name == "piezolib.robust.dk"]
 
 
-class SlowClock:
-    """Stands in for the ``time`` module: every reading is 1000 s after the last one."""
-
-    def __init__(self):
-        self.now = 0.0
-
-    def perf_counter(self):
-        self.now += 1000.0
-        return self.now
-
-
 def _same_design(a, b):
     assert [r["mu_upper"] for r in a.records] == [r["mu_upper"] for r in b.records]
     assert [r["gamma"] for r in a.records] == [r["gamma"] for r in b.records]
@@ -221,10 +210,10 @@ def _same_design(a, b):
         np.testing.assert_array_equal(getattr(a.K, name), getattr(b.K, name))
 
 
-def test_musyn_result_does_not_depend_on_the_clock(textbook, monkeypatch):
+def test_musyn_result_does_not_depend_on_the_clock(textbook, monkeypatch, slow_clock):
     """Every K-step and D-step seeming to take 1000 s changes nothing: no wall-time stop."""
     P, blk, omega = textbook["P"], textbook["blk"], textbook["omega"]
-    clock = SlowClock()
+    clock = slow_clock
     monkeypatch.setattr(robust.dk, "time", clock)
     monkeypatch.setattr(robust.hinf, "time", clock)
     slow = musyn(P, blk, 1, 1, omega, **TEXTBOOK["MUSYN_OPTIONS"])

@@ -117,22 +117,11 @@ def test_fixed_order_rejects_bad_arguments(problem, change, match):
         fixed_order_musyn(**args)
 
 
-class SlowClock:
-    """Stands in for the ``time`` module: every reading is 1000 s after the last one."""
-
-    def __init__(self):
-        self.now = 0.0
-
-    def perf_counter(self):
-        self.now += 1000.0
-        return self.now
-
-
 def test_fixed_order_result_does_not_depend_on_the_clock_or_the_bar(problem, result,
-                                                                   monkeypatch, capsys):
+                                                                   monkeypatch, capsys, slow_clock):
     """Steps that seem to take 1000 s each, with the bar shown: the same controller."""
     _, P, K0 = problem
-    monkeypatch.setattr(robust.fixed_order, "time", SlowClock())
+    monkeypatch.setattr(robust.fixed_order, "time", slow_clock)
     monkeypatch.setenv("PIEZOLIB_PROGRESS", "1")
     slow = fixed_order_musyn(P, BLK, K0, OMEGA)
     np.testing.assert_array_equal(slow.modal.theta, result.modal.theta)
