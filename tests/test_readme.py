@@ -5,6 +5,7 @@ import io
 import os
 import pathlib
 import re
+import textwrap
 import warnings
 
 import control as ct
@@ -40,3 +41,16 @@ def test_own_stage_example_identifies_the_example_chirp():
     claimed = float(re.search(r"DC gain ([0-9.]+) µm/V", README).group(1))
     model = run_block(block)[1]["model"]
     assert ct.dcgain(model) == pytest.approx(claimed, abs=5e-4)
+
+
+def test_study_example_derives_saves_and_compares(tmp_path):
+    from piezolib.workbook import study
+
+    block = textwrap.dedent(next(b for b in BLOCKS if "compare_studies" in b))
+    assert '"studies/mine.toml"' in block
+    target = tmp_path / "mine.toml"
+    _, namespace = run_block(block.replace('"studies/mine.toml"', repr(str(target))))
+    mine = namespace["mine"]
+    assert mine.weights.omega_e == 1600.0 and mine.design.max_iter == 4
+    assert study.load(target) == mine            # the saved file reads back as the same study
+    assert mine.digest("weights") != study.load("reference").digest("weights")
