@@ -29,8 +29,10 @@ def extra_d_scaling_fit(mu_run):
     s = 1j * omega
     fig, ax = plotting.new_figure(figsize=(6.5, 3.4))
     plotting.plot_magnitude(ax, omega, mu_run.mu.d[:, 0], label="optimal d(omega) for the final K")
-    plotting.plot_magnitude(ax, omega, np.ravel(mu_run.d_scalings[0](s)),
-                            label="4th-order fit used in the last K-step", ls="--")
+    fit = mu_run.d_scalings[0]
+    order = len(ct.poles(fit))
+    plotting.plot_magnitude(ax, omega, np.ravel(fit(s)),
+                            label=f"order-{order} fit used in the last K-step", ls="--")
     ax.set_ylabel("|d| [dB]")
     ax.legend()
     plotting.save_figure(fig, None, "d_scaling_fit")
