@@ -62,8 +62,13 @@ def lower_lft(P, K, omega_s=None):
 def lft_response(P, K, omega, omega_s=None):
     """Frequency response of F_l(P, K) on ``omega`` [rad/s], shape (nf, p1, m1).
 
-    P and K are in ordinary time; the loop is closed and evaluated in scaled
-    time (s -> s/omega_s), where the realisations are well conditioned.
+    Evaluated frequency by frequency as P11 + P12 K (I - P22 K)^-1 P21 from
+    the responses of P and K (each realised in scaled time, s -> s/omega_s,
+    and balanced by :func:`~piezolib.robust.lti.to_scaled`).  No closed-loop realisation is formed: where the loop
+    nearly cancels a pole (a slow controller pole against a plant zero, as in
+    DK-iteration K-steps) the closed loop's state matrix is ill-conditioned
+    and its direct evaluation can be wrong by O(1), while the responses of P
+    and K stay as accurate as the models themselves.
 
     Parameters
     ----------
@@ -78,11 +83,52 @@ def lft_response(P, K, omega, omega_s=None):
     Returns
     -------
     ndarray, shape (len(omega), p1, m1)
+
+    Raises
+    ------
+    ValueError
+        As :func:`lower_lft`, or when I - P22 K is singular at a frequency of
+        ``omega`` (the closed loop has a pole there).
     """
-    _split(P, K)
+    nmeas, ncon = _split(P, K)
     omega = check_finite_array("omega", omega, ndim=1)
     omega_s = time_scale_of(P, K) if omega_s is None else check_positive("omega_s", omega_s)
-    if omega_s != 1.0:
-        P, K = to_scaled(ct.ss(P), omega_s), to_scaled(ct.ss(K), omega_s)
-    CL = ct.ss(P).lft(ct.ss(K), nu=K.noutputs, ny=K.ninputs)
-    return np.moveaxis(CL(1j * omega / omega_s, squeeze=False), -1, 0)
+    s = 1j * omega / omega_s
+    Ps, Ks = to_scaled(ct.ss(P), omega_s), to_scaled(ct.ss(K), omega_s)
+    (Pw, P_cond), (Kw, K_cond) = _response(Ps, s), _response(Ks, s)
+    M = np.empty((omega.size, P.noutputs - nmeas, P.ninputs - ncon), complex)
+    # near a pole of P or K on the axis (a plant resonance, an integrator) their
+    # responses are huge and the pointwise formula cancels them; there the
+    # balanced closed-loop realisation is the accurate one
+    near_pole = np.maximum(P_cond, K_cond) > _POLE_CONDITION
+    if np.any(near_pole):
+        CL = balance(Ps.lft(Ks, nu=ncon, ny=nmeas))
+        M[near_pole] = _response(CL, s[near_pole])[0]
+    ok = ~near_pole
+    P11, P12 = Pw[ok, :-nmeas, :-ncon], Pw[ok, :-nmeas, -ncon:]
+    P21, P22 = Pw[ok, -nmeas:, :-ncon], Pw[ok, -nmeas:, -ncon:]
+    loop = np.eye(nmeas) - P22 @ Kw[ok]
+    singular = np.linalg.cond(loop) > 1 / np.finfo(float).eps
+    if np.any(singular):
+        raise ValueError(f"I - P22 K is singular at omega = {omega[ok][singular][0]:.6g} rad/s: "
+                         "F_l(P, K) has a pole on the imaginary axis there")
+    M[ok] = P11 + P12 @ Kw[ok] @ np.linalg.solve(loop, P21)
+    return M
+
+
+#: cond(sI - A) above which a frequency counts as at a pole of P or K.
+_POLE_CONDITION = 1e8
+
+
+def _response(sys, s):
+    """Response C (sI - A)^-1 B + D of a state-space model at the points ``s``,
+    shape (ns, p, m), and cond(sI - A) at each (inf where singular)."""
+    D = np.broadcast_to(sys.D, (s.size, *sys.D.shape)).astype(complex)
+    if sys.nstates == 0:
+        return D, np.ones(s.size)
+    resolvent = s[:, None, None] * np.eye(sys.nstates) - sys.A
+    cond = np.linalg.cond(resolvent)
+    regular = np.isfinite(cond) & (cond < 1 / np.finfo(float).eps)
+    out = np.full_like(D, np.nan)
+    out[regular] = sys.C @ np.linalg.solve(resolvent[regular], sys.B) + D[regular]
+    return out, np.where(regular, cond, np.inf)
