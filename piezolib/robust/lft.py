@@ -2,12 +2,13 @@
 
 import control as ct
 import numpy as np
+import scipy.optimize as opt
 
 from piezolib._checks import (check_continuous, check_finite_array, check_finite_lti,
                               check_lti, check_positive)
 from piezolib.robust.lti import balance, from_scaled, time_scale_of, to_scaled
 
-__all__ = ["lower_lft", "lft_response"]
+__all__ = ["lower_lft", "lft_response", "lft_hinf_norm"]
 
 
 def _split(P, K):
@@ -107,13 +108,65 @@ def lft_response(P, K, omega, omega_s=None):
     ok = ~near_pole
     P11, P12 = Pw[ok, :-nmeas, :-ncon], Pw[ok, :-nmeas, -ncon:]
     P21, P22 = Pw[ok, -nmeas:, :-ncon], Pw[ok, -nmeas:, -ncon:]
-    loop = np.eye(nmeas) - P22 @ Kw[ok]
-    singular = np.linalg.cond(loop) > 1 / np.finfo(float).eps
+    PK = P22 @ Kw[ok]
+    loop = np.eye(nmeas) - PK
+    # singular relative to the terms it is the difference of (round-off level)
+    sigma_min = np.linalg.svd(loop, compute_uv=False)[:, -1]
+    singular = sigma_min <= 8 * np.finfo(float).eps * (1 + np.linalg.norm(PK, 2, axis=(1, 2)))
     if np.any(singular):
         raise ValueError(f"I - P22 K is singular at omega = {omega[ok][singular][0]:.6g} rad/s: "
                          "F_l(P, K) has a pole on the imaginary axis there")
     M[ok] = P11 + P12 @ Kw[ok] @ np.linalg.solve(loop, P21)
     return M
+
+
+def lft_hinf_norm(P, K, omega, omega_s=None, rtol=1e-9):
+    """H-infinity norm of F_l(P, K) from its pointwise response, with the peak's frequency.
+
+    The largest singular value of :func:`lft_response` is maximised on
+    ``omega`` (and at DC) and refined around the best grid point, as
+    :func:`~piezolib.robust.lti.hinf_norm` does for a realisation.  Working
+    from the responses of P and K avoids the closed loop's state matrix, whose
+    evaluation can be ill-conditioned where the loop nearly cancels a pole.
+    Stability is not checked here: the caller checks the closed-loop poles.
+
+    Parameters
+    ----------
+    P, K : control.LTI
+        Generalized plant and controller (as in :func:`lower_lft`).
+    omega : array_like
+        Search grid [rad/s], at least 2 points.
+    omega_s : float, optional
+        Internal time scale [rad/s] (see :func:`lft_response`).
+    rtol : float, optional
+        Relative tolerance of the refinement in log-frequency.
+
+    Returns
+    -------
+    peak : float
+    omega_peak : float
+        [rad/s]; 0 for a peak at DC.
+    """
+    omega = check_finite_array("omega", omega, ndim=1, min_length=2)
+    omega_s = time_scale_of(P, K) if omega_s is None else check_positive("omega_s", omega_s)
+
+    def sigma(w):
+        return np.linalg.norm(lft_response(P, K, np.atleast_1d(w), omega_s), 2, axis=(1, 2))
+
+    g = sigma(omega)
+    k = int(np.argmax(g))
+    lo, hi = omega[max(k - 1, 0)], omega[min(k + 1, omega.size - 1)]
+    if lo > 0:
+        res = opt.minimize_scalar(lambda lw: -sigma(np.exp(lw))[0],
+                                  bounds=(np.log(lo), np.log(hi)), method="bounded",
+                                  options={"xatol": rtol})
+        peak, w_peak = max((g[k], omega[k]), (-res.fun, float(np.exp(res.x))))
+    else:
+        peak, w_peak = g[k], omega[k]
+    dc = float(sigma(0.0)[0])
+    if dc >= peak:
+        return dc, 0.0
+    return float(peak), float(w_peak)
 
 
 #: cond(sI - A) above which a frequency counts as at a pole of P or K.
@@ -122,13 +175,21 @@ _POLE_CONDITION = 1e8
 
 def _response(sys, s):
     """Response C (sI - A)^-1 B + D of a state-space model at the points ``s``,
-    shape (ns, p, m), and cond(sI - A) at each (inf where singular)."""
+    shape (ns, p, m), and cond(sI - A) at each (inf, and a NaN response, only
+    where sI - A is exactly singular)."""
     D = np.broadcast_to(sys.D, (s.size, *sys.D.shape)).astype(complex)
     if sys.nstates == 0:
         return D, np.ones(s.size)
     resolvent = s[:, None, None] * np.eye(sys.nstates) - sys.A
     cond = np.linalg.cond(resolvent)
-    regular = np.isfinite(cond) & (cond < 1 / np.finfo(float).eps)
     out = np.full_like(D, np.nan)
-    out[regular] = sys.C @ np.linalg.solve(resolvent[regular], sys.B) + D[regular]
-    return out, np.where(regular, cond, np.inf)
+    finite = np.isfinite(cond)
+    try:
+        out[finite] = sys.C @ np.linalg.solve(resolvent[finite], sys.B) + D[finite]
+    except np.linalg.LinAlgError:           # an exact pole on the grid: point by point
+        for k in np.flatnonzero(finite):
+            try:
+                out[k] = sys.C @ np.linalg.solve(resolvent[k], sys.B) + D[k]
+            except np.linalg.LinAlgError:
+                cond[k] = np.inf
+    return out, cond
