@@ -104,7 +104,7 @@ def check_signals(min_length=2, **signals):
     Each must be 1-D, finite and at least ``min_length`` long, and all must
     have the same length; errors name the argument(s).
     """
-    arrays = tuple(check_finite_array(name, x, ndim=1, min_length=min_length)
+    arrays = tuple(check_finite_array(name, x, ndim=1, min_length=min_length, real=True)
                    for name, x in signals.items())
     check_same_length(**dict(zip(signals, arrays)))
     return arrays
@@ -112,7 +112,7 @@ def check_signals(min_length=2, **signals):
 
 def check_frequency_grid(name, omega, min_length=2):
     """Return a 1-D, finite, positive and strictly increasing frequency grid [rad/s]."""
-    omega = check_finite_array(name, omega, ndim=1, min_length=min_length)
+    omega = check_finite_array(name, omega, ndim=1, min_length=min_length, real=True)
     if np.any(omega <= 0) or np.any(np.diff(omega) <= 0):
         raise ValueError(f"{name} must be positive and increasing [rad/s]")
     return omega
@@ -158,6 +158,15 @@ def check_continuous(name, sys):
         raise ValueError(f"{name} must be continuous-time, got a discrete-time model "
                          f"(dt={sys.dt}); pass the continuous-time model (discretise results "
                          "afterwards, e.g. with piezolib.robust.discrete)")
+    return sys
+
+
+def check_model(name, sys, proper=False):
+    """Check a continuous-time LTI model with finite coefficients (and, optionally, proper)."""
+    check_finite_lti(name, sys)
+    check_continuous(name, sys)
+    if proper:
+        check_proper(name, sys)
     return sys
 
 

@@ -29,8 +29,8 @@ def tracking_error(x_r, x):
     -------
     ndarray
     """
-    x_r = check_finite_array("x_r", x_r, ndim=1, min_length=2)
-    x = check_finite_array("x", x, ndim=1, min_length=2)
+    x_r = check_finite_array("x_r", x_r, ndim=1, min_length=2, real=True)
+    x = check_finite_array("x", x, ndim=1, min_length=2, real=True)
     check_same_length(x_r=x_r, x=x)
     return x_r - x
 
@@ -129,8 +129,8 @@ def improvement_percent(before, after):
     float or ndarray
         Positive when ``after`` is smaller.
     """
-    b = check_finite_array("before", before)
-    a = check_finite_array("after", after)
+    b = check_finite_array("before", before, real=True)
+    a = check_finite_array("after", after, real=True)
     if np.any(b <= 0):
         raise ValueError(f"before must be positive, got {before!r}")
     try:

@@ -77,8 +77,8 @@ def hysteresis_measure(v, x, band=0.02):
         For NaN, unequal lengths, a constant input, or a record without at
         least one full ascending and one full descending stroke.
     """
-    v = check_finite_array("v", v, ndim=1, min_length=8)
-    x = check_finite_array("x", x, ndim=1, min_length=8)
+    v = check_finite_array("v", v, ndim=1, min_length=8, real=True)
+    x = check_finite_array("x", x, ndim=1, min_length=8, real=True)
     check_same_length(v=v, x=x)
     band = check_positive("band", band)
     if band >= 0.25:

@@ -79,9 +79,9 @@ def rls(regressors, y, initial_gain=1e6, initial_parameters=None):
         Empty, non-finite or mismatched data, or ``initial_gain`` outside
         (0, MAX_INITIAL_GAIN].
     """
-    phi = check_finite_array("regressors", regressors, ndim=2)
+    phi = check_finite_array("regressors", regressors, ndim=2, real=True)
     n, p = phi.shape
-    y = check_finite_array("y", y, ndim=1)
+    y = check_finite_array("y", y, ndim=1, real=True)
     check_same_length(regressors=phi, y=y)
     if n == 0 or p == 0:
         raise ValueError(f"regressors must be non-empty, got shape {phi.shape}")
@@ -91,7 +91,7 @@ def rls(regressors, y, initial_gain=1e6, initial_parameters=None):
                          f"data power; larger values lose every digit of eq. 3 in double "
                          f"precision), got {initial_gain:g}")
     psi = (np.zeros(p) if initial_parameters is None else
-           check_finite_array("initial_parameters", initial_parameters, shape=(p,)).copy())
+           check_finite_array("initial_parameters", initial_parameters, shape=(p,), real=True).copy())
     power = np.mean(phi ** 2, axis=0)
     power[power == 0] = 1.0                          # all-zero regressor: unit scale
     W = np.diag(initial_gain / power)
@@ -309,8 +309,8 @@ def check_io(u, y):
     ValueError
         NaN/inf, unequal lengths, or a constant input.
     """
-    u = check_finite_array("u", u, ndim=1)
-    y = check_finite_array("y", y, ndim=1)
+    u = check_finite_array("u", u, ndim=1, real=True)
+    y = check_finite_array("y", y, ndim=1, real=True)
     check_same_length(u=u, y=y)
     if len(u) < 2:
         raise ValueError(f"u and y are {'empty' if len(u) == 0 else 'too short'}: got "

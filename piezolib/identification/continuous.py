@@ -138,7 +138,7 @@ def zoh_simulate(sys, u, fs):
     """Response of a continuous SISO model to a sampled input held by a ZOH,
     from rest, at the sampling instants."""
     fs = check_positive("fs", fs)
-    u = check_finite_array("u", u, ndim=1, min_length=1)
+    u = check_finite_array("u", u, ndim=1, min_length=1, real=True)
     b, a = zoh_coefficients(sys, 1.0 / fs)
     return sg.lfilter(b, a, u)
 

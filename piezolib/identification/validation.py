@@ -18,8 +18,8 @@ __all__ = ["fit_percent", "Whiteness", "whiteness", "empirical_frequency_respons
 # --- Step IV: validation -------------------------------------------------------------------
 def fit_percent(y, y_hat):
     """Normalised fit 100 (1 - ||y - y_hat|| / ||y - mean(y)||) in %."""
-    y = check_finite_array("y", y, ndim=1, min_length=2)
-    y_hat = check_finite_array("y_hat", y_hat, ndim=1, min_length=2)
+    y = check_finite_array("y", y, ndim=1, min_length=2, real=True)
+    y_hat = check_finite_array("y_hat", y_hat, ndim=1, min_length=2, real=True)
     check_same_length(y=y, y_hat=y_hat)
     spread = np.linalg.norm(y - y.mean())
     if spread == 0:
@@ -64,7 +64,7 @@ def whiteness(residual, max_lag=20, alpha=0.05):
     Q = N (N + 2) sum R(i)^2 / (N - i) against chi-square(max_lag) at level
     ``alpha`` (the mean is removed first).
     """
-    e = check_finite_array("residual", residual, ndim=1)
+    e = check_finite_array("residual", residual, ndim=1, real=True)
     max_lag = check_integer("max_lag", max_lag, minimum=1)
     alpha = check_positive("alpha", alpha)
     n = len(e)

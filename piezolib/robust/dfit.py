@@ -98,8 +98,8 @@ def fit_magnitude(omega, magnitude, order, weight=None, *, n_starts=3, initial=N
     -------
     MagnitudeFit
     """
-    omega = check_finite_array("omega", omega, ndim=1, min_length=2)
-    magnitude = check_finite_array("magnitude", magnitude, ndim=1)
+    omega = check_finite_array("omega", omega, ndim=1, min_length=2, real=True)
+    magnitude = check_finite_array("magnitude", magnitude, ndim=1, real=True)
     check_same_length(omega=omega, magnitude=magnitude)
     if np.any(omega <= 0):
         raise ValueError("omega must be positive")
@@ -109,7 +109,7 @@ def fit_magnitude(omega, magnitude, order, weight=None, *, n_starts=3, initial=N
     n_starts = check_integer("n_starts", n_starts, minimum=1)
     if weight is None:
         weight = np.ones_like(omega)
-    weight = check_finite_array("weight", weight, ndim=1)
+    weight = check_finite_array("weight", weight, ndim=1, real=True)
     check_same_length(omega=omega, weight=weight)
     if np.any(weight < 0) or not np.any(weight > 0):
         raise ValueError("weight must be non-negative and not all zero")

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
-from piezolib._checks import check_positive, check_siso
+from piezolib._checks import check_finite_lti, check_positive, check_siso
 from piezolib.robust.lti import realize, with_signals
 
 __all__ = ["DiscreteController", "discretize", "least_damped_frequency"]
@@ -109,6 +109,7 @@ def discretize(K, fs, *, prewarp="auto", check_hz=1000.0, rtol=0.1, G=None, n_ch
     (0.0001, True)
     """
     check_siso("K", K)
+    check_finite_lti("K", K)
     if not K.isctime(strict=True):
         raise ValueError("K must be a continuous-time controller")
     fs = check_positive("fs", fs)

@@ -92,7 +92,7 @@ def lft_response(P, K, omega, omega_s=None):
         ``omega`` (the closed loop has a pole there).
     """
     nmeas, ncon = _split(P, K)
-    omega = check_finite_array("omega", omega, ndim=1)
+    omega = check_finite_array("omega", omega, ndim=1, min_length=1, real=True)
     omega_s = time_scale_of(P, K) if omega_s is None else check_positive("omega_s", omega_s)
     s = 1j * omega / omega_s
     Ps, Ks = to_scaled(ct.ss(P), omega_s), to_scaled(ct.ss(K), omega_s)
@@ -147,7 +147,8 @@ def lft_hinf_norm(P, K, omega, omega_s=None, rtol=1e-9):
     omega_peak : float
         [rad/s]; 0 for a peak at DC.
     """
-    omega = check_finite_array("omega", omega, ndim=1, min_length=2)
+    _split(P, K)
+    omega = check_finite_array("omega", omega, ndim=1, min_length=2, real=True)
     omega_s = time_scale_of(P, K) if omega_s is None else check_positive("omega_s", omega_s)
 
     def sigma(w):

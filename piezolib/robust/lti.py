@@ -15,7 +15,7 @@ import scipy.linalg as la
 import scipy.optimize as opt
 
 from piezolib._checks import (check_continuous, check_finite_array, check_finite_lti,
-                              check_lti, check_positive, check_proper, check_siso)
+                              check_lti, check_model, check_positive, check_proper, check_siso)
 
 __all__ = [
     "frequency_grid", "scaled_coefficients", "scale_time", "balance",
@@ -60,7 +60,9 @@ def scaled_coefficients(num, den, omega_s):
 
 def max_singular_value(sys, omega):
     """Largest singular value of sys(j omega) at each frequency of ``omega`` [rad/s]."""
-    resp = np.moveaxis(sys(1j * np.atleast_1d(omega), squeeze=False), -1, 0)
+    check_model("sys", sys)
+    omega = check_finite_array("omega", np.atleast_1d(omega), ndim=1, min_length=1, real=True)
+    resp = np.moveaxis(sys(1j * omega, squeeze=False), -1, 0)
     return np.linalg.svd(resp, compute_uv=False)[:, 0]
 
 
@@ -73,7 +75,7 @@ def scale_time(sys, omega_s):
     scaling) and state-space models (A/omega_s, B/sqrt(omega_s),
     C/sqrt(omega_s)).
     """
-    check_lti("sys", sys)
+    check_model("sys", sys)
     omega_s = check_positive("omega_s", omega_s)
     if isinstance(sys, ct.TransferFunction):
         num, den = [], []
@@ -196,7 +198,7 @@ def balance(sys):
     permutation), so the transfer function is unchanged bit for bit in exact
     arithmetic.
     """
-    sys = ct.ss(check_lti("sys", sys))
+    sys = ct.ss(check_finite_lti("sys", sys))
     if sys.nstates == 0:
         return sys
     _, (scale, _) = la.matrix_balance(sys.A, permute=False, separate=True)
@@ -223,7 +225,7 @@ def realize(sys, omega_s=None):
     -------
     control.StateSpace
     """
-    check_lti("sys", sys)
+    check_model("sys", sys)
     omega_s = time_scale_of(sys) if omega_s is None else check_positive("omega_s", omega_s)
     return from_scaled(to_scaled(sys, omega_s), omega_s, sys.input_labels, sys.output_labels,
                        name=sys.name)
@@ -254,8 +256,9 @@ def loop_functions(G, K, omega_s=None):
         ``T`` (v_r -> v_y), ``KS`` (v_r -> u_b), ``GS`` (input disturbance
         d -> v_y).
     """
-    check_siso("G", G)
-    check_siso("K", K)
+    for name, sys in (("G", G), ("K", K)):
+        check_siso(name, sys)
+        check_model(name, sys)
     omega_s = time_scale_of(G, K) if omega_s is None else check_positive("omega_s", omega_s)
     Gs = with_signals(to_scaled(G, omega_s), ["u_c"], ["v_y"], name="G")
     Ks = with_signals(to_scaled(K, omega_s), ["v_e"], ["u_b"], name="K")
@@ -277,8 +280,9 @@ def closed_loop_poles(G, K, omega_s=None):
 
     ``omega_s`` [rad/s] defaults to :func:`time_scale_of` ``(G, K)``.
     """
-    check_siso("G", G)
-    check_siso("K", K)
+    for name, sys in (("G", G), ("K", K)):
+        check_siso(name, sys)
+        check_model(name, sys)
     omega_s = time_scale_of(G, K) if omega_s is None else check_positive("omega_s", omega_s)
     L = ct.ss(scale_time(G, omega_s)) * ct.ss(scale_time(K, omega_s))
     cl = balance(ct.feedback(balance(L), 1))
@@ -323,7 +327,7 @@ def hinf_norm(sys, omega=None, rtol=1e-9):
                          f"poles with Re >= 0: {poles[poles.real >= 0]}")
     if omega is None:
         omega = np.logspace(-2, 9, 4000)
-    omega = check_finite_array("omega", omega, ndim=1, min_length=2)
+    omega = check_finite_array("omega", omega, ndim=1, min_length=2, real=True)
 
     g = max_singular_value(sys, omega)
     dc = float(max_singular_value(sys, 0.0)[0])
@@ -345,9 +349,10 @@ def bandwidth(sys, level_dB=-3.0, omega=None):
     when the gain never crosses the level on the grid.
     """
     check_siso("sys", sys)
+    check_model("sys", sys)
     if omega is None:
         omega = np.logspace(-2, 8, 20000)
-    omega = check_finite_array("omega", omega, ndim=1, min_length=2)
+    omega = check_finite_array("omega", omega, ndim=1, min_length=2, real=True)
     mag_dB = 20 * np.log10(np.abs(sys(1j * omega)).ravel())
     below = np.nonzero(mag_dB < level_dB)[0]
     if below.size == 0 or below[0] == 0:

@@ -37,7 +37,7 @@ import control as ct
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
-from piezolib._checks import check_frequency_grid, check_integer, check_siso
+from piezolib._checks import check_finite_lti, check_frequency_grid, check_integer, check_siso
 from piezolib.robust.lti import closed_loop_poles, frequency_grid, realize, time_scale_of
 
 __all__ = ["LoopMargins", "loop_margins", "sampled_loop_radius", "DelayTolerance",
@@ -170,6 +170,7 @@ def loop_margins(G, K, omega=None):
     """
     for name, sys in (("G", G), ("K", K)):
         check_siso(name, sys)
+        check_finite_lti(name, sys)
         if sys.isdtime(strict=True):
             raise ValueError(f"{name} must be a continuous-time model")
     omega = _default_grid(G, K) if omega is None else check_frequency_grid(

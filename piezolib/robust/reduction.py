@@ -13,7 +13,7 @@ import numpy as np
 import scipy.linalg as la
 import slycot
 
-from piezolib._checks import check_integer, check_lti, check_positive
+from piezolib._checks import check_integer, check_lti, check_model, check_positive
 from piezolib.robust.lti import (balance, from_scaled, hinf_norm, max_singular_value,
                                  time_scale_of, to_scaled)
 
@@ -136,7 +136,7 @@ def hankel_singular_values(K, weight=None, omega_s=None):
     -------
     ndarray
     """
-    K = ct.ss(check_lti("K", K))
+    K = ct.ss(check_model("K", K))
     omega_s = _time_scale(K, weight, omega_s)
     Ks = to_scaled(K, omega_s)
     stable, _ = _split_stable(Ks)
@@ -175,7 +175,7 @@ def reduce_controller(K, order, weight=None, *, method="truncate", omega_s=None)
     -------
     ReducedController
     """
-    check_lti("K", K)
+    check_model("K", K)
     K = ct.ss(K)
     order = check_integer("order", order, minimum=0)
     if method not in ("truncate", "residualize"):

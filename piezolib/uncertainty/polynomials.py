@@ -12,7 +12,8 @@ import control as ct
 import numpy as np
 import numpy.polynomial.polynomial as npoly
 
-from piezolib._checks import check_finite_array, check_positive, check_proper, check_siso
+from piezolib._checks import (check_finite_array, check_finite_lti, check_positive, check_proper,
+                              check_siso)
 
 __all__ = [
     "check_plant", "check_spread", "check_frequencies", "plant_polynomials",
@@ -32,6 +33,7 @@ def check_plant(G, name="G"):
         ``G`` is not SISO, not proper, discrete-time, or has no pole.
     """
     check_siso(name, G)
+    check_finite_lti(name, G)
     check_proper(name, G)
     if not isinstance(G, ct.TransferFunction):
         G = ct.tf(G)
@@ -53,7 +55,7 @@ def check_spread(spread, name="spread"):
 
 def check_frequencies(omega, name="omega"):
     """Return ``omega`` as a 1-D float array of positive frequencies [rad/s]."""
-    omega = check_finite_array(name, omega, ndim=1, min_length=1)
+    omega = check_finite_array(name, omega, ndim=1, min_length=1, real=True)
     if np.any(omega <= 0):
         raise ValueError(f"{name} must be positive [rad/s]")
     return omega

@@ -1,0 +1,187 @@
+"""Bad input to the toolkit's public functions: a specific exception that names the argument.
+
+Each entry of ``CASES`` is a valid call of one public function.  Every argument listed in
+its ``corrupt`` map is replaced, one at a time, by each bad value of its kind (NaN, inf,
+empty, wrong shape or dtype, non-positive, a discrete / improper / NaN-coefficient model,
+absurd scale), and the call must raise ValueError or TypeError whose message names the
+argument.  ``test_every_public_function_is_swept`` keeps the table complete: a public
+function is either swept here or listed in ``NOT_YET_SWEPT`` (issue 15 tracks that list).
+"""
+
+import importlib
+import inspect
+import re
+
+import control as ct
+import numpy as np
+import pytest
+
+TOOLKIT = ("piezolib.robust", "piezolib.identification", "piezolib.hysteresis",
+           "piezolib.uncertainty", "piezolib.signals", "piezolib.metrics")
+
+FS = 1000.0
+G = ct.ss(ct.tf([2.0], [1.0, 3.0, 2.0]))               # stable, strictly proper
+K = ct.ss(ct.tf([1.0, 2.0], [1.0, 10.0]))              # stable, proper
+P = ct.ss(G.A, np.c_[G.B, G.B], np.r_[G.C, -G.C], np.zeros((2, 2)))   # one w, z; one u, y
+OMEGA = np.logspace(-1, 2, 30)
+RNG = np.random.default_rng(0)
+U = RNG.standard_normal(400)
+Y = np.convolve(U, [0.0, 0.5, 0.25], mode="full")[:400] + 1e-3 * RNG.standard_normal(400)
+M3 = RNG.standard_normal((3, 3)) + 1j * RNG.standard_normal((3, 3))
+
+# bad values by kind of argument
+SIGNAL = {"nan": np.r_[U[:-1], np.nan], "inf": np.r_[U[:-1], np.inf], "empty": np.array([]),
+          "2-D": np.c_[U, U], "complex": U + 1j, "text": "abc"}
+GRID = {"nan": np.r_[OMEGA[:-1], np.nan], "inf": np.r_[OMEGA[:-1], np.inf],
+        "empty": np.array([]), "2-D": np.c_[OMEGA, OMEGA], "complex": OMEGA + 1j, "text": "abc"}
+POSITIVE = {"zero": 0.0, "negative": -1.0, "nan": np.nan, "inf": np.inf, "text": "x"}
+LTI = {"nan coefficient": ct.ss([[np.nan]], [[1.0]], [[1.0]], [[0.0]]),
+       "discrete": ct.ss(ct.tf([1.0], [1.0, -0.5], 0.001)),
+       "not a model": np.ones((2, 2))}
+LTI_PROPER = {**LTI, "improper": ct.tf([1.0, 0.0, 0.0], [1.0, 1.0])}
+LTI_STABLE = {**LTI_PROPER, "unstable": ct.ss(ct.tf([1.0], [1.0, -1.0]))}
+MATRIX_STACK = {"nan": np.where(np.eye(3) == 1, np.nan, M3), "empty": np.zeros((0, 3, 3)),
+                "1-D": np.ones(3), "text": "abc"}
+
+CASES = {
+    # robust
+    "robust.frequency_grid": (dict(omega_min=1.0, omega_max=10.0, n=20),
+                              {"omega_min": POSITIVE, "omega_max": POSITIVE}),
+    "robust.balance": (dict(sys=G), {"sys": {k: v for k, v in LTI.items() if k != "discrete"}}),  # any dt
+    "robust.realize": (dict(sys=G), {"sys": LTI}),
+    "robust.scale_time": (dict(sys=G, omega_s=10.0), {"sys": LTI, "omega_s": POSITIVE}),
+    "robust.max_singular_value": (dict(sys=G, omega=OMEGA), {"sys": LTI, "omega": GRID}),
+    "robust.hinf_norm": (dict(sys=G, omega=OMEGA), {"sys": LTI_STABLE, "omega": GRID}),
+    "robust.bandwidth": (dict(sys=G, omega=OMEGA), {"sys": LTI, "omega": GRID}),
+    "robust.loop_functions": (dict(G=G, K=K), {"G": LTI, "K": LTI}),
+    "robust.closed_loop_poles": (dict(G=G, K=K), {"G": LTI, "K": LTI}),
+    "robust.is_stable": (dict(G=G, K=K), {"G": LTI, "K": LTI}),
+    "robust.lower_lft": (dict(P=P, K=K), {"P": LTI, "K": LTI, "omega_s": POSITIVE}),
+    "robust.lft_response": (dict(P=P, K=K, omega=OMEGA),
+                            {"P": LTI, "K": LTI, "omega": GRID, "omega_s": POSITIVE}),
+    "robust.lft_hinf_norm": (dict(P=P, K=K, omega=OMEGA), {"P": LTI, "K": LTI, "omega": GRID}),
+    "robust.mussv": (dict(M=M3, blk=[(1, 1), (2, 2)]),
+                     {"M": MATRIX_STACK, "blk": {"too large": [(2, 2), (2, 2)],
+                                                 "zero size": [(0, 0), (3, 3)],
+                                                 "text": "abc"}}),
+    "robust.hinfsyn": (dict(P=P), {"P": LTI_PROPER}),
+    "robust.fit_magnitude": (dict(omega=OMEGA, magnitude=1 / np.abs(1j * OMEGA + 1), order=1),
+                             {"omega": GRID, "magnitude": SIGNAL}),
+    "robust.reduce_controller": (dict(K=K, order=1), {"K": LTI}),
+    "robust.hankel_singular_values": (dict(K=K), {"K": LTI}),
+    "robust.discretize": (dict(K=K, fs=FS, check_hz=100.0), {"K": LTI, "fs": POSITIVE}),
+    "robust.loop_margins": (dict(G=G, K=K), {"G": LTI, "K": LTI}),
+    # identification
+    "identification.fit_arx": (dict(u=U, y=Y, fs=FS, na=2, nb=2),
+                               {"u": SIGNAL, "y": SIGNAL, "fs": POSITIVE}),
+    "identification.fit_output_error": (dict(u=U, y=Y, fs=FS, na=2, nb=2),
+                                        {"u": SIGNAL, "y": SIGNAL, "fs": POSITIVE}),
+    "identification.identify": (dict(u=U, y=Y, fs=FS, n_poles=2, n_zeros=1),
+                                {"u": SIGNAL, "y": SIGNAL, "fs": POSITIVE}),
+    "identification.fit_percent": (dict(y=Y, y_hat=Y + 0.01), {"y": SIGNAL, "y_hat": SIGNAL}),
+    "identification.whiteness": (dict(residual=U), {"residual": SIGNAL}),
+    "identification.empirical_frequency_response": (dict(u=U, y=Y, fs=FS, nperseg=128),
+                                                    {"u": SIGNAL, "y": SIGNAL, "fs": POSITIVE}),
+    # signals and metrics
+    "signals.time_vector": (dict(duration_s=1.0, fs=FS), {"duration_s": POSITIVE, "fs": POSITIVE}),
+    "signals.triangle": (dict(peak=1.0, frequency_hz=5.0, fs=FS),
+                         {"frequency_hz": POSITIVE, "fs": POSITIVE}),
+    "signals.chirp": (dict(amplitude=1.0, f0_hz=1.0, f1_hz=10.0, duration_s=1.0, fs=FS),
+                      {"f0_hz": POSITIVE, "f1_hz": POSITIVE, "duration_s": POSITIVE,
+                       "fs": POSITIVE}),
+    "metrics.tracking_error": (dict(x_r=U, x=Y), {"x_r": SIGNAL, "x": SIGNAL}),
+    "metrics.tracking_error_percent": (dict(x_r=U, x=Y), {"x_r": SIGNAL, "x": SIGNAL}),
+    "metrics.peak_to_peak_error_percent": (dict(x_r=U, x=Y), {"x_r": SIGNAL, "x": SIGNAL}),
+    # uncertainty
+    "uncertainty.model_set": (dict(G=ct.tf([1.0], [1.0, 3.0, 2.0]), spread=0.05),
+                              {"G": LTI_PROPER, "spread": POSITIVE}),   # unstable G allowed
+    "uncertainty.parametric_stability_margin": (dict(G=ct.tf([1.0], [1.0, 3.0, 2.0])),
+                                                {"G": LTI_PROPER}),
+    # hysteresis
+    "hysteresis.hysteresis_measure": (dict(v=np.sin(np.linspace(0, 13, 400)),
+                                           x=np.sin(np.linspace(0, 13, 400) - 0.1)),
+                                      {"v": SIGNAL, "x": SIGNAL}),
+}
+
+# Public functions whose bad-input cases are not written yet (issue 15 item 6 is open
+# until this is empty).  Classes are exempt: their constructors are exercised through the
+# functions that build them.
+NOT_YET_SWEPT = {
+    "robust.scaled_coefficients", "robust.time_scale_of", "robust.to_scaled",
+    "robust.from_scaled", "robust.with_signals", "robust.parse_blk", "robust.block_slices",
+    "robust.musyn", "robust.scaled_plant", "robust.modal_controller",
+    "robust.fixed_order_musyn", "robust.least_damped_frequency", "robust.sampled_loop_radius",
+    "robust.delay_tolerance", "robust.performance_lower_bound", "robust.pointwise_lower_bound",
+    "robust.structured_lower_bound", "robust.achievable_range", "robust.controller_sos",
+    "robust.sos_filter", "robust.write_json", "robust.read_json", "robust.write_c_header",
+    "robust.export_controller",
+    "identification.rls", "identification.arx_regressors", "identification.discrete_tf",
+    "identification.checked_arx_regressors", "identification.least_squares",
+    "identification.check_io", "identification.d2c", "identification.zoh_coefficients",
+    "identification.zoh_simulate", "identification.refit_numerator",
+    "identification.identify_record", "identification.pole_pairs",
+    "identification.monic_coefficients", "identification.coefficient_table",
+    "metrics.improvement_percent",
+    "uncertainty.level_offsets", "uncertainty.perturbed_plant", "uncertainty.set_response",
+    "uncertainty.relative_errors", "uncertainty.member_poles",
+    "uncertainty.member_closed_loop_poles", "uncertainty.unstable_members",
+    "uncertainty.relative_error_envelope", "uncertainty.envelope_peak",
+    "uncertainty.relative_error_bound", "uncertainty.coverage",
+    "uncertainty.largest_covered_spread", "uncertainty.fit_covering_weight",
+    "uncertainty.stability_gauge", "uncertainty.small_gain_spread",
+    "uncertainty.weight_certified_spread",
+    "hysteresis.strokes", "hysteresis.dahl_hysteresis", "hysteresis.simulate_dahl",
+    "hysteresis.simulate_dahl_records", "hysteresis.min_stroke_slope",
+    "hysteresis.initial_state_of", "hysteresis.check_dahl_model", "hysteresis.feedforward",
+    "hysteresis.estimates", "hysteresis.covariance", "hysteresis.parameter_frame",
+    "hysteresis.warn_about", "hysteresis.check_loops", "hysteresis.loop_errors",
+    "hysteresis.fit_dahl", "hysteresis.monotone_path", "hysteresis.choose_fit",
+    "hysteresis.check_fit_options", "hysteresis.play_outputs", "hysteresis.fit_pi",
+    "hysteresis.hysteresis_percent", "hysteresis.split_record", "hysteresis.loop_scores",
+    "hysteresis.validation_table", "hysteresis.pooled_rms", "hysteresis.cross_check",
+}
+
+
+def function(qualname):
+    package, name = qualname.split(".")
+    return getattr(importlib.import_module(f"piezolib.{package}"), name)
+
+
+def public_functions():
+    names = set()
+    for module in TOOLKIT:
+        mod = importlib.import_module(module)
+        short = module.split(".")[1]
+        names |= {f"{short}.{n}" for n in mod.__all__
+                  if callable(getattr(mod, n)) and not inspect.isclass(getattr(mod, n))}
+    return names
+
+
+def bad_calls():
+    for qualname, (valid, corrupt) in CASES.items():
+        for argument, values in corrupt.items():
+            for kind, value in values.items():
+                yield pytest.param(qualname, valid, argument, value,
+                                   id=f"{qualname}-{argument}-{kind}")
+
+
+def test_every_public_function_is_swept():
+    public = public_functions()
+    assert not (set(CASES) - public), "cases for names that are not public"
+    assert not (NOT_YET_SWEPT - public), "stale names in NOT_YET_SWEPT"
+    assert not (set(CASES) & NOT_YET_SWEPT)
+    missing = public - set(CASES) - NOT_YET_SWEPT
+    assert not missing, f"public functions with no bad-input cases: {sorted(missing)}"
+
+
+@pytest.mark.parametrize("qualname", sorted(CASES))
+def test_the_valid_call_works(qualname):
+    valid, _ = CASES[qualname]
+    function(qualname)(**valid)
+
+
+@pytest.mark.parametrize("qualname, valid, argument, value", list(bad_calls()))
+def test_bad_input_raises_naming_the_argument(qualname, valid, argument, value):
+    with pytest.raises((ValueError, TypeError)) as info:
+        function(qualname)(**{**valid, argument: value})
+    assert re.search(rf"\b{re.escape(argument)}\b", str(info.value), re.I), str(info.value)
