@@ -16,8 +16,8 @@ import numpy as np
 import scipy.linalg as la
 import scipy.signal as sg
 
-from piezolib._checks import (check_finite_array, check_integer, check_lti, check_positive,
-                              check_siso)
+from piezolib._checks import (check_finite_array, check_finite_lti, check_integer, check_lti,
+                              check_positive, check_siso)
 from piezolib.identification.oe import OutputErrorModel, fit_output_error
 from piezolib.identification.arx import (DEFAULT_INITIAL_GAIN, check_io, discrete_tf,
                                          least_squares)
@@ -137,6 +137,7 @@ def zoh_coefficients(sys, dt):
 def zoh_simulate(sys, u, fs):
     """Response of a continuous SISO model to a sampled input held by a ZOH,
     from rest, at the sampling instants."""
+    check_finite_lti("sys", sys)
     fs = check_positive("fs", fs)
     u = check_finite_array("u", u, ndim=1, min_length=1, real=True)
     b, a = zoh_coefficients(sys, 1.0 / fs)

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
-from piezolib._checks import check_finite_lti, check_positive, check_siso
+from piezolib._checks import check_finite_lti, check_model, check_positive, check_siso
 from piezolib.robust.lti import realize, with_signals
 
 __all__ = ["DiscreteController", "discretize", "least_damped_frequency"]
@@ -60,6 +60,8 @@ def least_damped_frequency(K, omega_max):
     Returns None when K has no complex pole or zero below omega_max.
     """
     check_siso("K", K)
+    check_model("K", K)
+    omega_max = check_positive("omega_max", omega_max)
     roots = np.r_[ct.poles(K), ct.zeros(K)]
     roots = roots[(np.abs(roots.imag) > 0) & (np.abs(roots) < omega_max)]
     if roots.size == 0:

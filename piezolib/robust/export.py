@@ -30,7 +30,7 @@ import control as ct
 import numpy as np
 import scipy.signal as sig
 
-from piezolib._checks import check_finite_array, check_positive, check_siso
+from piezolib._checks import check_finite_array, check_finite_lti, check_positive, check_siso
 
 __all__ = ["SOSController", "controller_sos", "SectionFilter", "sos_filter", "write_json",
            "read_json", "write_c_header", "export_controller"]
@@ -124,6 +124,7 @@ def controller_sos(Kd, name="K"):
         1e-6 on a grid up to the Nyquist frequency).
     """
     check_siso("Kd", Kd)
+    check_finite_lti("Kd", Kd)
     if not Kd.isdtime(strict=True) or Kd.dt is True:
         raise ValueError("Kd must be a discrete-time controller with a numeric sample time")
     if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", name):

@@ -229,8 +229,9 @@ def loop_margins(G, K, omega=None):
 
 
 def _discrete_parts(G, Kd):
-    check_siso("G", G)
-    check_siso("Kd", Kd)
+    for name, sys in (("G", G), ("Kd", Kd)):
+        check_siso(name, sys)
+        check_finite_lti(name, sys)
     if G.isdtime(strict=True):
         raise ValueError("G must be a continuous-time plant (it is sampled with a zero-order hold)")
     if Kd.isctime() or Kd.dt is True or not Kd.dt:

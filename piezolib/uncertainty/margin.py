@@ -64,7 +64,7 @@ def stability_gauge(G, K, omega):
         Gauge [-] on the grid.
     """
     polys = loop_polynomials(G, K)
-    omega = check_finite_array("omega", omega, ndim=1, min_length=1)
+    omega = check_finite_array("omega", omega, ndim=1, min_length=1, real=True)
     if np.any(omega < 0):
         raise ValueError("omega must be non-negative")
     return _gauge(polys, omega / polys.ws)

@@ -181,6 +181,7 @@ def loop_polynomials(G, K):
 def _controller_polynomials(K):
     """(n, d) of K, lowest power first, d monic."""
     check_siso("K", K)
+    check_finite_lti("K", K)
     check_proper("K", K)
     if not K.isctime(strict=False):
         raise ValueError("K must be a continuous-time model")
