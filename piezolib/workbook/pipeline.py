@@ -211,9 +211,11 @@ def study_controllers(study, cache=True):
     """The controllers every notebook of ``study`` uses.
 
     The reference study reads the committed artifact (:func:`reference_design_path`)
-    and checks that it was designed for the reference's current choices; any
-    other study derives them (:func:`derive_controllers`) and writes them to
-    ``runs/<study>/artifacts/controllers.json``.
+    and checks that it was designed for the reference's current choices.  Any
+    other study uses the same committed controllers when its weights, design
+    and loop choices equal the reference's (same :func:`design_digest`), and
+    derives them otherwise (:func:`derive_controllers`); either way they are
+    written to ``runs/<study>/artifacts/controllers.json``.
 
     Raises
     ------
@@ -233,7 +235,13 @@ def study_controllers(study, cache=True):
                 f"study's is {design_digest(study)}): re-derive it with `python -m piezolib "
                 "controllers --write-reference`")
         return found
-    found = derive_controllers(study, cache=cache)
+    path = reference_design_path()
+    if path.is_file() and read_controllers(path).digest == design_digest(study):
+        # same weights, design and loop as the reference: its committed controllers, so
+        # that the study differs from the reference only by what it changes
+        found = read_controllers(path)
+    else:
+        found = derive_controllers(study, cache=cache)
     write_controllers(found, study.output_dir / "artifacts" / "controllers.json", study)
     return found
 

@@ -83,3 +83,17 @@ def test_derived_controllers_are_cached_on_disk(tmp_path, monkeypatch):
     history = first.nodelay.musyn.history
     assert len(history) <= 2 and history.d_order.max() == 1
     assert first.K_nodelay_full.nstates <= 14 + 2 * 1
+
+
+def test_a_study_with_the_reference_design_choices_uses_the_committed_controllers(
+        tmp_path, monkeypatch):
+    # e.g. uncertainty_3pct: only the uncertainty section differs, so its controllers must be
+    # the reference's (a re-derivation could follow another DK path on another machine)
+    reference = pipeline.study_controllers("reference")
+    monkeypatch.setattr(pipeline, "derive_controllers",
+                        lambda *a, **k: pytest.fail("re-derived the reference design"))
+    spread = study.Study().replace(name="spread", uncertainty={"spread": 0.03})
+    monkeypatch.setattr(study.Study, "output_dir", property(lambda s: tmp_path / s.name))
+    found = pipeline.study_controllers(spread)
+    assert np.array_equal(found.K_fixed.A, reference.K_fixed.A) and found.mu == reference.mu
+    assert (tmp_path / "spread" / "artifacts" / "controllers.json").is_file()
