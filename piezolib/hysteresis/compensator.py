@@ -37,7 +37,7 @@ def feedforward(model, x_r, z0=None, direction0=None):
         Feedforward input u_f [v-unit] (workbook: amplifier input [V]).
     """
     check_dahl_model(model)
-    x_r = check_finite_array("x_r", x_r, ndim=1, min_length=2)
+    x_r = check_finite_array("x_r", x_r, ndim=1, min_length=2, real=True)
     H = dahl_hysteresis(model, x_r, z0=z0, direction0=direction0)
     return (x_r - model.x0 + H) / model.g_a
 

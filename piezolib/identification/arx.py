@@ -278,6 +278,9 @@ def least_squares(phi, target):
     ndarray, shape (p,)
         Parameters minimising ||phi @ theta - target||.
     """
+    phi = check_finite_array("phi", phi, ndim=2, min_length=1, real=True)
+    target = check_finite_array("target", target, ndim=1, real=True)
+    check_same_length(phi=phi, target=target)
     scale = np.sqrt(np.mean(phi ** 2, axis=0))
     if not np.all(np.isfinite(phi)) or not np.all(scale > 0):
         raise ValueError("the regressors contain a zero, NaN or inf column: the data do not "

@@ -16,8 +16,8 @@ import numpy as np
 import scipy.linalg as la
 import scipy.signal as sg
 
-from piezolib._checks import (check_finite_array, check_finite_lti, check_integer, check_lti,
-                              check_positive, check_siso)
+from piezolib._checks import (check_finite_array, check_finite_lti, check_integer, check_positive,
+                              check_siso)
 from piezolib.identification.oe import OutputErrorModel, fit_output_error
 from piezolib.identification.arx import (DEFAULT_INITIAL_GAIN, check_io, discrete_tf,
                                          least_squares)
@@ -55,7 +55,7 @@ def d2c(sysd, method="zoh"):
         For a continuous or unspecified-dt model, or a pole at z = 0 or on
         the negative real axis, where no real ZOH-equivalent model exists.
     """
-    check_lti("sysd", sysd)
+    check_finite_lti("sysd", sysd)
     if method != "zoh":
         raise ValueError(f"method must be 'zoh', got {method!r}")
     dt = sysd.dt
@@ -349,6 +349,7 @@ def pole_pairs(sys):
         Damping ratios, in the same order.
     """
     check_siso("sys", sys)
+    check_finite_lti("sys", sys)
     w = time_scale_of(sys)
     poles = la.eigvals(to_scaled(sys, w).A) * w          # computed in scaled time
     upper = poles[poles.imag > 0]

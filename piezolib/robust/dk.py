@@ -15,7 +15,8 @@ from dataclasses import dataclass, field
 import control as ct
 import numpy as np
 
-from piezolib._checks import check_frequency_grid, check_integer, check_lti, check_positive
+from piezolib._checks import (check_frequency_grid, check_integer, check_model,
+                              check_positive)
 from piezolib.progress import postfix, progress
 from piezolib.robust.blocks import parse_blk
 from piezolib.robust.dfit import fit_magnitude
@@ -129,7 +130,7 @@ def scaled_plant(P, blk, d_tfs, nmeas, ncon):
     control.StateSpace
         The scaled plant, balanced.
     """
-    check_lti("P", P)
+    check_model("P", P, proper=True)
     blocks = _full_blocks(blk, P.noutputs - nmeas, P.ninputs - ncon)
     if len(d_tfs) > len(blocks):
         raise ValueError(f"{len(d_tfs)} scalings for {len(blocks)} blocks")
@@ -235,7 +236,7 @@ def musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=4, max_iter=8, rtol=5e
         The first K-step fails.
     """
     t0 = time.perf_counter()
-    check_lti("P", P)
+    check_model("P", P, proper=True)
     P = ct.ss(P)
     nmeas = check_integer("nmeas", nmeas, minimum=1)
     ncon = check_integer("ncon", ncon, minimum=1)

@@ -11,7 +11,8 @@ from collections import namedtuple
 import numpy as np
 import scipy.optimize as opt
 
-from piezolib._checks import check_integer, check_proper, check_siso
+from piezolib._checks import (check_finite_array, check_integer, check_model, check_proper,
+                              check_siso, check_stable)
 from piezolib.uncertainty.modelset import (check_model_set, frequency_basis, member_poles,
                                            model_set, unstable_members)
 from piezolib.uncertainty.polynomials import (
@@ -214,9 +215,10 @@ def coverage(weight, omega, envelope):
     Coverage
     """
     check_siso("weight", weight)
-    check_proper("weight", weight)
+    check_model("weight", weight, proper=True)
+    check_stable("weight", weight)
     omega = check_frequencies(omega)
-    env = np.asarray(envelope, dtype=float)
+    env = check_finite_array("envelope", envelope, real=True)
     if env.shape != omega.shape:
         raise ValueError(f"envelope must have the shape of omega {omega.shape}, got {env.shape}")
     if np.any(np.isnan(env)) or np.any(env < 0):
