@@ -241,6 +241,7 @@ def strokes(u, direction0=1):
         ``s``; samples at rest keep the previous direction.  ``start`` is the
         index of the sample the run starts from.
     """
+    u = check_finite_array("u", u, ndim=1, min_length=1, real=True)
     d = np.sign(np.diff(u))
     idx = np.where(d != 0, np.arange(d.size), -1)
     idx = np.maximum.accumulate(idx)

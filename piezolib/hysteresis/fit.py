@@ -19,7 +19,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.optimize as opt
 
-from piezolib._checks import check_integer, check_positive
+from piezolib._checks import check_integer, check_positive, check_signals
 from piezolib.hysteresis.common import (FitScores, check_loops, covariance, estimates, loop_errors,
                                         warn_about)
 from piezolib.hysteresis.dahl import (FORMS, STARTS, DahlModel, NotInvertibleError,
@@ -95,7 +95,8 @@ def monotone_path(v, x):
     ndarray
         The projected output [x-unit].
     """
-    out = np.array(x, dtype=float)
+    v, x = check_signals(2, v=v, x=x)
+    out = x.copy()
     for start, stop, s in strokes(v):
         seg = opt.isotonic_regression(out[start + 1:stop + 1], increasing=s > 0).x
         out[start + 1:stop + 1] = (np.maximum(seg, out[start]) if s > 0

@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from piezolib._checks import check_finite_array, check_signals, check_integer
+from piezolib._checks import check_finite_array, check_integer, check_positive, check_signals
 from piezolib.hysteresis.common import HysteresisModel
 from piezolib.hysteresis.dahl import strokes
 from piezolib.hysteresis.measure import hysteresis_measure
@@ -43,6 +43,7 @@ def split_record(v, x, fraction=0.5):
         own), and only samples from ``first`` on are scored.
     """
     v, x = check_signals(8, v=v, x=x)
+    fraction = check_positive("fraction", fraction)
     if not 0 < fraction < 1:
         raise ValueError(f"fraction must lie strictly between 0 and 1, got {fraction!r}")
     turns = np.array([stop for start, stop, s in strokes(v)][:-1], dtype=int)
@@ -84,6 +85,7 @@ def loop_scores(x_model, v, x):
         ``hysteresis % data`` / ``model`` (eq. 26) and ``loop width data`` /
         ``model`` (|x_up - x_lo| at the mid input V_M, eq. 25, [x-unit]).
     """
+    x_model, v, x = check_signals(8, x_model=x_model, v=v, x=x)
     r = x_model - x
     stroke = float(np.ptp(x))
     h_data, w_data = _width(v, x)

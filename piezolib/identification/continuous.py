@@ -114,6 +114,7 @@ def zoh_coefficients(sys, dt):
         ``scipy.signal.lfilter``.
     """
     check_siso("sys", sys)
+    check_finite_lti("sys", sys)
     if not sys.isctime(strict=True):
         raise ValueError("sys must be a continuous-time model")
     dt = check_positive("dt", dt)
@@ -385,6 +386,7 @@ def monic_coefficients(sys, n_poles=6, n_zeros=3, time_scale=None):
         When ``sys`` has another number of poles or more zeros.
     """
     check_siso("sys", sys)
+    check_finite_lti("sys", sys)
     time_scale = time_scale_of(sys) if time_scale is None else check_positive(
         "time_scale", time_scale)
     tf = ct.tf(scale_time(sys, time_scale))

@@ -198,7 +198,7 @@ def pointwise_lower_bound(P, nmeas, ncon, omega, *, outputs=None, inputs=None):
         Bad P, sizes, selections or frequencies.
     """
     P, nmeas, ncon = _check_plant(P, nmeas, ncon)
-    omega = check_finite_array("omega", omega, ndim=1, min_length=1)
+    omega = check_finite_array("omega", omega, ndim=1, min_length=1, real=True)
     if np.any(omega <= 0):
         raise ValueError("omega must hold positive frequencies [rad/s]")
     p1, m1 = P.noutputs - nmeas, P.ninputs - ncon

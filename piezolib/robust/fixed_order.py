@@ -31,7 +31,8 @@ import control as ct
 import numpy as np
 from scipy import optimize
 
-from piezolib._checks import check_finite_array, check_frequency_grid, check_integer, check_lti, check_positive
+from piezolib._checks import (check_finite_array, check_finite_lti, check_frequency_grid,
+                              check_integer, check_lti, check_positive)
 from piezolib.progress import postfix, progress
 from piezolib.robust.blocks import parse_blk
 from piezolib.robust.lti import time_scale_of, to_scaled, with_signals
@@ -160,7 +161,7 @@ def modal_controller(K, omega=None):
     ValueError
         K not SISO, not continuous, unstable or not represented to 1e-6.
     """
-    check_lti("K", K)
+    check_finite_lti("K", K)
     K = ct.ss(K)
     if K.ninputs != 1 or K.noutputs != 1 or not K.isctime(strict=True):
         raise ValueError("K must be a continuous-time SISO controller")

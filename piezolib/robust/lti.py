@@ -166,6 +166,7 @@ def from_scaled(sys, omega_s, inputs=None, outputs=None, name=None):
     control.StateSpace
         The model in ordinary time (seconds).
     """
+    omega_s = check_positive("omega_s", omega_s)
     out = balance(scale_time(ct.ss(sys), 1.0 / omega_s))
     return with_signals(out, inputs, outputs, name)
 

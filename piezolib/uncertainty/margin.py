@@ -12,7 +12,8 @@ import numpy as np
 import numpy.polynomial.polynomial as npoly
 import scipy.optimize as opt
 
-from piezolib._checks import check_finite_array, check_positive, check_proper, check_siso
+from piezolib._checks import (check_continuous, check_finite_array, check_finite_lti,
+                              check_positive, check_proper, check_siso, check_stable)
 from piezolib import robust
 from piezolib.uncertainty.envelope import (SpreadBracket, largest_covered_spread,
                                            relative_error_bound)
@@ -204,7 +205,10 @@ def weight_certified_spread(weight, G, K, omega, rtol=1e-3):
         Largest spread covered (spread 0 when ||W T||_inf >= 1).
     """
     check_siso("weight", weight)
+    check_finite_lti("weight", weight)
     check_proper("weight", weight)
+    check_continuous("weight", weight)
+    check_stable("weight", weight)
     G = check_plant(G)
     _check_controller(K)
     T = robust.loop_functions(G, K).T
