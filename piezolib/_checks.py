@@ -26,6 +26,18 @@ def check_positive(name, value):
     return value
 
 
+def check_bisection_tol(name, value):
+    """A bisection's (relative) tolerance as a float in [1e-12, 1).
+
+    Below ~1e-12 a bisection on floats can stall between adjacent numbers and
+    never meet the tolerance; 0 never ends at all.
+    """
+    value = check_positive(name, value)
+    if not 1e-12 <= value < 1:
+        raise ValueError(f"{name} must be in [1e-12, 1), got {value!r}")
+    return value
+
+
 def check_nonnegative(name, value):
     """Return ``value`` as a float after checking it is finite and >= 0."""
     value = _as_real_scalar(name, value)
@@ -168,6 +180,22 @@ def check_model(name, sys, proper=False):
     if proper:
         check_proper(name, sys)
     return sys
+
+
+def check_channels(P, nmeas, ncon):
+    """(nmeas, ncon) as ints, checked to leave ``P`` at least one performance output and input.
+
+    ``P`` is a generalized plant whose last ``nmeas`` outputs are measurements
+    and last ``ncon`` inputs controls.
+    """
+    nmeas = check_integer("nmeas", nmeas, minimum=1)
+    ncon = check_integer("ncon", ncon, minimum=1)
+    if nmeas >= P.noutputs:
+        raise ValueError(f"nmeas={nmeas} leaves no performance output: P has "
+                         f"{P.noutputs} outputs")
+    if ncon >= P.ninputs:
+        raise ValueError(f"ncon={ncon} leaves no performance input: P has {P.ninputs} inputs")
+    return nmeas, ncon
 
 
 def check_siso(name, sys):

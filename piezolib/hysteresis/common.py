@@ -18,8 +18,10 @@ import numpy as np
 
 from piezolib._checks import check_integer, check_signals
 
-__all__ = ["HysteresisModel", "FitScores", "FitWarning", "ParameterEstimate", "estimates",
-           "covariance", "parameter_frame", "warn_about", "check_loops", "loop_errors", "Z95"]
+# The functions below the classes (estimates, covariance, parameter_frame, warn_about,
+# check_loops, loop_errors) are the fits' shared plumbing, imported by name by fit.py and
+# pi.py; they take inputs those fits have already checked and are not part of the API.
+__all__ = ["HysteresisModel", "FitScores", "FitWarning", "ParameterEstimate", "Z95"]
 
 #: Two-sided 95 % quantile of the normal distribution.
 Z95 = 1.959963984540054
@@ -201,7 +203,7 @@ def check_loops(loops, discard=0, stride=1, what="loops"):
         late = [r for r in runs if r[1] > discard]
         if not any(r[2] > 0 for r in late) or not any(r[2] < 0 for r in late) \
                 or np.ptp(x[discard:]) == 0:
-            raise ValueError(f"{what}[{i}] has no full cycle after discarding {discard} "
+            raise ValueError(f"{what}[{i}] has no full cycle after discard={discard} "
                              "samples: need an ascending and a descending stroke of v")
         keep = np.union1d(np.arange(0, v.size, stride), [r[1] for r in runs] + [0])
         out.append((v[keep], x[keep], np.flatnonzero(keep >= discard)))

@@ -20,8 +20,8 @@ from piezolib._checks import check_finite_array, check_positive, check_same_leng
 __all__ = [
     "FORMS", "STARTS", "DahlModel", "DahlResponse", "NotInvertibleError", "strokes",
     "dahl_hysteresis", "simulate_dahl", "simulate_dahl_records", "min_stroke_slope",
-    "StrokeDynamics", "initial_state_of", "check_dahl_model",
-]
+    "StrokeDynamics", "check_dahl_model",
+]   # initial_state_of: shared with compensator.py, not part of the API
 
 #: The two model forms: eq. 10 as printed, and the Bliman-Sorine placement.
 FORMS = ("printed", "bliman_sorine")

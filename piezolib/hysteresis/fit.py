@@ -14,6 +14,8 @@ Method: ``docs/hysteresis.md``.
 """
 
 import math
+import numbers
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -490,6 +492,12 @@ def choose_fit(fits):
         The key of the fit with the smallest :attr:`DahlFit.pooled_rms_percent`
         (the criterion every fit minimises; first key on a tie).
     """
+    if not isinstance(fits, Mapping):
+        raise TypeError(f"fits must be a dict {{key: DahlFit}}, got {type(fits).__name__}")
     if not fits:
         raise ValueError("fits must hold at least one DahlFit")
+    for key, fit in fits.items():
+        if not isinstance(getattr(fit, "pooled_rms_percent", None), numbers.Real):
+            raise TypeError(f"fits[{key!r}] must be a fit with a pooled_rms_percent (a DahlFit), "
+                            f"got {type(fit).__name__}")
     return min(fits, key=lambda key: fits[key].pooled_rms_percent)

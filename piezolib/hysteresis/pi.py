@@ -48,9 +48,13 @@ def play_outputs(v, thresholds, y0):
         Along a rising stroke y = max(y_start, v - r), along a falling one
         y = min(y_start, v + r): one numpy operation per stroke.
     """
-    r = np.asarray(thresholds, dtype=float)
+    v = check_finite_array("v", v, ndim=1, min_length=1, real=True)
+    r = check_finite_array("thresholds", thresholds, ndim=1, min_length=1, real=True)
+    if np.any(r < 0):
+        raise ValueError(f"thresholds must be >= 0, got {r}")
+    y0 = check_finite_array("y0", y0, shape=r.shape, real=True)
     Y = np.empty((v.size, r.size))
-    y = np.clip(np.asarray(y0, dtype=float), v[0] - r, v[0] + r)
+    y = np.clip(y0, v[0] - r, v[0] + r)
     Y[0] = y
     for start, stop, s in strokes(v):
         seg = v[start + 1:stop + 1, None]
@@ -257,8 +261,8 @@ def fit_pi(loops, n_plays=10, offset=True, start="rest", discard=0, thresholds=N
         n_plays = check_integer("n_plays", n_plays, minimum=1)
         half = max(float(np.ptp(v)) for v, x, used in data) / 2.0
         thresholds = half * np.arange(n_plays) / n_plays
-    template = PIModel(tuple(np.asarray(thresholds, dtype=float)),
-                       tuple(np.ones(len(thresholds))), start=start)
+    thresholds = check_finite_array("thresholds", thresholds, ndim=1, min_length=1, real=True)
+    template = PIModel(tuple(thresholds), tuple(np.ones(thresholds.size)), start=start)
     r = np.asarray(template.thresholds)
     rows, rhs = [], []
     for v, x, used in data:

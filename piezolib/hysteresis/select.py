@@ -12,6 +12,7 @@ beyond the model it was derived from.  Models are any
 """
 
 import math
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -53,7 +54,26 @@ def split_record(v, x, fraction=0.5):
     return (v[:k + 1], x[:k + 1]), (v, x, k)
 
 
+def _models(what, models, callables=False):
+    """``models`` checked to be a non-empty dict of hysteresis models (or callables)."""
+    if not isinstance(models, Mapping):
+        raise TypeError(f"{what} must be a dict {{name: model}}, got {type(models).__name__}")
+    if not models:
+        raise ValueError(f"{what} must hold at least one model")
+    for name, model in models.items():
+        if not (isinstance(model, HysteresisModel) or (callables and callable(model))):
+            need = "a model or a callable v -> x" if callables else \
+                "a model with simulate() and feedforward()"
+            raise TypeError(f"{what}[{name!r}] must be {need}, got {type(model).__name__}")
+    return models
+
+
 def _triples(records, what):
+    if isinstance(records, (str, np.ndarray)) or not hasattr(records, "__iter__"):
+        raise TypeError(f"{what} must be a sequence of (v, x) or (v, x, first)")
+    records = list(records)
+    if not records:
+        raise ValueError(f"{what} must hold at least one record")
     out = []
     for i, rec in enumerate(records):
         if not isinstance(rec, (tuple, list)) or len(rec) not in (2, 3):
@@ -117,14 +137,13 @@ def validation_table(models, records, names=None):
         same in every row of a model).
     """
     import pandas as pd
-    if not models:
-        raise ValueError("models must hold at least one model")
-    for name, model in models.items():
-        if not isinstance(model, HysteresisModel):
-            raise TypeError(f"models[{name!r}] must have simulate() and feedforward(), "
-                            f"got {type(model).__name__}")
+    models = _models("models", models)
     records = _triples(records, "records")
-    names = list(range(len(records))) if names is None else list(names)
+    if names is None:
+        names = list(range(len(records)))
+    elif isinstance(names, str) or not hasattr(names, "__iter__"):
+        raise TypeError(f"names must be a sequence of labels, got {names!r}")
+    names = list(names)
     if len(names) != len(records):
         raise ValueError(f"names must hold one label per record ({len(records)})")
     rows, index = [], []
@@ -145,6 +164,12 @@ def pooled_rms(table):
     pandas.Series
         Indexed by model, in the table's order; ``.idxmin()`` is the model chosen.
     """
+    import pandas as pd
+    if not isinstance(table, pd.DataFrame):
+        raise TypeError(f"table must be a DataFrame of validation_table, got {type(table).__name__}")
+    if "pooled RMS %" not in table.columns or "model" not in table.index.names:
+        raise ValueError("table must be a DataFrame of validation_table (a 'pooled RMS %' "
+                         "column and a 'model' index level)")
     return table["pooled RMS %"].groupby(level="model", sort=False).first()
 
 
@@ -172,7 +197,9 @@ def cross_check(compensators, plants, x_r, first=0):
         exactness of the feedforward (0 for an exact inverse).
     """
     import pandas as pd
-    x_r = check_finite_array("x_r", x_r, ndim=1, min_length=8)
+    compensators = _models("compensators", compensators)
+    plants = _models("plants", plants, callables=True)
+    x_r = check_finite_array("x_r", x_r, ndim=1, min_length=8, real=True)
     first = check_integer("first", first, minimum=0)
     if first > x_r.size - 8:
         raise ValueError(f"first = {first} leaves fewer than 8 samples of x_r")
@@ -181,13 +208,9 @@ def cross_check(compensators, plants, x_r, first=0):
         raise ValueError("x_r is constant: the cross-check needs a moving reference")
     rows = []
     for cname, comp in compensators.items():
-        if not isinstance(comp, HysteresisModel):
-            raise TypeError(f"compensators[{cname!r}] must have a feedforward() method")
         u = comp.feedforward(x_r)
         for pname, plant in plants.items():
             run = plant.simulate if isinstance(plant, HysteresisModel) else plant
-            if not callable(run):
-                raise TypeError(f"plants[{pname!r}] must be a model or a callable v -> x")
             x = np.asarray(run(u), dtype=float)
             if x.shape != x_r.shape:
                 raise ValueError(f"plants[{pname!r}] returned shape {x.shape}, "

@@ -15,9 +15,8 @@ from piezolib._checks import (check_finite_array, check_integer, check_positive,
 
 __all__ = [
     "RLSResult", "rls", "arx_regressors", "ArxModel", "fit_arx", "DEFAULT_INITIAL_GAIN",
-    "MIN_SAMPLES_PER_PARAMETER", "MAX_INITIAL_GAIN", "discrete_tf", "checked_arx_regressors", "least_squares",
-    "check_io",
-]
+    "MIN_SAMPLES_PER_PARAMETER", "MAX_INITIAL_GAIN", "least_squares", "check_io",
+]   # discrete_tf, checked_arx_regressors: shared with oe.py and continuous.py, not API
 
 
 # --- Step III: recursive least squares, eq. 1-3 -------------------------------------

@@ -7,7 +7,8 @@ import numpy as np
 import scipy.signal as sg
 import scipy.stats as stats
 
-from piezolib._checks import check_finite_array, check_integer, check_positive, check_same_length
+from piezolib._checks import (check_finite_array, check_integer, check_model, check_positive,
+                              check_same_length, check_siso)
 from piezolib.identification.continuous import monic_coefficients
 from piezolib.identification.arx import check_io
 
@@ -100,13 +101,25 @@ def coefficient_table(identified, reference, names=("identified", "published")):
         (first - second) / second.
     """
     import pandas as pd
-    a1, b1 = monic_coefficients(identified)
-    a2, b2 = monic_coefficients(reference)
+    if (isinstance(names, str) or not hasattr(names, "__len__") or len(names) != 2
+            or not all(isinstance(n, str) for n in names)):
+        raise TypeError(f"names must be a pair of str, got {names!r}")
+    (a1, b1), (a2, b2) = (_six_three("identified", identified), _six_three("reference", reference))
     index = [f"a{i}" for i in range(len(a1))] + [f"b{i}" for i in range(len(b1))]
     first, second = np.concatenate((a1, b1)), np.concatenate((a2, b2))
     return pd.DataFrame({names[0]: first, names[1]: second,
                          "relative error": (first - second) / second},
                         index=pd.Index(index, name="coefficient"))
+
+
+def _six_three(name, sys):
+    """monic_coefficients of a 6-pole / 3-zero model, errors naming the argument."""
+    check_model(name, sys)
+    check_siso(name, sys)
+    try:
+        return monic_coefficients(sys)
+    except ValueError as exc:
+        raise ValueError(f"{name}: {exc}") from None
 
 
 def empirical_frequency_response(u, y, fs, nperseg=2048):

@@ -10,6 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from piezolib._checks import check_integer
+
 __all__ = ["Block", "parse_blk", "block_slices"]
 
 _KINDS = ("complex", "real")
@@ -186,12 +188,13 @@ def parse_blk(blk, p=None, q=None):
     if (p is None) != (q is None):
         raise ValueError("give both p and q (M's outputs and inputs) or neither")
     if p is not None:
+        p, q = check_integer("p", p, minimum=1), check_integer("q", q, minimum=1)
         n_in, n_out = sum(b.rows for b in blocks), sum(b.cols for b in blocks)
         if n_out != p or n_in != q:
             rows = [b.blk_row for b in blocks]
             raise ValueError(
-                f"blk does not fit M: M is {p} x {q} (outputs x inputs), so the blocks' "
-                f"column counts c_i must sum to {p} and row counts r_i to {q}; blk "
+                f"blk does not fit M: M is p x q = {p} x {q} (outputs x inputs), so the "
+                f"blocks' column counts c_i must sum to {p} and row counts r_i to {q}; blk "
                 f"{rows} gives sum c_i = {n_out}, sum r_i = {n_in}")
     return blocks
 
@@ -202,6 +205,10 @@ def block_slices(blocks):
     ``inputs`` indexes M's columns (the block's rows), ``outputs`` M's rows
     (the block's columns), in the order of ``blocks``.
     """
+    blocks = tuple(blocks) if hasattr(blocks, "__iter__") and not isinstance(blocks, str) else ()
+    if not blocks or not all(isinstance(b, Block) for b in blocks):
+        raise TypeError("blocks must be a non-empty sequence of Block (parse a blk with "
+                        "parse_blk)")
     out, n_in, n_out = [], 0, 0
     for b in blocks:
         out.append((slice(n_in, n_in + b.rows), slice(n_out, n_out + b.cols)))

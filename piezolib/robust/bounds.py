@@ -44,7 +44,8 @@ import control as ct
 import numpy as np
 import scipy.linalg as la
 
-from piezolib._checks import check_finite_array, check_integer, check_lti, check_positive
+from piezolib._checks import (check_channels, check_finite_array, check_integer, check_lti,
+                              check_positive)
 from piezolib.robust.blocks import block_slices, parse_blk
 from piezolib.robust.hinf import HinfSynthesisError, hinfsyn
 from piezolib.robust.lti import frequency_grid
@@ -139,11 +140,7 @@ def _check_plant(P, nmeas, ncon):
     check_lti("P", P)
     if not P.isctime():
         raise ValueError("P must be a continuous-time model")
-    nmeas = check_integer("nmeas", nmeas, minimum=1)
-    ncon = check_integer("ncon", ncon, minimum=1)
-    if P.noutputs <= nmeas or P.ninputs <= ncon:
-        raise ValueError(f"P ({P.noutputs} outputs x {P.ninputs} inputs) is too small for "
-                         f"nmeas={nmeas}, ncon={ncon}")
+    nmeas, ncon = check_channels(P, nmeas, ncon)
     return ct.ss(P), nmeas, ncon
 
 
@@ -365,5 +362,7 @@ def achievable_range(lower, achieved, what="mu_RP"):
     """
     lo = lower.value if isinstance(lower, LowerBound) else check_positive("lower", lower)
     achieved = check_positive("achieved", achieved)
+    if not isinstance(what, str):
+        raise TypeError(f"what must be a str (the quantity's name), got {what!r}")
     gap = achieved / lo - 1.0
     return f"achievable {what} in [{lo:.3f}, {achieved:.3f}] (ours within {100 * gap:.1f} % of the bound)"

@@ -15,8 +15,8 @@ from dataclasses import dataclass, field
 import control as ct
 import numpy as np
 
-from piezolib._checks import (check_frequency_grid, check_integer, check_model,
-                              check_positive)
+from piezolib._checks import (check_channels, check_frequency_grid, check_integer,
+                              check_model, check_positive, check_siso, check_stable)
 from piezolib.progress import postfix, progress
 from piezolib.robust.blocks import parse_blk
 from piezolib.robust.dfit import fit_magnitude
@@ -131,9 +131,19 @@ def scaled_plant(P, blk, d_tfs, nmeas, ncon):
         The scaled plant, balanced.
     """
     check_model("P", P, proper=True)
+    nmeas, ncon = check_channels(P, nmeas, ncon)
     blocks = _full_blocks(blk, P.noutputs - nmeas, P.ninputs - ncon)
+    if isinstance(d_tfs, (str, ct.LTI)) or not hasattr(d_tfs, "__len__"):
+        raise TypeError("d_tfs must be a list of scalings d_i(s) (control.LTI)")
     if len(d_tfs) > len(blocks):
-        raise ValueError(f"{len(d_tfs)} scalings for {len(blocks)} blocks")
+        raise ValueError(f"d_tfs: {len(d_tfs)} scalings for {len(blocks)} blocks")
+    for i, d in enumerate(d_tfs):
+        check_model(f"d_tfs[{i}]", d, proper=True)
+        check_siso(f"d_tfs[{i}]", d)
+        check_stable(f"d_tfs[{i}]", d)
+        zeros = ct.zeros(d)
+        if np.any(zeros.real >= 0):
+            raise ValueError(f"d_tfs[{i}] must be minimum phase; zeros {zeros[zeros.real >= 0]}")
     one = ct.ss([], [], [], [[1.0]])
     left, right = [], []
     for b, d in zip(blocks, list(d_tfs) + [None] * (len(blocks) - len(d_tfs))):
@@ -238,8 +248,7 @@ def musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=4, max_iter=8, rtol=5e
     t0 = time.perf_counter()
     check_model("P", P, proper=True)
     P = ct.ss(P)
-    nmeas = check_integer("nmeas", nmeas, minimum=1)
-    ncon = check_integer("ncon", ncon, minimum=1)
+    nmeas, ncon = check_channels(P, nmeas, ncon)
     p, q = P.noutputs - nmeas, P.ninputs - ncon
     blocks = _full_blocks(blk, p, q)
     if omega is None:

@@ -22,6 +22,7 @@ float32; :func:`read_json` reads them back.
 """
 
 import json
+import os
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -248,9 +249,34 @@ def sos_filter(controller, x, dtype="float64"):
     ndarray
         Output samples (float64 array holding the ``dtype`` results).
     """
-    x = check_finite_array("x", x, ndim=1, min_length=1)
+    x = check_finite_array("x", x, ndim=1, min_length=1, real=True)
     f = SectionFilter(controller, dtype)
     return np.array([f.step(v) for v in x.tolist()])
+
+
+def _path(name, path, *, directory=False):
+    """``path`` as a Path, checked to be a path (and, to write a file, not a directory)."""
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"{name} must be a str or path, got {type(path).__name__}")
+    path = Path(path)
+    if directory and path.exists() and not path.is_dir():
+        raise ValueError(f"{name} {path} exists and is not a directory")
+    if not directory and path.is_dir():
+        raise ValueError(f"{name} {path} is a directory, not a file")
+    return path
+
+
+def _meta_json(meta):
+    """``meta`` (a dict or None) checked to be JSON-serialisable."""
+    if meta is None:
+        return {}
+    if not isinstance(meta, dict):
+        raise TypeError(f"meta must be a dict, got {type(meta).__name__}")
+    try:
+        json.dumps(meta)
+    except (TypeError, ValueError) as exc:
+        raise TypeError(f"meta must be JSON-serialisable: {exc}") from None
+    return meta
 
 
 def write_json(controller, path, meta=None):
@@ -276,20 +302,25 @@ def write_json(controller, path, meta=None):
            "sos_float64": controller.sos.tolist(),
            # float32 values written as the exact decimal of the rounded number
            "sos_float32": [[float(np.float32(v)) for v in row] for row in controller.sos],
-           "meta": meta or {}}
-    path = Path(path)
+           "meta": _meta_json(meta)}
+    path = _path("path", path)
     path.write_text(json.dumps(doc, indent=1) + "\n")
     return path
 
 
 def read_json(path, dtype="float64"):
     """Read a file of :func:`write_json`; the ``dtype`` coefficients as an SOSController."""
-    doc = json.loads(Path(path).read_text())
     key = {"float64": "sos_float64", "float32": "sos_float32"}[_dtype(dtype).__name__]
+    path = _path("path", path)
+    try:
+        doc = json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"path {path} is not a JSON file: {exc}") from None
     try:
         sos, fs, name = np.array(doc[key], float), float(doc["fs_Hz"]), doc["name"]
-    except KeyError as err:
-        raise ValueError(f"{path} is not a controller file of write_json (missing {err})") from None
+    except (KeyError, TypeError) as err:
+        raise ValueError(f"path {path} is not a controller file of write_json "
+                         f"(missing {err})") from None
     return SOSController(check_finite_array("sos", sos, ndim=2, shape=(None, 6)),
                          check_positive("fs_Hz", fs), name)
 
@@ -349,7 +380,7 @@ static inline float {controller.name.lower()}_step_f32(float state[{n}][2], floa
 
 #endif /* {guard} */
 """
-    path = Path(path)
+    path = _path("path", path)
     path.write_text(text)
     return path
 
@@ -375,9 +406,10 @@ def export_controller(Kd, directory, name, meta=None, dtype="float32"):
     SOSController
         The sections read back from the JSON file in ``dtype``: what is deployed.
     """
-    directory = Path(directory)
-    directory.mkdir(parents=True, exist_ok=True)
+    directory = _path("directory", directory, directory=True)
+    meta = _meta_json(meta)
     sos = controller_sos(Kd, name)
+    directory.mkdir(parents=True, exist_ok=True)
     path = write_json(sos, directory / f"{name}.json", meta=meta)
     write_c_header(sos, directory / f"{name}.h")
     return read_json(path, dtype)

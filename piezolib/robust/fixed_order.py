@@ -32,7 +32,7 @@ import numpy as np
 from scipy import optimize
 
 from piezolib._checks import (check_finite_array, check_finite_lti, check_frequency_grid,
-                              check_integer, check_lti, check_positive)
+                              check_integer, check_model, check_positive, check_siso)
 from piezolib.progress import postfix, progress
 from piezolib.robust.blocks import parse_blk
 from piezolib.robust.lti import time_scale_of, to_scaled, with_signals
@@ -444,10 +444,9 @@ def fixed_order_musyn(P, blk, K0, omega, *, max_iter=20, rtol=1e-3, patience=2,
         structure with real blocks or not fitting P, a bad grid or option.
     """
     t0 = time.perf_counter()
-    check_lti("P", P)
-    check_lti("K0", K0)
-    if K0.ninputs != 1 or K0.noutputs != 1:
-        raise ValueError(f"K0 must be SISO, got {K0.noutputs}x{K0.ninputs}")
+    check_model("P", P, proper=True)
+    check_model("K0", K0, proper=True)
+    check_siso("K0", K0)
     omega = check_frequency_grid("omega", omega, min_length=16)
     blocks = parse_blk(blk, P.noutputs - 1, P.ninputs - 1)
     if any(b.is_real for b in blocks):

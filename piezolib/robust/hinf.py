@@ -13,8 +13,8 @@ import control as ct
 import numpy as np
 import scipy.linalg as la
 
-from piezolib._checks import (check_finite_array, check_integer, check_lti, check_positive,
-                              check_proper)
+from piezolib._checks import (check_channels, check_finite_array, check_integer, check_lti,
+                              check_positive, check_proper)
 from piezolib.robust.lft import lft_hinf_norm
 from piezolib.robust.lti import (balance, from_scaled, hinf_norm, max_singular_value,
                                  time_scale_of, to_scaled)
@@ -535,11 +535,7 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60,
         raise ValueError("P is static (it has no states): there is no dynamic H-infinity "
                          "problem to solve; the best static gain follows from a constant-"
                          "matrix LFT, or add the weights' dynamics to P")
-    nmeas = check_integer("nmeas", nmeas, minimum=1)
-    ncon = check_integer("ncon", ncon, minimum=1)
-    if nmeas >= P.noutputs or ncon >= P.ninputs:
-        raise ValueError(f"P has {P.noutputs} outputs and {P.ninputs} inputs: too few for "
-                         f"nmeas={nmeas}, ncon={ncon} plus performance channels")
+    nmeas, ncon = check_channels(P, nmeas, ncon)
     for name, mat in (("A", P.A), ("B", P.B), ("C", P.C), ("D", P.D)):
         check_finite_array(f"P.{name}", mat)
     gamma_max = check_positive("gamma_max", gamma_max)

@@ -15,7 +15,7 @@ import scipy.linalg as la
 import scipy.optimize as opt
 
 from piezolib._checks import (check_continuous, check_finite_array, check_finite_lti,
-                              check_lti, check_model, check_positive, check_proper, check_siso)
+                              check_model, check_positive, check_proper, check_siso)
 
 __all__ = [
     "frequency_grid", "scaled_coefficients", "scale_time", "balance",
@@ -117,7 +117,7 @@ def time_scale_of(*systems):
     """
     mags = []
     for k, sys in enumerate(systems):
-        sys = ct.ss(check_lti(f"systems[{k}]", sys))
+        sys = ct.ss(check_finite_lti(f"systems[{k}]", sys))
         if sys.nstates:
             mags.append(np.abs(np.linalg.eigvals(sys.A)))
     if not mags:
@@ -185,11 +185,24 @@ def with_signals(sys, inputs=None, outputs=None, name=None):
     control.StateSpace
         Same matrices and sample time, new names.
     """
-    sys = ct.ss(sys)
+    sys = ct.ss(check_finite_lti("sys", sys))
+    if name is not None and not isinstance(name, str):
+        raise TypeError(f"name must be a str, got {name!r}")
     return ct.ss(sys.A, sys.B, sys.C, sys.D, sys.dt,
-                 inputs=list(sys.input_labels if inputs is None else inputs),
-                 outputs=list(sys.output_labels if outputs is None else outputs),
-                 name=name)
+                 inputs=_signal_names("inputs", inputs, sys.input_labels),
+                 outputs=_signal_names("outputs", outputs, sys.output_labels), name=name)
+
+
+def _signal_names(name, names, default):
+    """``names`` (default: ``default``) as a list of str of the length of ``default``."""
+    if names is None:
+        return list(default)
+    names = [names] if isinstance(names, str) else list(names)
+    if not all(isinstance(n, str) for n in names):
+        raise TypeError(f"{name} must be signal names (str), got {names!r}")
+    if len(names) != len(default):
+        raise ValueError(f"{name}: {len(names)} names for {len(default)} signals")
+    return names
 
 
 def balance(sys):

@@ -26,7 +26,8 @@ from dataclasses import dataclass, field
 import control as ct
 import numpy as np
 
-from piezolib._checks import check_finite_array, check_frequency_grid, check_integer, check_lti, check_positive
+from piezolib._checks import (check_bisection_tol, check_finite_array, check_frequency_grid,
+                              check_integer, check_lti, check_positive)
 from piezolib.progress import postfix, progress
 from piezolib.robust.blocks import block_slices, parse_blk
 from piezolib.robust.dfit import fit_magnitude
@@ -172,6 +173,7 @@ def real_block_shrink(M, blk, target, *, rounds=2, tol=1e-6):
     if np.any(target <= 0):
         raise ValueError("target must be positive")
     rounds = check_integer("rounds", rounds, minimum=1)
+    tol = check_bisection_tol("tol", tol)
     real_rows = np.zeros(p, bool)
     for b, (_, out) in zip(blocks, block_slices(blocks)):
         real_rows[out] = b.is_real

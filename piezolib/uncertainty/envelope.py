@@ -11,8 +11,8 @@ from collections import namedtuple
 import numpy as np
 import scipy.optimize as opt
 
-from piezolib._checks import (check_finite_array, check_integer, check_model, check_proper,
-                              check_siso, check_stable)
+from piezolib._checks import (check_bisection_tol, check_finite_array, check_integer, check_model,
+                              check_proper, check_siso, check_stable)
 from piezolib.uncertainty.modelset import (check_model_set, frequency_basis, member_poles,
                                            model_set, unstable_members)
 from piezolib.uncertainty.polynomials import (
@@ -288,6 +288,8 @@ def largest_covered_spread(weight, G, omega, levels=3, members="stable", spread_
     spread_max = check_spread(spread_max, "spread_max")
     if members not in MEMBERS:
         raise ValueError(f"members must be one of {MEMBERS}, got {members!r}")
+    rtol = check_bisection_tol("rtol", rtol)
+    scan = check_integer("scan", scan, minimum=2)
 
     def covered_box(spread):
         return coverage(weight, omega, relative_error_bound(G, spread, omega)).covers
@@ -335,8 +337,7 @@ def _largest_passing(passes, spread_max, rtol, scan, start=0.0):
     ``start`` must be known to pass (0 is trivially "passing").
     """
     first = start * (1 + 10 * rtol) if start > 0 else spread_max * 1e-3
-    grid = np.geomspace(min(first, spread_max), spread_max,
-                        check_integer("scan", scan, minimum=2))
+    grid = np.geomspace(min(first, spread_max), spread_max, scan)
     last_ok = float(start)
     for spread in grid:
         if passes(spread):

@@ -12,8 +12,9 @@ import numpy as np
 import numpy.polynomial.polynomial as npoly
 import scipy.optimize as opt
 
-from piezolib._checks import (check_continuous, check_finite_array, check_finite_lti,
-                              check_positive, check_proper, check_siso, check_stable)
+from piezolib._checks import (check_bisection_tol, check_continuous, check_finite_array,
+                              check_finite_lti, check_positive, check_proper, check_siso,
+                              check_stable)
 from piezolib import robust
 from piezolib.uncertainty.envelope import (SpreadBracket, largest_covered_spread,
                                            relative_error_bound)
@@ -152,6 +153,7 @@ def small_gain_spread(G, K, omega, rtol=1e-4):
     G = check_plant(G)
     _check_controller(K)
     omega = check_frequencies(omega)
+    rtol = check_bisection_tol("rtol", rtol)
     if not robust.is_stable(G, K):
         return SpreadBracket(0.0, 0.0, 0.0, True)
     T = robust.loop_functions(G, K).T

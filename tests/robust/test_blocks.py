@@ -59,7 +59,7 @@ def test_bad_structures_are_rejected(blk, error, match):
 
 
 def test_sizes_must_match_the_matrix():
-    with pytest.raises(ValueError, match="blk does not fit M: M is 3 x 2"):
+    with pytest.raises(ValueError, match="blk does not fit M: M is p x q = 3 x 2"):
         parse_blk([(1, 1), (2, 1)], p=3, q=2)        # transposed performance block
     with pytest.raises(ValueError, match="give both p and q"):
         parse_blk([(1, 1)], p=1)
