@@ -49,8 +49,10 @@ class HinfResult:
         Verified bound: ||F_l(P_reg, K)||_inf <= gamma (1 + verify_rtol),
         with P_reg the plant including any regularisation.
     gamma_infeasible : float
-        Largest gamma found infeasible (lower end of the final bracket), so
-        the optimum lies in (gamma_infeasible, gamma] up to numerical error.
+        Largest gamma at which the Riccati conditions failed (lower end of
+        the final bracket), so the optimum lies in (gamma_infeasible, gamma]
+        up to numerical error.  A gamma whose central controller merely
+        failed the closed-loop check is never counted as infeasible.
     norm, omega_peak : float
         ||F_l(P, K)||_inf recomputed on the plant as given (no
         regularisation) and the frequency of its peak [rad/s].
@@ -70,7 +72,9 @@ class HinfResult:
         Wall time [s] (information only: no stopping rule uses time).
     converged : bool
         False when ``max_iter`` ended the search before the bracket was
-        ``rtol`` wide, or when the final check had to raise gamma.
+        ``rtol`` wide, when no central controller near the optimum passed
+        the closed-loop check (numerically ill-conditioned problem), or when
+        the final check had to raise gamma.
     attempts : tuple
         (gamma, outcome) of every trial, in order.
     """
@@ -555,28 +559,38 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60,
     attempts = []
     cache, tried = {}, {}
 
-    def feasible(gamma):
+    def outcome(gamma):
+        """'verified', 'numerical' (the Riccati conditions hold but the central
+        controller fails the closed-loop check) or 'infeasible'."""
         if gamma in tried:
             return tried[gamma]
         K, status = _central(nz.plant, gamma)
+        verdict = "infeasible" if K is None else "verified"
         if K is not None:
             A, B, C, D = _close_loop(nz.plant, K)
             if np.any(_marginal(*_eig_errors(A))):
-                K, status = None, "closed loop unstable (numerical failure)"
+                verdict, status = "numerical", "closed loop unstable (numerical failure)"
             else:
                 peak = _peak_gain(A, B, C, D, _check_grid(A, 150))
                 if peak > gamma * (1 + verify_rtol):
-                    K, status = None, f"closed-loop peak {peak:.4g} > gamma (numerical failure)"
+                    verdict = "numerical"
+                    status = f"closed-loop peak {peak:.4g} > gamma (numerical failure)"
         attempts.append((float(gamma), status))
-        if K is not None:
+        if verdict == "verified":
             cache[gamma] = K
-        tried[gamma] = K is not None
-        return tried[gamma]
+        tried[gamma] = verdict
+        return verdict
+
+    def feasible(gamma):
+        return outcome(gamma) == "verified"
 
     def out_of_trials():
         return len(attempts) >= max_iter
 
-    # bracket: find a feasible gamma (upwards), then an infeasible one (downwards)
+    # bracket: find a verified gamma (upwards), then an infeasible one (downwards).
+    # Only a failed Riccati condition proves a gamma infeasible: where the
+    # conditions hold but the central controller fails its check (ill-conditioned
+    # near the optimum), the optimum is still below, so ``lo`` never moves there.
     hi = max(2.0 * gamma_d, 1.0)
     while not feasible(hi):
         if hi >= gamma_max or out_of_trials():
@@ -586,20 +600,34 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60,
                 f"{attempts[-1][1]}.{_spread_hint(pl.A, ws)}")
         hi = min(4.0 * hi, gamma_max)
     lo = floor = max(gamma_d, 1e-9 * hi)
+    hi_cond = hi                      # smallest gamma where the Riccati conditions hold
     trial = hi / 4.0
     while trial > floor and not out_of_trials():
-        if feasible(trial):
-            hi = trial
-            trial = hi / 4.0
-        else:
+        verdict = outcome(trial)
+        if verdict == "infeasible":
             lo = trial
             break
-    while hi > lo * (1 + rtol) and not out_of_trials():
-        mid = np.sqrt(lo * hi) if lo > 0 else hi / 2
+        hi_cond = trial
+        if verdict == "verified":
+            hi = trial
+        trial = hi_cond / 4.0
+    while hi_cond > lo * (1 + rtol) and not out_of_trials():
+        mid = np.sqrt(lo * hi_cond) if lo > 0 else hi_cond / 2
+        verdict = outcome(mid)
+        if verdict == "infeasible":
+            lo = mid
+        else:
+            hi_cond = mid
+            if verdict == "verified":
+                hi = mid
+    # a verified controller between the conditions' optimum and ``hi``, if any
+    v_lo = hi_cond
+    while hi > lo * (1 + rtol) and hi > v_lo * (1 + rtol / 8) and not out_of_trials():
+        mid = np.sqrt(v_lo * hi)
         if feasible(mid):
             hi = mid
         else:
-            lo = mid
+            v_lo = mid
     converged = hi <= lo * (1 + rtol) or lo <= floor
 
     # final verification on a dense grid, backing off gamma if it fails
