@@ -341,6 +341,129 @@ def _newton_direction(H, g, free):
     return step, decrement
 
 
+def _power_divided_differences(mu, m):
+    """(mu_k^m - mu_l^m) / (mu_k - mu_l) for mu in [0, 1], m * mu^(m-1) on the diagonal.
+
+    Written as hi^(m-1) (1 - rho^m) / (1 - rho), rho = lo / hi, with expm1 and
+    log1p so that nearly equal eigenvalues do not cancel.
+    """
+    a, b = mu[:, :, None], mu[:, None, :]
+    hi, lo = np.maximum(a, b), np.minimum(a, b)
+    if m == 0:
+        return np.zeros(hi.shape)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        delta = np.where(hi > 0, (hi - lo) / np.where(hi > 0, hi, 1.0), 0.0)
+        ratio = np.where(delta > 0, -np.expm1(m * np.log1p(-delta)) / np.where(delta > 0, delta, 1),
+                         m)
+        dd = np.where(hi > 0, hi ** (m - 1) * ratio, 1.0 if m == 1 else 0.0)
+    return dd
+
+
+def _diagonal_newton_model(M, theta, scaling, t):
+    """Surrogate F_t, its gradient and exact Hessian for diagonal scalings.
+
+    With G = A^H A (A the scaled matrix) and Phi = sum_k (lambda_k /
+    lambda_1)^(t/2) over G's eigenvalues, F_t = log sigma_1 + log(Phi) / t.
+    dG/dtheta_j = 2 A^H E_j A - F_j G - G F_j (E_j, F_j: the block's output and
+    input indicators); the Hessian of the spectral function Phi follows from
+    first-order eigenvalue perturbation plus the divided differences of its
+    derivative (the Daleckii-Krein formula).  One SVD per matrix instead of
+    one per parameter for a Hessian by differences.
+
+    Returns F (N,), gradient (N, n), Hessian (N, n, n), sigma_max (N,).
+    """
+    N, p, q = M.shape
+    n = scaling.n
+    A, _ = scaling.scaled(M, theta)
+    # eigenvectors of G = A^H A (cheaper than an SVD; small eigenvalues lose
+    # relative accuracy, but their weights (lambda / lambda_1)^(t/2) vanish)
+    lam, V = np.linalg.eigh(np.swapaxes(A, 1, 2).conj() @ A)
+    lam, V = np.maximum(lam[:, ::-1], 0.0), V[:, :, ::-1]
+    lam1 = np.maximum(lam[:, :1], np.finfo(float).tiny)
+    mu = lam / lam1
+    W = A @ V
+    P = np.empty((N, n, q, q), complex)
+    Q = np.empty((N, n, q, q), complex)
+    for j in range(n):
+        rows, cols = scaling.out_map == j + 1, scaling.in_map == j + 1
+        P[:, j] = np.swapaxes(W[:, rows], 1, 2).conj() @ W[:, rows]
+        Q[:, j] = np.swapaxes(V[:, cols], 1, 2).conj() @ V[:, cols]
+    P /= lam1[:, :, None, None]
+    dG = 2 * P - Q * mu[:, None, None, :] - mu[:, None, :, None] * Q
+    m = t / 2 - 1
+    pw = mu ** m                                   # f'(lambda) = (t/2) mu^m / lambda_1
+    phi = np.sum(mu ** (t / 2), axis=1)
+    g_phi = (t / 2) * np.einsum("nk,njkk->nj", pw, dG).real
+    # every Hessian term is Re sum_kl c_kl X_i,kl conj(Y_j,kl) (P, Q, dG Hermitian)
+    flat = N, n, q * q
+
+    def pair(X, c, Y):
+        return ((X * c[:, None]).reshape(flat) @ np.swapaxes(Y.conj().reshape(flat), 1, 2)).real
+
+    ones = np.ones((1, q))
+    B = pair(Q, pw[:, :, None] * ones, P)
+    C = pair(Q, pw[:, :, None] * (mu[:, :, None] + mu[:, None, :]), Q)
+    D = pair(dG.conj(), _power_divided_differences(mu, m), dG.conj())
+    Pdiag = np.einsum("nk,njkk->nj", pw, P).real
+    H_phi = (t / 2) * (4 * (np.eye(n) * Pdiag[:, :, None]) - 4 * (B + np.swapaxes(B, 1, 2))
+                       + 2 * C + D)
+    grad = g_phi / (t * phi[:, None])
+    hess = (H_phi / phi[:, None, None] - g_phi[:, :, None] * g_phi[:, None, :]
+            / phi[:, None, None] ** 2) / t
+    s = np.sqrt(lam[:, :min(p, q)])
+    return _log_schatten(s, t)[0], grad, hess, s[:, 0]
+
+
+def _hessian_by_differences(M, theta, scaling, t, free):
+    """Surrogate, gradient and a Hessian from central differences of the gradient.
+
+    (Forward differences, half the cost, left repeated-scalar structures whose
+    bound is exact up to 1e-6 above mu.)
+    """
+    na, n = theta.shape
+    cols = np.nonzero(free)[0]
+    nfree = cols.size
+    h = 1e-4 / np.sqrt(t)
+    shifts = np.zeros((2 * nfree + 1, n))
+    shifts[1 + np.arange(nfree), cols] = h
+    shifts[1 + nfree + np.arange(nfree), cols] = -h
+    pts = (theta[None] + shifts[:, None]).reshape(-1, n)
+    F, g, _ = _surrogate(np.tile(M, (len(shifts), 1, 1)), pts, scaling, t)
+    g = g.reshape(len(shifts), na, n)
+    H = np.zeros((na, n, n))
+    H[:, :, cols] = np.moveaxis((g[1:1 + nfree] - g[1 + nfree:]) / (2 * h), 0, 2)
+    return F[:na], g[0], H
+
+
+def _line_search(M, theta, step, scaling, t, F0):
+    """Full Newton step, then the shorter fractions only where it did not decrease F.
+
+    Returns, per matrix, the lowest surrogate value found, the lowest sigma_max
+    and the parameters of each.
+    """
+    na, n = theta.shape
+    cand = np.clip(theta + step, -_MAX_LOG_SCALE, _MAX_LOG_SCALE)
+    F, _, s = _surrogate(M, cand, scaling, t, need_grad=False)
+    cand_F, cand_s = cand.copy(), cand.copy()
+    retry = np.nonzero(~(F < F0))[0]
+    if retry.size:
+        fr = _STEP_FRACTIONS[1:]
+        short = theta[retry][None] + fr[:, None, None] * step[retry][None]
+        short = np.clip(short, -_MAX_LOG_SCALE, _MAX_LOG_SCALE)
+        Fs, _, ss = _surrogate(np.tile(M[retry], (len(fr), 1, 1)), short.reshape(-1, n),
+                               scaling, t, need_grad=False)
+        Fs, ss = Fs.reshape(len(fr), -1), ss.reshape(len(fr), -1)
+        cols = np.arange(retry.size)
+        kf, ks = np.argmin(Fs, axis=0), np.argmin(ss, axis=0)
+        use_f = Fs[kf, cols] < F[retry]
+        use_s = ss[ks, cols] < s[retry]
+        cand_F[retry[use_f]] = short[kf[use_f], cols[use_f]]
+        cand_s[retry[use_s]] = short[ks[use_s], cols[use_s]]
+        F[retry[use_f]] = Fs[kf[use_f], cols[use_f]]
+        s[retry[use_s]] = ss[ks[use_s], cols[use_s]]
+    return F, s, cand_s, cand_F
+
+
 def _complex_upper(M, blocks, tol):
     """D-scaled upper bound for complex structures; returns (upper, theta, scaling)."""
     nf, p, q = M.shape
@@ -353,46 +476,41 @@ def _complex_upper(M, blocks, tol):
         return best, best_theta, scaling
     free = scaling.free()
     active_all = best > 0            # mu = 0 where M = 0: nothing to optimise
-    nfree = int(free.sum())
     for t in _T_SCHEDULE:
         active = np.nonzero(active_all)[0]
-        h = 1e-4 / np.sqrt(t)
         for _ in range(_NEWTON_ITERATIONS):
             if active.size == 0:
                 break
             Ma, th = M[active], theta[active]
-            na = active.size
-            # value and gradient at theta and at theta +- h e_j (Hessian by differences)
-            shifts = np.zeros((1 + 2 * nfree, n))
-            for j, col in enumerate(np.nonzero(free)[0]):
-                shifts[1 + 2 * j, col] = h
-                shifts[2 + 2 * j, col] = -h
-            pts = (th[None] + shifts[:, None]).reshape(-1, n)
-            F, g, _ = _surrogate(np.tile(Ma, (len(shifts), 1, 1)), pts, scaling, t)
-            F0, g = F[:na], g.reshape(len(shifts), na, n)
-            H = np.zeros((na, n, n))
-            for j, col in enumerate(np.nonzero(free)[0]):
-                H[:, :, col] = (g[1 + 2 * j] - g[2 + 2 * j]) / (2 * h)
-            step, dec = _newton_direction(H, g[0], free)
-            # line search over a fixed set of step fractions, all in one batch
-            cand = th[None] + _STEP_FRACTIONS[:, None, None] * step[None]
-            cand = np.clip(cand, -_MAX_LOG_SCALE, _MAX_LOG_SCALE)
-            Fc, _, sc = _surrogate(np.tile(Ma, (len(_STEP_FRACTIONS), 1, 1)),
-                                   cand.reshape(-1, n), scaling, t, need_grad=False)
-            Fc, sc = Fc.reshape(len(_STEP_FRACTIONS), na), sc.reshape(len(_STEP_FRACTIONS), na)
-            k = np.argmin(Fc, axis=0)
-            Fnew = Fc[k, np.arange(na)]
+            if scaling.diagonal:
+                F0, g0, H, _ = _diagonal_newton_model(Ma, th, scaling, t)
+            else:
+                F0, g0, H = _hessian_by_differences(Ma, th, scaling, t, free)
+            step, dec = _newton_direction(H, g0, free)
+            Fnew, sbest, cand_best, cand_new = _line_search(Ma, th, step, scaling, t, F0)
             improved = Fnew < F0
-            theta[active[improved]] = cand[k[improved], np.nonzero(improved)[0]]
+            theta[active[improved]] = cand_new[improved]
             # keep the D with the smallest sigma_max seen (that is the bound)
-            kbest = np.argmin(sc, axis=0)
-            sbest = sc[kbest, np.arange(na)]
             better = sbest < best[active]
             best[active[better]] = sbest[better]
-            best_theta[active[better]] = cand[kbest[better], np.nonzero(better)[0]]
+            best_theta[active[better]] = cand_best[better]
             done = (~improved) | (dec < tol) | (F0 - Fnew < tol)
             active = active[~done]
+        active_all &= ~_settled(M, theta, scaling, t)
     return best, best_theta, scaling
+
+
+def _settled(M, theta, scaling, t):
+    """Matrices whose surrogate at level ``t`` already equals log sigma_max.
+
+    Where sum_k>1 (sigma_k / sigma_1)^t is below 1e-15 at the point a level
+    converged to, that level minimised log sigma_max itself, and larger t
+    cannot move the point: no further levels for those matrices.
+    """
+    s = _svd(scaling.scaled(M, theta)[0], compute_uv=False)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rest = np.sum((s[:, 1:] / s[:, :1]) ** t, axis=1)
+    return rest < 1e-15
 
 
 def complex_upper_bound(M, blocks, tol=1e-12):

@@ -89,3 +89,30 @@ def test_repeated_scalar_with_full_block_reaches_1e_6():
     M = crandn(rng, 4, 5)
     res = mussv(M, [(3, 0), (2, 1)])
     assert res.gap[0] <= 1e-6
+
+
+@pytest.mark.parametrize("blk, p, q", [([(1, 1)] * 5, 5, 5), ([(1, 1), (2, 3), (1, 1)], 5, 4),
+                                       ([(2, 2), (1, 1), (3, 1)], 4, 6)])
+@pytest.mark.parametrize("t", [2.0, 8.0, 512.0])
+def test_analytic_hessian_matches_differences_of_the_gradient(blk, p, q, t):
+    """The Newton model for diagonal scalings (Daleckii-Krein Hessian of the
+    log-Schatten surrogate) against central differences of its gradient."""
+    from piezolib.robust import mu_upper
+
+    rng = np.random.default_rng(7)
+    scaling = mu_upper._Scaling(parse_blk(blk, p, q), p, q)
+    M = crandn(rng, 3, p, q)
+    theta = 0.5 * rng.standard_normal((3, scaling.n))
+    F, grad, hess, smax = mu_upper._diagonal_newton_model(M, theta, scaling, t)
+    F_ref, grad_ref, smax_ref = mu_upper._surrogate(M, theta, scaling, t)
+    np.testing.assert_allclose(F, F_ref, rtol=1e-12)
+    np.testing.assert_allclose(grad, grad_ref, atol=1e-12)
+    np.testing.assert_allclose(smax, smax_ref, rtol=1e-12)
+    h = 1e-6 / np.sqrt(t)
+    fd = np.empty_like(hess)
+    for j in range(scaling.n):
+        e = np.zeros(scaling.n)
+        e[j] = h
+        fd[:, :, j] = (mu_upper._surrogate(M, theta + e, scaling, t)[1]
+                       - mu_upper._surrogate(M, theta - e, scaling, t)[1]) / (2 * h)
+    np.testing.assert_allclose(hess, fd, atol=1e-6 * np.abs(fd).max())
