@@ -169,10 +169,10 @@ def _full_blocks(blk, p, q):
     return blocks
 
 
-def _fit_scalings(omega_s, mu_res, blocks, order, prev_fits, N=None):
+def _fit_scalings(omega_s, mu_res, blocks, order, prev_fits, N):
     """Fit d_i for every block but the last; pick the order when 'auto'.
 
-    With the closed-loop response ``N`` the fits are checked where they
+    The fits are checked on the closed-loop response ``N`` where they
     matter: if sigma_max(D_fit N D_fit^-1) exceeds the mu peak by more than
     ``_FIT_PEAK_RTOL`` somewhere, the weight is raised there and the fit
     repeated (up to ``_FIT_ROUNDS`` times), keeping the fits with the lowest
@@ -183,7 +183,7 @@ def _fit_scalings(omega_s, mu_res, blocks, order, prev_fits, N=None):
     upper = mu_res.upper
     weight = (upper / upper.max()) ** 4 + 1e-3
     fits = _fit_each(omega_s, mu_res.d, len(blocks) - 1, order, weight, prev_fits)
-    if N is None or not fits:
+    if not fits:
         return fits
     peak = _scaled_peak(N, blocks, fits, omega_s)
     for _ in range(_FIT_ROUNDS):

@@ -367,8 +367,8 @@ def _diagonal_newton_model(M, theta, scaling, t):
     dG/dtheta_j = 2 A^H E_j A - F_j G - G F_j (E_j, F_j: the block's output and
     input indicators); the Hessian of the spectral function Phi follows from
     first-order eigenvalue perturbation plus the divided differences of its
-    derivative (the Daleckii-Krein formula).  One SVD per matrix instead of
-    one per parameter for a Hessian by differences.
+    derivative (the Daleckii-Krein formula).  One eigen-decomposition per
+    matrix instead of 2n + 1 gradients for a Hessian by differences.
 
     Returns F (N,), gradient (N, n), Hessian (N, n, n), sigma_max (N,).
     """
