@@ -331,7 +331,9 @@ def _newton_direction(H, g, free):
     Hf = 0.5 * (Hf + np.swapaxes(Hf, 1, 2))
     lam, Q = np.linalg.eigh(Hf)
     floor = 1e-9 * np.maximum(np.abs(lam).max(1, keepdims=True), 1.0)
-    lam = np.maximum(lam, floor)
+    # |lambda|: along negative curvature (the repeated scalars' triangular
+    # parametrisation is not convex) step downhill, as far as the curvature says
+    lam = np.maximum(np.abs(lam), floor)
     gf = g[:, free]
     step = np.zeros_like(g)
     step[:, free] = -np.einsum("nij,nj,nkj,nk->ni", Q, 1 / lam, Q, gf)
@@ -359,6 +361,31 @@ def _power_divided_differences(mu, m):
     return dd
 
 
+def _block_gram(X, index_map, n):
+    """X_j^H X_j over the rows of X (N, r, k) in block j, for j = 1 ... n: (N, n, k, k).
+
+    ``index_map`` gives each row of X its block's number (0: no block).
+    """
+    N, r, k = X.shape
+    out = np.empty((N, n, k, k), complex)
+    for j in range(n):
+        Xj = X[:, index_map == j + 1]
+        out[:, j] = np.swapaxes(Xj, 1, 2).conj() @ Xj
+    return out
+
+
+def _real_pairing(X, Y):
+    """Re sum_kl X_i,kl conj(Y_j,kl) for stacks X, Y of shape (N, n, k, k): (N, n, n).
+
+    As a real matrix product over the interleaved real and imaginary parts
+    (Re(x conj y) = Re x Re y + Im x Im y), with no conjugated copies.
+    """
+    N, n = X.shape[:2]
+    Xf = np.ascontiguousarray(X).view(float).reshape(N, n, -1)
+    Yf = np.ascontiguousarray(Y).view(float).reshape(N, n, -1)
+    return Xf @ np.swapaxes(Yf, 1, 2)
+
+
 def _diagonal_newton_model(M, theta, scaling, t):
     """Surrogate F_t, its gradient and exact Hessian for diagonal scalings.
 
@@ -381,29 +408,18 @@ def _diagonal_newton_model(M, theta, scaling, t):
     lam, V = np.maximum(lam[:, ::-1], 0.0), V[:, :, ::-1]
     lam1 = np.maximum(lam[:, :1], np.finfo(float).tiny)
     mu = lam / lam1
-    W = A @ V
-    P = np.empty((N, n, q, q), complex)
-    Q = np.empty((N, n, q, q), complex)
-    for j in range(n):
-        rows, cols = scaling.out_map == j + 1, scaling.in_map == j + 1
-        P[:, j] = np.swapaxes(W[:, rows], 1, 2).conj() @ W[:, rows]
-        Q[:, j] = np.swapaxes(V[:, cols], 1, 2).conj() @ V[:, cols]
-    P /= lam1[:, :, None, None]
+    W = (A @ V) / np.sqrt(lam1)[:, :, None]
+    # P_j = W_j^H W_j and Q_j = V_j^H V_j over block j's rows (outputs of W, inputs of V)
+    P = _block_gram(W, scaling.out_map, n)
+    Q = _block_gram(V, scaling.in_map, n)
     dG = 2 * P - Q * mu[:, None, None, :] - mu[:, None, :, None] * Q
     m = t / 2 - 1
     pw = mu ** m                                   # f'(lambda) = (t/2) mu^m / lambda_1
     phi = np.sum(mu ** (t / 2), axis=1)
     g_phi = (t / 2) * np.einsum("nk,njkk->nj", pw, dG).real
-    # every Hessian term is Re sum_kl c_kl X_i,kl conj(Y_j,kl) (P, Q, dG Hermitian)
-    flat = N, n, q * q
-
-    def pair(X, c, Y):
-        return ((X * c[:, None]).reshape(flat) @ np.swapaxes(Y.conj().reshape(flat), 1, 2)).real
-
-    ones = np.ones((1, q))
-    B = pair(Q, pw[:, :, None] * ones, P)
-    C = pair(Q, pw[:, :, None] * (mu[:, :, None] + mu[:, None, :]), Q)
-    D = pair(dG.conj(), _power_divided_differences(mu, m), dG.conj())
+    B = _real_pairing(Q * pw[:, None, :, None], P)
+    C = _real_pairing(Q * (pw[:, :, None] * (mu[:, :, None] + mu[:, None, :]))[:, None], Q)
+    D = _real_pairing(dG * _power_divided_differences(mu, m)[:, None], dG)
     Pdiag = np.einsum("nk,njkk->nj", pw, P).real
     H_phi = (t / 2) * (4 * (np.eye(n) * Pdiag[:, :, None]) - 4 * (B + np.swapaxes(B, 1, 2))
                        + 2 * C + D)
