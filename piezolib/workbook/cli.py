@@ -19,6 +19,9 @@ def _parser():
                      help="only the notebooks whose names start with these prefixes")
     rep.add_argument("--timeout", type=float, default=600,
                      help="per-cell time limit in seconds (default 600)")
+    rep.add_argument("--jobs", type=_positive_int, default=None, metavar="N",
+                     help="notebooks run side by side (default 2, 1 on a single core; "
+                          "1 runs them one by one in order)")
     rep.add_argument("--keep-going", action="store_true",
                      help="run the remaining notebooks after a failure")
     rep.add_argument("--no-data", action="store_true",
@@ -37,6 +40,16 @@ def _parser():
     cmp_.add_argument("first", help="study name (e.g. reference)")
     cmp_.add_argument("second", help="study name")
     return parser
+
+
+def _positive_int(text):
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text!r}")
+    return value
 
 
 def _list_studies(stream):
@@ -114,5 +127,5 @@ def main(argv=None, stream=sys.stdout):
         return 2
     failures = reproduce.run(args.notebooks or None, timeout=args.timeout,
                              keep_going=args.keep_going, data=not args.no_data, stream=stream,
-                             study=args.study)
+                             study=args.study, jobs=args.jobs)
     return 1 if failures else 0

@@ -1,11 +1,13 @@
 """Run the whole workbook headless: data files first, then every notebook.
 
 ``python -m piezolib reproduce`` regenerates the virtual-stage experiment
-files, executes ``notebooks/NN_*.ipynb`` in order (the notebooks save the
-figures into ``figures/`` and the paper-versus-reproduced tables into
+files, executes ``notebooks/NN_*.ipynb`` (the notebooks save the figures
+into ``figures/`` and the paper-versus-reproduced tables into
 ``data/results/``), prints one progress line per step and exits non-zero,
-naming the notebook and the cell, when a step fails.  The notebooks on disk
-are never modified: they are executed in memory.
+naming the notebook and the cell, when a step fails.  Two notebooks run side
+by side on a machine with two cores or more (``--jobs``); the reproduction
+report, which gathers the other notebooks' tables, runs last.  The notebooks
+on disk are never modified: they are executed in memory.
 
 With ``--study``, the study's name or file is injected after each notebook's
 cell tagged ``parameters`` (as papermill does), the figures and tables go to
@@ -17,14 +19,16 @@ import os
 import subprocess
 import sys
 import time
+from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from pathlib import Path
 
 from piezolib import progress
 from piezolib.workbook import study as studies
 from piezolib.workbook.paths import notebooks_dir, project_root, study_results_dir
 
-__all__ = ["DATA_STEPS", "DATA_CHECKS", "check_data", "list_notebooks", "inject_study",
-           "run_notebook", "run", "NotebookFailure"]
+__all__ = ["DATA_STEPS", "DATA_CHECKS", "GATHERING", "check_data", "list_notebooks",
+           "notebook_waves", "default_jobs", "inject_study", "run_notebook", "run",
+           "NotebookFailure"]
 
 #: Data-generating steps run before the notebooks, as "module:function" names
 #: of functions that take no arguments and return the list of files written.
@@ -34,6 +38,10 @@ DATA_STEPS = ["piezolib.problem.stage_data:write_experiment_files"]
 #: that take no arguments and return ``{path: problem}`` for the files that
 #: fail; each failing file gets one line when the data steps regenerate it.
 DATA_CHECKS = ["piezolib.problem.stage_data:check_experiment_files"]
+
+#: Name prefixes of the notebooks that read every other notebook's table
+#: (the reproduction report): they run after all the others have finished.
+GATHERING = ("07_",)
 
 
 class NotebookFailure(RuntimeError):
@@ -55,6 +63,28 @@ def list_notebooks(selection=None):
         if not paths:
             raise ValueError(f"no notebook matches {selection!r}")
     return paths
+
+
+def notebook_waves(paths):
+    """Split notebooks into waves that run one after the other.
+
+    Within a wave the notebooks are independent (each builds what it needs,
+    the controllers come from the committed artifact or the study's disk
+    cache) and may run side by side; the notebooks named in
+    :data:`GATHERING` form a last wave.  Empty waves are left out.
+    """
+    first = [p for p in paths if not p.name.startswith(GATHERING)]
+    last = [p for p in paths if p.name.startswith(GATHERING)]
+    return [wave for wave in (first, last) if wave]
+
+
+def default_jobs():
+    """Notebooks run side by side by default: 2, or 1 on a single-core machine.
+
+    Each kernel computes on one core (``OPENBLAS_NUM_THREADS=1``); more than
+    two at once mostly adds memory.
+    """
+    return max(1, min(2, os.cpu_count() or 1))
 
 
 def inject_study(nb, study):
@@ -122,13 +152,20 @@ def run_notebook(path, timeout=600, study=None, save_to=None):
 
 
 def run(selection=None, timeout=600, keep_going=False, data=True, stream=sys.stdout,
-        study=None):
+        study=None, jobs=None):
     """Regenerate data, then execute the notebooks; return the number of failures.
 
     ``study`` (a name in ``studies/`` or a path to a TOML file) is injected
     into every notebook; its outputs and the executed notebooks go to
-    ``runs/<name>/`` unless it is the reference study.
+    ``runs/<name>/`` unless it is the reference study.  ``jobs`` notebooks
+    run side by side (default :func:`default_jobs`; waves from
+    :func:`notebook_waves`); one line is printed as each finishes.  After a
+    failure, without ``keep_going``, no further notebook starts (those
+    already running finish and are reported).
     """
+    jobs = default_jobs() if jobs is None else jobs
+    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
+        raise ValueError(f"jobs must be a positive integer, got {jobs!r}")
     chosen = studies.load(studies.REFERENCE if study is None else study)
     spec = None if study is None else (str(Path(study).resolve()) if str(study).endswith(".toml")
                                        else str(study))
@@ -139,51 +176,20 @@ def run(selection=None, timeout=600, keep_going=False, data=True, stream=sys.std
     # kernels inherit this: threaded BLAS on small problems is slower on 2 cores
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     os.environ.setdefault("PIEZOLIB_ROOT", str(project_root()))
-    failures = 0
     steps = DATA_STEPS if data and not selection else []
-    total = len(steps) + len(list_notebooks(selection))
-    k = 0
+    notebooks = list_notebooks(selection)
+    counter = _Counter(stream, len(steps) + len(notebooks))
     start_all = time.perf_counter()
-    # a bar on stderr (a terminal), beside the one line per step on stream
-    bar = progress.progress(total=total, desc="reproduce", unit="step")
     try:
-        if steps:
-            for path, problem in check_data().items():
-                print(f"regenerating {path}: it failed its check ({problem})", file=stream,
-                      flush=True)
-        for step in steps:
-            k += 1
-            start = time.perf_counter()
-            module, func = step.split(":")
-            try:
-                written = getattr(importlib.import_module(module), func)()
-                status = f"ok ({len(written)} files)"
-            except Exception as exc:  # report and continue or stop, like a notebook
-                failures += 1
-                status = f"FAILED: {type(exc).__name__}: {exc}"
-            _line(stream, k, total, step, time.perf_counter() - start, status)
-            bar.update()
-            if failures and not keep_going:
-                return failures
-        for path in list_notebooks(selection):
-            k += 1
-            start = time.perf_counter()
-            try:
-                run_notebook(path, timeout=timeout, study=spec, save_to=save_to)
-                status = "ok"
-            except NotebookFailure as exc:
-                failures += 1
-                lines = exc.error.strip().splitlines() or [""]
-                status = f"FAILED at cell {exc.cell_index}: {lines[0][:160]}"
-            _line(stream, k, total, path.name, time.perf_counter() - start, status)
-            bar.update()
-            if status != "ok" and len(lines) > 1:   # the rest of a long error, indented
-                detail = lines[1:21] + ([f"... ({len(lines) - 21} more lines)"] if len(lines) > 21 else [])
-                print("\n".join("      " + line for line in detail), file=stream, flush=True)
-            if failures and not keep_going:
-                break
+        failures = _run_data_steps(steps, counter, stream)
+        if not failures or keep_going:
+            for wave in notebook_waves(notebooks):
+                failures += _run_wave(wave, jobs, counter, keep_going, stream,
+                                      dict(timeout=timeout, study=spec, save_to=save_to))
+                if failures and not keep_going:
+                    break
     finally:
-        bar.close()
+        counter.close()
     out = chosen.output_dir
     tables = study_results_dir(chosen.name)
     print(f"{'all done' if not failures else f'{failures} step(s) failed'} in "
@@ -191,6 +197,85 @@ def run(selection=None, timeout=600, keep_going=False, data=True, stream=sys.std
           f"{out / 'figures'}, tables in {tables}"
           + (f", executed notebooks in {save_to}" if save_to else ""), file=stream, flush=True)
     return failures
+
+
+class _Counter:
+    """Numbered progress lines ``[k/total]`` on the stream, with a bar on stderr."""
+
+    def __init__(self, stream, total):
+        self.stream, self.total, self.k = stream, total, 0
+        self.bar = progress.progress(total=total, desc="reproduce", unit="step")
+
+    def line(self, name, seconds, status):
+        self.k += 1
+        _line(self.stream, self.k, self.total, name, seconds, status)
+        self.bar.update()
+
+    def close(self):
+        self.bar.close()
+
+
+def _run_data_steps(steps, counter, stream):
+    """Checks, then the data steps; returns the number of failures (stops at the first)."""
+    if steps:
+        for path, problem in check_data().items():
+            print(f"regenerating {path}: it failed its check ({problem})", file=stream,
+                  flush=True)
+    for step in steps:
+        start = time.perf_counter()
+        module, func = step.split(":")
+        try:
+            written = getattr(importlib.import_module(module), func)()
+            status = f"ok ({len(written)} files)"
+        except Exception as exc:  # report and stop, like a notebook
+            counter.line(step, time.perf_counter() - start, f"FAILED: {type(exc).__name__}: {exc}")
+            return 1
+        counter.line(step, time.perf_counter() - start, status)
+    return 0
+
+
+def _run_wave(paths, jobs, counter, keep_going, stream, options):
+    """Execute one wave of notebooks, ``jobs`` at a time; return the number of failures."""
+    failures = 0
+    pending = list(paths)
+    running = {}
+    with ThreadPoolExecutor(max_workers=jobs) as pool:
+        while pending or running:
+            while pending and len(running) < jobs and not (failures and not keep_going):
+                path = pending.pop(0)
+                future = pool.submit(_timed_notebook, path, options)
+                running[future] = path
+            if not running:
+                break
+            done, _ = wait(running, return_when=FIRST_COMPLETED)
+            for future in sorted(done, key=lambda f: running[f].name):
+                path = running.pop(future)
+                seconds, error = future.result()
+                failures += error is not None
+                _report(counter, stream, path.name, seconds, error)
+    return failures
+
+
+def _timed_notebook(path, options):
+    """(seconds, None) or (seconds, NotebookFailure) of one notebook run."""
+    start = time.perf_counter()
+    try:
+        run_notebook(path, **options)
+        return time.perf_counter() - start, None
+    except NotebookFailure as exc:
+        return time.perf_counter() - start, exc
+
+
+def _report(counter, stream, name, seconds, error):
+    """One line per notebook; a failure's long error follows, indented."""
+    if error is None:
+        counter.line(name, seconds, "ok")
+        return
+    lines = error.error.strip().splitlines() or [""]
+    counter.line(name, seconds, f"FAILED at cell {error.cell_index}: {lines[0][:160]}")
+    if len(lines) > 1:
+        detail = lines[1:21] + ([f"... ({len(lines) - 21} more lines)"] if len(lines) > 21 else [])
+        print("\n".join("      " + line for line in detail), file=stream, flush=True)
 
 
 def check_data():

@@ -25,14 +25,63 @@ def test_failure_names_notebook_and_cell(workbook):
     write_notebook(workbook / "notebooks" / "00_ok.ipynb", "x = 1")
     write_notebook(workbook / "notebooks" / "01_bad.ipynb", "y = 2", "assert y == 3, 'y is 2'")
     write_notebook(workbook / "notebooks" / "02_never.ipynb", "z = 3")
-    proc = subprocess.run([sys.executable, "-m", "piezolib", "reproduce", "--no-data"],
-                          capture_output=True, text=True, timeout=300)
+    proc = subprocess.run([sys.executable, "-m", "piezolib", "reproduce", "--no-data",
+                           "--jobs", "1"], capture_output=True, text=True, timeout=300)
     assert proc.returncode == 1
     lines = proc.stdout.splitlines()
     assert "00_ok.ipynb" in lines[0] and lines[0].rstrip().endswith("ok")
     assert "01_bad.ipynb" in lines[1] and "FAILED at cell 1" in lines[1]
     assert "AssertionError: y is 2" in lines[1]
     assert not any("02_never" in line for line in lines)   # stops at the first failure
+
+
+STAMP = ("import pathlib, time\n"
+         "start = time.time(); time.sleep(1.5)\n"
+         "pathlib.Path('{name}.done').write_text(f'{{start}} {{time.time()}}')")
+
+
+def test_notebooks_run_side_by_side_and_the_report_runs_after_them(workbook):
+    import io
+
+    nbs = workbook / "notebooks"
+    write_notebook(nbs / "00_a.ipynb", STAMP.format(name="a"))
+    write_notebook(nbs / "01_b.ipynb", STAMP.format(name="b"))
+    write_notebook(nbs / "07_report.ipynb",      # reads what both others wrote
+                   "import pathlib\nassert all(pathlib.Path(n + '.done').is_file() for n in 'ab')")
+    write_notebook(nbs / "08_after.ipynb", "pass")
+    out = io.StringIO()
+    assert reproduce.run(data=False, stream=out, jobs=2) == 0
+    lines = out.getvalue().splitlines()
+    assert "07_report.ipynb" in lines[3] and lines[3].rstrip().endswith("ok")
+    (a0, a1), (b0, b1) = ([float(x) for x in (nbs / f"{n}.done").read_text().split()] for n in "ab")
+    assert a0 < b1 and b0 < a1                   # the two runs overlapped in time
+
+
+def test_after_a_failure_no_further_notebook_starts_in_parallel_runs(workbook):
+    import io
+
+    nbs = workbook / "notebooks"
+    write_notebook(nbs / "00_slow.ipynb", STAMP.format(name="slow"))
+    write_notebook(nbs / "01_bad.ipynb", "assert False, 'bad'")
+    write_notebook(nbs / "02_never.ipynb", "open('never.done', 'w').close()")
+    out = io.StringIO()
+    assert reproduce.run(data=False, stream=out, jobs=2) == 1
+    text = out.getvalue()
+    assert "FAILED at cell 0: AssertionError: bad" in text
+    assert "00_slow.ipynb" in text and (nbs / "slow.done").is_file()   # finished and reported
+    assert "02_never" not in text and not (nbs / "never.done").exists()
+    with pytest.raises(ValueError, match="jobs must be a positive integer"):
+        reproduce.run(data=False, stream=out, jobs=0)
+
+
+def test_report_notebooks_form_the_last_wave():
+    from pathlib import Path
+
+    names = ["00_a.ipynb", "07_reproduction_report.ipynb", "08_b.ipynb", "09_c.ipynb"]
+    waves = reproduce.notebook_waves([Path(n) for n in names])
+    assert [[p.name for p in w] for w in waves] == [["00_a.ipynb", "08_b.ipynb", "09_c.ipynb"],
+                                                    ["07_reproduction_report.ipynb"]]
+    assert reproduce.notebook_waves([Path("00_a.ipynb")]) == [[Path("00_a.ipynb")]]
 
 
 def test_selection_and_listing(workbook):
