@@ -496,28 +496,49 @@ def _complex_upper(M, blocks, tol):
         return best, best_theta, scaling
     free = scaling.free()
     active_all = best > 0            # mu = 0 where M = 0: nothing to optimise
+    state = (theta, best, best_theta)
     for t in _T_SCHEDULE:
-        active = np.nonzero(active_all)[0]
-        for _ in range(_NEWTON_ITERATIONS):
-            if active.size == 0:
-                break
-            Ma, th = M[active], theta[active]
-            if scaling.diagonal:
-                F0, g0, H, _ = _diagonal_newton_model(Ma, th, scaling, t)
-            else:
-                F0, g0, H = _hessian_by_differences(Ma, th, scaling, t, free)
-            step, dec = _newton_direction(H, g0, free)
-            Fnew, sbest, cand_best, cand_new = _line_search(Ma, th, step, scaling, t, F0)
-            improved = Fnew < F0
-            theta[active[improved]] = cand_new[improved]
-            # keep the D with the smallest sigma_max seen (that is the bound)
-            better = sbest < best[active]
-            best[active[better]] = sbest[better]
-            best_theta[active[better]] = cand_best[better]
-            done = (~improved) | (dec < tol) | (F0 - Fnew < tol)
-            active = active[~done]
-        active_all &= ~_settled(M, theta, scaling, t)
+        # a level before the last only sets the start of the next one: with
+        # scalar scalings (a convex surrogate) its minimiser is needed to a fraction
+        # of the smoothing's own offset ~ 1/t; repeated scalars' non-convex
+        # parametrisation wants each level converged
+        loose = scaling.diagonal and t != _T_SCHEDULE[-1]
+        level_tol = max(tol, 1e-3 / t) if loose else tol
+        _newton_level(M, np.nonzero(active_all)[0], state, scaling, t, free, level_tol)
+        settled = active_all & _settled(M, theta, scaling, t)
+        if level_tol > tol and np.any(settled):
+            # leaving the continuation here: this level's minimiser is the answer
+            _newton_level(M, np.nonzero(settled)[0], state, scaling, t, free, tol)
+        active_all &= ~settled
     return best, best_theta, scaling
+
+
+def _newton_level(M, active, state, scaling, t, free, tol):
+    """Newton steps on the level-t surrogate for the matrices ``active``.
+
+    Updates ``state`` = (theta, best, best_theta) in place: the current
+    parameters, and the smallest sigma_max seen (that is the bound) with its
+    parameters.  A matrix stops when a step no longer lowers the surrogate
+    by ``tol`` (or its Newton decrement is below it).
+    """
+    theta, best, best_theta = state
+    for _ in range(_NEWTON_ITERATIONS):
+        if active.size == 0:
+            break
+        Ma, th = M[active], theta[active]
+        if scaling.diagonal:
+            F0, g0, H, _ = _diagonal_newton_model(Ma, th, scaling, t)
+        else:
+            F0, g0, H = _hessian_by_differences(Ma, th, scaling, t, free)
+        step, dec = _newton_direction(H, g0, free)
+        Fnew, sbest, cand_best, cand_new = _line_search(Ma, th, step, scaling, t, F0)
+        improved = Fnew < F0
+        theta[active[improved]] = cand_new[improved]
+        better = sbest < best[active]
+        best[active[better]] = sbest[better]
+        best_theta[active[better]] = cand_best[better]
+        done = (~improved) | (dec < tol) | (F0 - Fnew < tol)
+        active = active[~done]
 
 
 def _settled(M, theta, scaling, t):
