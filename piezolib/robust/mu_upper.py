@@ -329,8 +329,12 @@ def _log_schatten(s, t):
     return np.log(s1[:, 0]) + np.log(total) / t, r / total[:, None]
 
 
-def _newton_direction(H, g, free):
-    """Regularised Newton direction -H^-1 g on the free parameters."""
+def _newton_direction(H, g, free, max_step=None):
+    """Regularised Newton direction -H^-1 g on the free parameters, and its decrement.
+
+    The step's length is limited to ``max_step`` (default ``_MAX_STEP``).
+    """
+    max_step = _MAX_STEP if max_step is None else max_step
     Hf = H[:, free][:, :, free]
     Hf = 0.5 * (Hf + np.swapaxes(Hf, 1, 2))
     lam, Q = np.linalg.eigh(Hf)
@@ -342,7 +346,7 @@ def _newton_direction(H, g, free):
     step = np.zeros_like(g)
     step[:, free] = -np.einsum("nij,nj,nkj,nk->ni", Q, 1 / lam, Q, gf)
     norm = np.linalg.norm(step, axis=1, keepdims=True)
-    step *= np.minimum(1.0, _MAX_STEP / np.maximum(norm, 1e-300))
+    step *= np.minimum(1.0, max_step / np.maximum(norm, 1e-300))
     decrement = -np.einsum("ni,ni->n", step, g)
     return step, decrement
 
