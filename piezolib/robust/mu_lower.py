@@ -169,7 +169,9 @@ def complex_lower_bound(M, blocks, Dl, Dr, upper, *, iterations=60, restarts=3, 
 
     The power iteration starts from the top singular vectors of the scaled
     matrix Dl M Dr^-1 and of M itself, then from ``restarts`` seeded random
-    vectors where the bounds still differ.
+    vectors where the bounds still differ, and where the scaled matrix's
+    largest singular value is double there, from 13 combinations of the two
+    top singular vectors (with twice the sweeps).
 
     Parameters
     ----------
@@ -195,11 +197,30 @@ def complex_lower_bound(M, blocks, Dl, Dr, upper, *, iterations=60, restarts=3, 
     # start from the top singular vectors of the scaled and unscaled M:
     # with A = Dl M Dr^-1 = sigma u v^H + ..., b = Dr^-1 v and w = Dr^H v
     # satisfy the power iteration's alignment conditions when D is optimal
-    v = np.linalg.svd(Dl @ M @ np.linalg.inv(Dr))[2][:, 0, :].conj()
+    _, s, Vh = np.linalg.svd(Dl @ M @ np.linalg.inv(Dr))
+    V = np.swapaxes(Vh, 1, 2).conj()
     v0 = np.linalg.svd(M)[2][:, 0, :].conj()
-    starts = [(np.linalg.solve(Dr, v[..., None])[..., 0],
-               np.einsum("nji,nj->ni", Dr.conj(), v)), (v0, v0)]
-    return _lower_bound(M, blocks, starts, iterations, rng, restarts, upper)
+    starts = [_aligned_start(Dr, V[:, :, 0]), (v0, v0)]
+    lower, Delta = _lower_bound(M, blocks, starts, iterations, rng, restarts, upper)
+    # a double sigma_max at the optimal D leaves v anywhere in a plane, and the
+    # aligned combination is not the first singular vector: try a grid of them
+    double = (s.shape[1] > 1) & (s[:, -1 if s.shape[1] < 2 else 1] >= (1 - 1e-6) * s[:, 0])
+    rows = np.nonzero(double & (lower < upper * (1 - 1e-6)))[0]
+    if rows.size:
+        plane = [_aligned_start(Dr[rows], np.cos(phi) * V[rows, :, 0]
+                                + np.exp(1j * psi) * np.sin(phi) * V[rows, :, 1])
+                 for phi in np.pi / 8 * np.arange(1, 5) for psi in np.pi / 2 * np.arange(4)
+                 if phi < np.pi / 2 or psi == 0]
+        # (the iteration converges slowly near a double sigma_max: twice the sweeps)
+        low, D = _lower_bound(M[rows], blocks, plane, 2 * iterations, rng, 0, upper[rows])
+        better = low > lower[rows]
+        lower[rows[better]], Delta[rows[better]] = low[better], D[better]
+    return lower, Delta
+
+
+def _aligned_start(Dr, v):
+    """Power-iteration start (b, w) = (Dr^-1 v, Dr^H v) from a right singular vector v of Dl M Dr^-1."""
+    return np.linalg.solve(Dr, v[..., None])[..., 0], np.einsum("nji,nj->ni", Dr.conj(), v)
 
 
 def mixed_lower_bound(M, blocks, upper, *, iterations=60, restarts=3, rng=None):

@@ -273,10 +273,9 @@ def test_distillation_mu_inverse_based_controller(column, omega):
     rp = robust.mussv(N, tp.BLK_RP)
     exact = tp.distillation_mu(omega, "diagonal")
     np.testing.assert_allclose(rp.upper, exact, rtol=1e-6)
-    # a valid lower bound; not tight to 1e-6 here: on this exactly symmetric N the two
-    # largest singular values at the optimal D coincide and the power iteration stalls
-    # (the strict xfail test below)
-    assert np.all(rp.lower <= exact * (1 + 1e-9)) and np.all(rp.lower >= exact * (1 - 1e-3))
+    # on this symmetric N the two largest singular values at the optimal D coincide and
+    # the power iteration converges slowly from most starts (see the exact-form test below)
+    assert np.all(rp.lower <= exact * (1 + 1e-9)) and np.all(rp.lower >= exact * (1 - 1e-5))
     full = robust.mussv(N, [(2, 2), (2, 2)], lower=False)
     np.testing.assert_allclose(full.upper, tp.distillation_mu(omega, "full"), rtol=1e-6)
     rs = robust.mussv(N[:, :2, :2], [(1, 1), (1, 1)])
@@ -293,10 +292,10 @@ def test_distillation_mu_inverse_based_controller(column, omega):
         assert rp.upper.max() > tp.SP_MU_RP + 5e-3
 
 
-@pytest.mark.xfail(strict=True, reason="finding: on the exactly symmetric closed-form N "
-                   "(double largest singular value at the optimal D) the lower bound stalls up "
-                   "to 2e-4 below mu; a 3e-12 perturbation of N (lft_response) removes it")
 def test_distillation_lower_bound_on_the_exact_closed_form_is_tight():
+    # regression: the lower bound stalled up to 2e-4 below mu here - with a double largest
+    # singular value at the optimal D, the start from the first singular vector (and random
+    # ones) missed the aligned combination; starts across the top singular plane reach it
     rp = robust.mussv(tp.distillation_N(tp.SP_GRID), tp.BLK_RP)
     np.testing.assert_allclose(rp.lower, tp.distillation_mu(tp.SP_GRID, "diagonal"), rtol=1e-6)
 
