@@ -169,9 +169,10 @@ def complex_lower_bound(M, blocks, Dl, Dr, upper, *, iterations=60, restarts=3, 
 
     The power iteration starts from the top singular vectors of the scaled
     matrix Dl M Dr^-1 and of M itself, then from ``restarts`` seeded random
-    vectors where the bounds still differ, and where the scaled matrix's
-    largest singular value is double there, from 13 combinations of the two
-    top singular vectors (with twice the sweeps).
+    vectors where the bounds still differ, and, for structures where the
+    D-scaled bound is mu, where the scaled matrix's largest singular value is
+    double, from 13 combinations of the two top singular vectors (with twice
+    the sweeps).
 
     Parameters
     ----------
@@ -202,11 +203,13 @@ def complex_lower_bound(M, blocks, Dl, Dr, upper, *, iterations=60, restarts=3, 
     v0 = np.linalg.svd(M)[2][:, 0, :].conj()
     starts = [_aligned_start(Dr, V[:, :, 0]), (v0, v0)]
     lower, Delta = _lower_bound(M, blocks, starts, iterations, rng, restarts, upper)
-    # a double sigma_max at the optimal D leaves v anywhere in a plane, and the
-    # aligned combination is not the first singular vector: try a grid of them
+    # where the D-scaled bound equals mu (2 S + F <= 3), a gap beside a double
+    # sigma_max at the optimal D is a stall: v may be anywhere in the top singular
+    # plane, and the aligned combination need not be the first singular vector.
+    # (Elsewhere a double sigma_max mostly marks the bound's own conservatism.)
     double = (s.shape[1] > 1) & (s[:, -1 if s.shape[1] < 2 else 1] >= (1 - 1e-6) * s[:, 0])
     rows = np.nonzero(double & (lower < upper * (1 - 1e-6)))[0]
-    if rows.size:
+    if rows.size and _d_scaled_bound_is_mu(blocks):
         plane = [_aligned_start(Dr[rows], np.cos(phi) * V[rows, :, 0]
                                 + np.exp(1j * psi) * np.sin(phi) * V[rows, :, 1])
                  for phi in np.pi / 8 * np.arange(1, 5) for psi in np.pi / 2 * np.arange(4)
@@ -216,6 +219,12 @@ def complex_lower_bound(M, blocks, Dl, Dr, upper, *, iterations=60, restarts=3, 
         better = low > lower[rows]
         lower[rows[better]], Delta[rows[better]] = low[better], D[better]
     return lower, Delta
+
+
+def _d_scaled_bound_is_mu(blocks):
+    """2 S + F <= 3 (S repeated complex scalars with k > 1, F other blocks): the bound is mu."""
+    S = sum(1 for b in blocks if b.repeated and b.size > 1)
+    return 2 * S + len(blocks) - S <= 3
 
 
 def _aligned_start(Dr, v):
