@@ -207,9 +207,10 @@ def complex_lower_bound(M, blocks, Dl, Dr, upper, *, iterations=60, restarts=3, 
     # sigma_max at the optimal D is a stall: v may be anywhere in the top singular
     # plane, and the aligned combination need not be the first singular vector.
     # (Elsewhere a double sigma_max mostly marks the bound's own conservatism.)
-    double = (s.shape[1] > 1) & (s[:, -1 if s.shape[1] < 2 else 1] >= (1 - 1e-6) * s[:, 0])
-    rows = np.nonzero(double & (lower < upper * (1 - 1e-6)))[0]
-    if rows.size and _d_scaled_bound_is_mu(blocks):
+    rows = np.zeros(0, int)
+    if s.shape[1] > 1 and _d_scaled_bound_is_mu(blocks):
+        rows = np.nonzero((s[:, 1] >= (1 - 1e-6) * s[:, 0]) & (lower < upper * (1 - 1e-6)))[0]
+    if rows.size:
         plane = [_aligned_start(Dr[rows], np.cos(phi) * V[rows, :, 0]
                                 + np.exp(1j * psi) * np.sin(phi) * V[rows, :, 1])
                  for phi in np.pi / 8 * np.arange(1, 5) for psi in np.pi / 2 * np.arange(4)

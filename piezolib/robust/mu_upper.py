@@ -374,7 +374,7 @@ def _block_gram(X, index_map, n):
 
     ``index_map`` gives each row of X its block's number (0: no block).
     """
-    N, r, k = X.shape
+    N, _, k = X.shape
     out = np.empty((N, n, k, k), complex)
     for j in range(n):
         Xj = X[:, index_map == j + 1]
