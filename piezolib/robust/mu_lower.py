@@ -53,7 +53,7 @@ def _power_iteration(M, layout, b, w, iterations, real_only):
     b, w = _unit(b), _unit(w)
     active = np.arange(N)
     Ma, MHa = M, MH
-    check = 10                      # sweeps between the (costly) eigenvalue checks
+    check = 15                      # sweeps between the (costly) eigenvalue checks
     for it in range(iterations):
         a, w, b = _power_sweep(Ma, MHa, layout, b, w)
         if (it + 1) % check and it != iterations - 1:

@@ -507,7 +507,7 @@ def _complex_upper(M, blocks, tol):
         # of the smoothing's own offset ~ 1/t; repeated scalars' non-convex
         # parametrisation wants each level converged
         loose = scaling.diagonal and t != _T_SCHEDULE[-1]
-        level_tol = max(tol, 1e-3 / t) if loose else tol
+        level_tol = max(tol, 1e-2 / t) if loose else tol
         _newton_level(M, np.nonzero(active_all)[0], state, scaling, t, free, level_tol)
         settled = active_all & _settled(M, theta, scaling, t)
         if level_tol > tol and np.any(settled):
