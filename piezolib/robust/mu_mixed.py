@@ -8,14 +8,14 @@ entry point.
 import numpy as np
 
 from piezolib.robust.blocks import Block, block_slices
-from piezolib.robust.mu_upper import _newton_direction, balancing_logs, complex_upper_bound
+from piezolib.robust.mu_upper import (_STEP_FRACTIONS, _central_difference_hessian,
+                                      _newton_direction, balancing_logs, complex_upper_bound)
 
 __all__ = ["mixed_upper_bound"]
 
 # continuation of the smoothing exponent of the D,G refinement (on eigenvalues / beta^2)
 _DG_T_SCHEDULE = tuple(4.0 ** np.array([2, 4, 6, 8, 10, 11]))
 _DG_NEWTON_ITERATIONS = 20
-_DG_STEP_FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125, 1 / 16, 1 / 64, 1 / 256])
 _DG_MAX_STEP = 2.0
 
 
@@ -163,17 +163,14 @@ class _DGProblem:
     """
 
     def __init__(self, nblock, itype):
-        starts = np.concatenate([[0], np.cumsum(nblock)[:-1]])
-        n = int(np.sum(nblock))
-        nb = len(nblock)
-        self.n = n
-        self.E = np.zeros((nb, n))                  # block indicators
-        for i, (s0, m) in enumerate(zip(starts, nblock)):
+        self.starts = np.concatenate([[0], np.cumsum(nblock)[:-1]])   # first row of each block
+        self.n = int(np.sum(nblock))
+        self.E = np.zeros((len(nblock), self.n))    # block indicators
+        for i, (s0, m) in enumerate(zip(self.starts, nblock)):
             self.E[i, s0:s0 + m] = 1.0
-        self.theta_blocks = np.arange(nb - 1)
-        self.real_rows = starts[np.asarray(itype) == 1]
-        self.n_theta, self.n_g = nb - 1, len(self.real_rows)
-        self.size = self.n_theta + self.n_g
+        self.real_rows = self.starts[np.asarray(itype) == 1]
+        self.n_theta = len(nblock) - 1
+        self.size = self.n_theta + len(self.real_rows)
 
     def split(self, x):
         """(log d per row, g per row) of parameters x = (theta, asinh g)."""
@@ -213,7 +210,7 @@ class _DGProblem:
         AHA_W = np.swapaxes(A, 1, 2).conj() @ AW          # A^H A W
         GAW = g[:, :, None] * AW                          # G A W
         WG = W * g[:, None, :]                            # W G
-        for j in self.theta_blocks:
+        for j in range(self.n_theta):
             e_j = self.E[j]
             t1 = 2 * np.einsum("na,a->n", np.diagonal(AWAH, axis1=1, axis2=2), e_j).real
             t2 = 2 * np.einsum("na,a->n", np.diagonal(AHA_W, axis1=1, axis2=2), e_j).real
@@ -242,13 +239,12 @@ def _refine_dg(M, nblock, itype, upper, dpad, gpad):
     if not np.any(np.asarray(itype) == 1) or M.shape[1] == 1:
         return upper, dpad, gpad
     prob = _DGProblem(nblock, itype)
-    starts = np.concatenate([[0], np.cumsum(nblock)[:-1]])
     ok = np.isfinite(upper) & (upper > 0) & np.all(dpad > 0, axis=1)
     rows = np.nonzero(ok)[0]
     if rows.size == 0 or prob.size == 0:
         return upper, dpad, gpad
     Mr = M[rows]
-    d0 = dpad[rows][:, starts]
+    d0 = dpad[rows][:, prob.starts]
     d0 = d0 / d0[:, -1:]
     # G = D^-1 Gt D^-1 does not change when (D^2, Gt) are scaled together
     x = np.concatenate([np.log(d0[:, :-1]), np.arcsinh(
@@ -320,20 +316,16 @@ def _certified_lambda_max(prob, M, x):
 
 def _dg_newton_model(prob, M, x, scale, t):
     """Surrogate, gradient and a Hessian by central differences of the gradient."""
-    N, P = x.shape
-    h = 1e-4 / np.sqrt(t)
-    shifts = np.concatenate([np.zeros((1, P)), h * np.eye(P), -h * np.eye(P)])
-    pts = (x[None] + shifts[:, None]).reshape(-1, P)
-    F, g, _ = prob.surrogate(np.tile(M, (len(shifts), 1, 1)), pts, np.tile(scale, len(shifts)), t)
-    g = g.reshape(len(shifts), N, P)
-    H = np.moveaxis((g[1:1 + P] - g[1 + P:]) / (2 * h), 0, 2)
-    return F[:N], g[0], 0.5 * (H + np.swapaxes(H, 1, 2))
+    copies = 2 * x.shape[1] + 1
+    return _central_difference_hessian(
+        lambda pts: prob.surrogate(np.tile(M, (copies, 1, 1)), pts, np.tile(scale, copies), t)[:2],
+        x, 1e-4 / np.sqrt(t), np.arange(x.shape[1]))
 
 
 def _dg_line_search(prob, M, x, step, scale, t, cap):
     """The fraction of the step with the lowest surrogate (all fractions at once)."""
     N, P = x.shape
-    fr = _DG_STEP_FRACTIONS
+    fr = _STEP_FRACTIONS
     cand = np.clip(x[None] + fr[:, None, None] * step[None], -cap, cap)
     F, _, lam = prob.surrogate(np.tile(M, (len(fr), 1, 1)), cand.reshape(-1, P),
                                np.tile(scale, len(fr)), t, need_grad=False)

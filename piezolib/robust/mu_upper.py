@@ -444,19 +444,30 @@ def _hessian_by_differences(M, theta, scaling, t, free):
     (Forward differences, half the cost, left repeated-scalar structures whose
     bound is exact up to 1e-6 above mu.)
     """
-    na, n = theta.shape
     cols = np.nonzero(free)[0]
-    nfree = cols.size
-    h = 1e-4 / np.sqrt(t)
-    shifts = np.zeros((2 * nfree + 1, n))
-    shifts[1 + np.arange(nfree), cols] = h
-    shifts[1 + nfree + np.arange(nfree), cols] = -h
-    pts = (theta[None] + shifts[:, None]).reshape(-1, n)
-    F, g, _ = _surrogate(np.tile(M, (len(shifts), 1, 1)), pts, scaling, t)
-    g = g.reshape(len(shifts), na, n)
-    H = np.zeros((na, n, n))
-    H[:, :, cols] = np.moveaxis((g[1:1 + nfree] - g[1 + nfree:]) / (2 * h), 0, 2)
-    return F[:na], g[0], H
+    copies = 2 * cols.size + 1
+    return _central_difference_hessian(
+        lambda pts: _surrogate(np.tile(M, (copies, 1, 1)), pts, scaling, t)[:2],
+        theta, 1e-4 / np.sqrt(t), cols)
+
+
+def _central_difference_hessian(value_and_gradient, x, h, cols):
+    """Value, gradient and Hessian columns ``cols`` by central differences of gradients.
+
+    ``value_and_gradient(points)`` maps the stacked points (2 len(cols) + 1
+    copies of x (N, n), shifted by +-h along each of ``cols``) to their values
+    and gradients; the other Hessian columns are zero.
+    """
+    N, n = x.shape
+    k = cols.size
+    shifts = np.zeros((2 * k + 1, n))
+    shifts[1 + np.arange(k), cols] = h
+    shifts[1 + k + np.arange(k), cols] = -h
+    F, g = value_and_gradient((x[None] + shifts[:, None]).reshape(-1, n))
+    g = g.reshape(len(shifts), N, n)
+    H = np.zeros((N, n, n))
+    H[:, :, cols] = np.moveaxis((g[1:1 + k] - g[1 + k:]) / (2 * h), 0, 2)
+    return F[:N], g[0], H
 
 
 def _line_search(M, theta, step, scaling, t, F0):
