@@ -219,8 +219,8 @@ class _Scaling:
                 grad[:, j] = wu[:, bo].sum(1) - wv[:, bi].sum(1)
         if self.tri:
             Dl, Dr, Dli, Dri = mats
-            GL = Dli @ np.einsum("npk,nk,nrk->npr", U, w, U.conj())
-            GR = Dri @ np.einsum("nqk,nk,nrk->nqr", V, w, V.conj())
+            GL = Dli @ ((U * w[:, None, :]) @ np.swapaxes(U, 1, 2).conj())
+            GR = Dri @ ((V * w[:, None, :]) @ np.swapaxes(V, 1, 2).conj())
             for i, sl, rows, cols in self.tri:
                 bi, bo = self.slots[i]
                 gl = GL[:, bo, bo]
@@ -259,21 +259,26 @@ def _svd(A, compute_uv=True):
     """Thin SVD of a stack of matrices: U (N, p, k), s (N, k), V (N, q, k).
 
     Closed form when min(p, q) <= 2 (the paper's M is 3 x 2), where LAPACK's
-    per-matrix overhead dominates; LAPACK otherwise, and the singular values
-    alone from the eigenvalues of the smaller Gram matrix.  Through the Gram
-    matrix sigma_max has full relative accuracy and a small sigma_k absolute
-    accuracy ~ sqrt(eps) sigma_max, which is all the surrogate needs (its
-    weight (sigma_k / sigma_max)^t on small sigma_k vanishes).
+    per-matrix overhead dominates; otherwise from the eigen-decomposition of
+    the smaller Gram matrix (cheaper than LAPACK's SVD), U = A V / sigma.
+    Through the Gram matrix sigma_max has full relative accuracy and a small
+    sigma_k absolute accuracy ~ sqrt(eps) sigma_max, which is all the
+    surrogate needs (its weight (sigma_k / sigma_max)^t on small sigma_k
+    vanishes); a zero sigma_k gets a zero column of U.
     """
     N, p, q = A.shape
     if min(p, q) > 2:
         if not compute_uv:
-            # eigenvalues of the smaller Gram matrix: cheaper than LAPACK's SVD, same accuracy
-            # for sigma_max; the small ones are only weighted by (sigma_k / sigma_max)^t
             G = A @ np.swapaxes(A, 1, 2).conj() if p <= q else np.swapaxes(A, 1, 2).conj() @ A
             return np.sqrt(np.maximum(np.linalg.eigvalsh(G)[:, ::-1], 0.0))
-        U, s, Vh = np.linalg.svd(A, full_matrices=False)
-        return U, s, np.swapaxes(Vh, 1, 2).conj()
+        if p < q:
+            V, s, U = _svd(np.swapaxes(A, 1, 2).conj())
+            return U, s, V
+        lam, V = np.linalg.eigh(np.swapaxes(A, 1, 2).conj() @ A)
+        s = np.sqrt(np.maximum(lam[:, ::-1], 0.0))
+        V = V[:, :, ::-1]
+        U = (A @ V) / np.where(s > 0, s, 1)[:, None, :]
+        return U, s, V
     if p < q:   # work on A^H: swap the roles of U and V
         out = _svd(np.swapaxes(A, 1, 2).conj(), compute_uv)
         return out if not compute_uv else (out[2], out[1], out[0])
@@ -329,19 +334,26 @@ def _log_schatten(s, t):
     return np.log(s1[:, 0]) + np.log(total) / t, r / total[:, None]
 
 
-def _newton_direction(H, g, free, max_step=None):
+def _absolute_eigh(H, free):
+    """Eigen-decomposition (lambda, Q) of H on the free parameters, |lambda| floored above 0.
+
+    |lambda|: along negative curvature (the repeated scalars' triangular
+    parametrisation is not convex) a step goes downhill, as far as the curvature says.
+    """
+    Hf = H[:, free][:, :, free]
+    lam, Q = np.linalg.eigh(0.5 * (Hf + np.swapaxes(Hf, 1, 2)))
+    floor = 1e-9 * np.maximum(np.abs(lam).max(1, keepdims=True), 1.0)
+    return np.maximum(np.abs(lam), floor), Q
+
+
+def _newton_direction(H, g, free, max_step=None, eig=None):
     """Regularised Newton direction -H^-1 g on the free parameters, and its decrement.
 
-    The step's length is limited to ``max_step`` (default ``_MAX_STEP``).
+    The step's length is limited to ``max_step`` (default ``_MAX_STEP``);
+    ``eig`` is H's :func:`_absolute_eigh` where already computed.
     """
     max_step = _MAX_STEP if max_step is None else max_step
-    Hf = H[:, free][:, :, free]
-    Hf = 0.5 * (Hf + np.swapaxes(Hf, 1, 2))
-    lam, Q = np.linalg.eigh(Hf)
-    floor = 1e-9 * np.maximum(np.abs(lam).max(1, keepdims=True), 1.0)
-    # |lambda|: along negative curvature (the repeated scalars' triangular
-    # parametrisation is not convex) step downhill, as far as the curvature says
-    lam = np.maximum(np.abs(lam), floor)
+    lam, Q = _absolute_eigh(H, free) if eig is None else eig
     gf = g[:, free]
     step = np.zeros_like(g)
     step[:, free] = -np.einsum("nij,nj,nkj,nk->ni", Q, 1 / lam, Q, gf)
@@ -512,48 +524,123 @@ def _complex_upper(M, blocks, tol):
     free = scaling.free()
     active_all = best > 0            # mu = 0 where M = 0: nothing to optimise
     state = (theta, best, best_theta)
+    # repeated scalars: Hessians carried from level to level (NaN: none yet)
+    hessians = None if scaling.diagonal else np.full((nf, n, n), np.nan)
     for t in _T_SCHEDULE:
         # a level before the last only sets the start of the next one: with
         # scalar scalings (a convex surrogate) its minimiser is needed to a fraction
         # of the smoothing's own offset ~ 1/t; repeated scalars' non-convex
-        # parametrisation wants each level converged
-        loose = scaling.diagonal and t != _T_SCHEDULE[-1]
-        level_tol = max(tol, 1e-2 / t) if loose else tol
-        _newton_level(M, np.nonzero(active_all)[0], state, scaling, t, free, level_tol)
+        # parametrisation wants each level converged, but may stop there on an
+        # updated Hessian (the last level stops on a recomputed one)
+        last = t == _T_SCHEDULE[-1]
+        level_tol = max(tol, 1e-2 / t) if scaling.diagonal and not last else tol
+        _newton_level(M, np.nonzero(active_all)[0], state, scaling, t, free, level_tol,
+                      hessians, strict=last)
         settled = active_all & _settled(M, theta, scaling, t)
-        if level_tol > tol and np.any(settled):
+        if not last and np.any(settled):
             # leaving the continuation here: this level's minimiser is the answer
-            _newton_level(M, np.nonzero(settled)[0], state, scaling, t, free, tol)
+            _newton_level(M, np.nonzero(settled)[0], state, scaling, t, free, tol, hessians,
+                          strict=True)
         active_all &= ~settled
     return best, best_theta, scaling
 
 
-def _newton_level(M, active, state, scaling, t, free, tol):
+def _newton_level(M, active, state, scaling, t, free, tol, hessians=None, strict=True):
     """Newton steps on the level-t surrogate for the matrices ``active``.
 
     Updates ``state`` = (theta, best, best_theta) in place: the current
     parameters, and the smallest sigma_max seen (that is the bound) with its
     parameters.  A matrix stops when a step no longer lowers the surrogate
     by ``tol`` (or its Newton decrement is below it).
+
+    Diagonal scalings have an exact Hessian at the cost of one eigen-
+    decomposition.  Repeated scalars' Hessian takes 2 n + 1 gradients by
+    differences: it is recomputed only after a step that failed (and, with
+    ``strict``, before a matrix stops), and otherwise updated by BFGS from one
+    gradient per step.  ``hessians`` (nf, n, n) carries those Hessians from
+    level to level (NaN: none yet), and is updated in place.
     """
     theta, best, best_theta = state
+    model = None                     # (F, g, H) at theta of the active rows
+    if not scaling.diagonal and active.size:
+        F, g, _ = _surrogate(M[active], theta[active], scaling, t)
+        model = (F, g, hessians[active])
     for _ in range(_NEWTON_ITERATIONS):
         if active.size == 0:
             break
         Ma, th = M[active], theta[active]
         if scaling.diagonal:
             F0, g0, H, _ = _diagonal_newton_model(Ma, th, scaling, t)
+            fresh = np.ones(active.size, bool)
         else:
-            F0, g0, H = _hessian_by_differences(Ma, th, scaling, t, free)
-        step, dec = _newton_direction(H, g0, free)
+            F0, g0, H, fresh = _refreshed_model(Ma, th, scaling, t, free, model)
+        eig = _absolute_eigh(H, free)
+        step, dec = _newton_direction(H, g0, free, eig=eig)
         Fnew, sbest, cand_best, cand_new = _line_search(Ma, th, step, scaling, t, F0)
         improved = Fnew < F0
         theta[active[improved]] = cand_new[improved]
         better = sbest < best[active]
         best[active[better]] = sbest[better]
         best_theta[active[better]] = cand_best[better]
-        done = (~improved) | (dec < tol) | (F0 - Fnew < tol)
+        converged = (dec < tol) | (F0 - Fnew < tol)
+        done = (~improved | converged) & (fresh | (improved & converged & (not strict)))
+        # a failed step on an updated Hessian (or, if strict, a converged one) recomputes it
+        retry = ~fresh & ~done & (~improved | converged)
+        if not scaling.diagonal:
+            hessians[active[done]] = H[done]
+            model = _updated_model(Ma, theta[active], scaling, t, free, (F0, g0, eig), th,
+                                   improved, retry, done)
+            model = tuple(x[~done] for x in model)
         active = active[~done]
+    if model is not None and active.size:
+        hessians[active] = model[2]
+
+
+def _refreshed_model(M, theta, scaling, t, free, model):
+    """Surrogate, gradient and Hessian, recomputed by differences where ``model`` has none.
+
+    ``model`` (F, g, H) carries rows whose H is NaN where a recomputation is
+    due; returns F, g, H and which rows were recomputed.
+    """
+    if model is None:
+        F, g, H = _hessian_by_differences(M, theta, scaling, t, free)
+        return F, g, H, np.ones(len(M), bool)
+    F, g, H = (x.copy() for x in model)
+    fresh = np.isnan(H[:, 0, 0])
+    if np.any(fresh):
+        F[fresh], g[fresh], H[fresh] = _hessian_by_differences(M[fresh], theta[fresh], scaling,
+                                                               t, free)
+    return F, g, H, fresh
+
+
+def _updated_model(M, theta, scaling, t, free, model, theta0, improved, retry, done):
+    """The next step's model: BFGS-updated where a step was taken, NaN-marked to recompute.
+
+    The update acts on the positive definite |H| the step was taken with
+    (``eig``: its :func:`_absolute_eigh`) and is skipped where y^T s <= 0.
+    """
+    F0, g0, (lam, Q) = model
+    N, n = g0.shape
+    F, g = F0.copy(), g0.copy()
+    Hn = np.full((N, n, n), np.nan)
+    moved = improved & ~done & ~retry
+    if np.any(moved):
+        F[moved], g[moved], _ = _surrogate(M[moved], theta[moved], scaling, t)
+        s = theta[moved] - theta0[moved]
+        y = g[moved] - g0[moved]
+        Hm = np.zeros((s.shape[0], n, n))
+        idx = np.nonzero(free)[0]
+        Hm[:, idx[:, None], idx[None, :]] = (Q[moved] * lam[moved][:, None, :]) @ np.swapaxes(
+            Q[moved], 1, 2)
+        Hs = np.einsum("nij,nj->ni", Hm, s)
+        sHs = np.einsum("ni,ni->n", s, Hs)
+        ys = np.einsum("ni,ni->n", y, s)
+        ok = (ys > 1e-12 * np.linalg.norm(y, axis=1) * np.linalg.norm(s, axis=1)) & (sHs > 0)
+        upd = (Hm - np.einsum("ni,nj->nij", Hs, Hs) / np.where(ok, sHs, 1)[:, None, None]
+               + np.einsum("ni,nj->nij", y, y) / np.where(ok, ys, 1)[:, None, None])
+        Hn[moved] = np.where(ok[:, None, None], upd, Hm)
+    # improved and retried rows have a new theta: their F, g come with the recomputation
+    return F, g, Hn
 
 
 def _settled(M, theta, scaling, t):

@@ -115,3 +115,31 @@ def test_analytic_hessian_matches_differences_of_the_gradient(blk, p, q, t):
         fd[:, :, j] = (mu_upper._surrogate(M, theta + e, scaling, t)[1]
                        - mu_upper._surrogate(M, theta - e, scaling, t)[1]) / (2 * h)
     np.testing.assert_allclose(hess, fd, atol=1e-6 * np.abs(fd).max())
+
+
+def test_repeated_scalar_scalings_are_locally_optimal():
+    # the repeated scalars' Newton steps run on BFGS-updated Hessians between
+    # recomputations: no structured change of the returned D may lower the bound
+    from scipy.optimize import minimize
+    rng = np.random.default_rng(8)
+    blk = [(2, 0), (1, 1), (2, 0), (1, 2)]            # 2 S + F = 6: the bound is not mu
+    M = crandn(rng, 3, 7, 6)
+    res = mussv(M, blk, lower=False)
+    for k in range(3):
+        A = res.Dl[k] @ M[k] @ np.linalg.inv(res.Dr[k])
+        assert np.isclose(sigma_max(A), res.upper[k], rtol=1e-10)
+
+        def scaled(x):
+            # X = blockdiag(2x2 complex, d_s, 2x2 complex, d_f I) on the outputs, the inputs alike
+            a = (x[:4] + 1j * x[4:8]).reshape(2, 2) + np.eye(2)
+            b = (x[8:12] + 1j * x[12:16]).reshape(2, 2) + np.eye(2)
+            ds, df = np.exp(x[16]), np.exp(x[17])
+            Xl = np.zeros((7, 7), complex)
+            Xl[:2, :2], Xl[2, 2], Xl[3:5, 3:5], Xl[5:, 5:] = a, ds, b, df * np.eye(2)
+            Xr = np.zeros((6, 6), complex)
+            Xr[:2, :2], Xr[2, 2], Xr[3:5, 3:5], Xr[5, 5] = a, ds, b, df
+            return sigma_max(Xl @ A @ np.linalg.inv(Xr))
+
+        best = minimize(scaled, np.zeros(18), method="Nelder-Mead",
+                        options={"maxfev": 20000, "xatol": 1e-10, "fatol": 1e-14}).fun
+        assert best >= res.upper[k] * (1 - 1e-6)
