@@ -143,3 +143,23 @@ def test_repeated_scalar_scalings_are_locally_optimal():
         best = minimize(scaled, np.zeros(18), method="Nelder-Mead",
                         options={"maxfev": 20000, "xatol": 1e-10, "fatol": 1e-14}).fun
         assert best >= res.upper[k] * (1 - 1e-6)
+
+
+def test_scalar_bound_reaches_the_optimum_beside_a_kink():
+    # here sigma_max's optimum has a double singular value, and the smoothed
+    # surrogate's Newton steps once stalled 8.5e-6 above it: even 1/256 of a step
+    # overshot the kink, so the line search now also tries much shorter steps
+    from scipy.optimize import minimize
+    rng = np.random.default_rng(0)
+    M = crandn(rng, 300, 8, 8)[77]
+    res = mussv(M, [(1, 1)] * 8, lower=False)
+    d = np.diag(res.Dl[0]).real
+
+    def scaled(x):
+        e = d * np.exp(np.append(x, 0.0))
+        return sigma_max(e[:, None] * M / e[None, :])
+
+    best = minimize(scaled, np.zeros(7), method="Nelder-Mead",
+                    options={"initial_simplex": np.vstack([np.zeros(7), 1e-3 * np.eye(7)]),
+                             "maxfev": 20000, "xatol": 1e-12, "fatol": 1e-15}).fun
+    assert best >= res.upper[0] * (1 - 1e-7)
