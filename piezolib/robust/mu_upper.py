@@ -18,6 +18,8 @@ _T_SCHEDULE = tuple(2.0 ** np.array([1, 4, 7, 10, 12, 14, 16, 18, 20, 22]))
 _NEWTON_ITERATIONS = 40           # per smoothing level (most stop after 2-4)
 _STEP_FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125, 1 / 16, 1 / 64, 1 / 256])
 _SHORT_FRACTIONS = 2.0 ** -np.array([10, 13, 16, 19])   # where all of those fail
+_WARM_STRIDE = 4                  # every 4th frequency starts cold (scalar scalings)
+_WARM_LEVEL = 1024.0              # the others start at this smoothing level
 _MAX_STEP = 4.0                   # [log units] per Newton step
 _MAX_LOG_SCALE = 200.0            # |log d| bound relative to the balanced start
 _OSBORNE_SWEEPS = 60
@@ -527,14 +529,18 @@ def _shorter_steps(M, theta, step, scaling, t, fractions, retry, found):
     s[retry[use_s]] = ss[ks[use_s], cols[use_s]]
 
 
-def _complex_upper(M, blocks, tol):
-    """D-scaled upper bound for complex structures; returns (upper, theta, scaling)."""
+def _complex_upper(M, blocks, tol, theta0=None, schedule=_T_SCHEDULE):
+    """D-scaled upper bound for complex structures; returns (upper, theta, scaling).
+
+    The Newton steps start from ``theta0`` (default 0: the balanced M) and
+    run the smoothing levels ``schedule``.
+    """
     nf, p, q = M.shape
     scaling = _Scaling(blocks, p, q)
     n = scaling.n
-    theta = np.zeros((nf, n))
+    theta = np.zeros((nf, n)) if theta0 is None else theta0.copy()
     best = np.linalg.svd(M, compute_uv=False)[:, 0]
-    best_theta = theta.copy()
+    best_theta = np.zeros((nf, n))
     if n == 0 or (scaling.fixed is not None and n == 1):
         return best, best_theta, scaling
     free = scaling.free()
@@ -542,13 +548,13 @@ def _complex_upper(M, blocks, tol):
     state = (theta, best, best_theta)
     # repeated scalars: Hessians carried from level to level (NaN: none yet)
     hessians = None if scaling.diagonal else np.full((nf, n, n), np.nan)
-    for t in _T_SCHEDULE:
+    for t in schedule:
         # a level before the last only sets the start of the next one: with
         # scalar scalings (a convex surrogate) its minimiser is needed to a fraction
         # of the smoothing's own offset ~ 1/t; repeated scalars' non-convex
         # parametrisation wants each level converged, but may stop there on an
         # updated Hessian (the last level stops on a recomputed one)
-        last = t == _T_SCHEDULE[-1]
+        last = t == schedule[-1]
         level_tol = max(tol, 1e-2 / t) if scaling.diagonal and not last else tol
         _newton_level(M, np.nonzero(active_all)[0], state, scaling, t, free, level_tol,
                       hessians, strict=last)
@@ -672,6 +678,55 @@ def _settled(M, theta, scaling, t):
     return rest < 1e-15
 
 
+def _warm_started_upper(M0, blocks, tol, xl0):
+    """:func:`_complex_upper` on a frequency grid of balanced matrices M0, warm-started.
+
+    Every ``_WARM_STRIDE``-th matrix runs all smoothing levels; the others
+    start from the nearest of those's scalings (carried through the two
+    balancings: only ratios of block scales matter) and run the levels from
+    t = ``_WARM_LEVEL`` on, where that start is no worse than the balancing
+    itself.  For scalar scalings only, where each level is convex; measured on
+    8 scalar blocks: 30-45 % less time, bounds within 5e-8 of the cold start's.
+    """
+    nf = M0.shape[0]
+    cold = np.zeros(nf, bool)
+    cold[::_WARM_STRIDE] = True
+    cold[-1] = True
+    rows = np.nonzero(cold)[0]
+    up_c, th_c, scaling = _complex_upper(M0[rows], blocks, tol)
+    upper, theta = np.zeros(nf), np.zeros((nf, scaling.n))
+    upper[rows], theta[rows] = up_c, th_c
+    warm = np.nonzero(~cold)[0]
+    nearest = rows[np.argmin(np.abs(warm[:, None] - rows[None, :]), axis=1)]
+    theta0 = _carried_scalings(scaling, theta[nearest], xl0[nearest], xl0[warm])
+    plain = _svd(M0[warm], compute_uv=False)[:, 0]
+    started = _svd(scaling.scaled(M0[warm], theta0)[0], compute_uv=False)[:, 0]
+    good = started <= plain
+    schedule = tuple(t for t in _T_SCHEDULE if t >= _WARM_LEVEL)
+    for use, th0, sched in ((good, theta0[good], schedule), (~good, None, _T_SCHEDULE)):
+        if np.any(use):
+            up_w, th_w, _ = _complex_upper(M0[warm[use]], blocks, tol, th0, sched)
+            upper[warm[use]], theta[warm[use]] = up_w, th_w
+    return upper, theta, scaling
+
+
+def _carried_scalings(scaling, theta, xl_from, xl_to):
+    """Scalar-scaling parameters that give matrices balanced by ``xl_to`` the D of ``theta``.
+
+    ``theta`` (N, n) parametrises D relative to the balancing ``xl_from`` (N, p);
+    only each block's scale relative to the reference block's matters.
+    """
+    first_row = {i: outputs.start for i, (_, outputs) in enumerate(scaling.slots)}
+    ref = first_row[scaling.reference]
+    out = np.zeros_like(theta)
+    for i, j in scaling.scalar_index.items():
+        if j >= 0:
+            rel_from = xl_from[:, first_row[i]] - xl_from[:, ref]
+            rel_to = xl_to[:, first_row[i]] - xl_to[:, ref]
+            out[:, j] = theta[:, j] + rel_from - rel_to
+    return out
+
+
 def complex_upper_bound(M, blocks, tol=1e-12):
     """D-scaled upper bound of mu for a structure without real blocks.
 
@@ -702,7 +757,10 @@ def complex_upper_bound(M, blocks, tol=1e-12):
     nf, p, q = M.shape
     xl0, xr0 = balancing_logs(M, blocks)
     M0 = np.exp(xl0)[:, :, None] * M * np.exp(-xr0)[:, None, :]
-    upper, theta, scaling = _complex_upper(M0, blocks, tol)
+    if _Scaling(blocks, p, q).diagonal and nf >= 4 * _WARM_STRIDE:
+        upper, theta, scaling = _warm_started_upper(M0, blocks, tol, xl0)
+    else:
+        upper, theta, scaling = _complex_upper(M0, blocks, tol)
     Dl, Dr, _, _ = scaling.matrices(theta)
     Dl = Dl * np.exp(xl0)[:, None, :]            # D = D_theta @ diag(exp(x0))
     Dr = Dr * np.exp(xr0)[:, None, :]
