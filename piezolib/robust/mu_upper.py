@@ -638,8 +638,9 @@ def _refreshed_model(M, theta, scaling, t, free, model):
 def _updated_model(M, theta, scaling, t, free, model, theta0, improved, retry, done):
     """The next step's model: BFGS-updated where a step was taken, NaN-marked to recompute.
 
-    The update acts on the positive definite |H| the step was taken with
-    (``eig``: its :func:`_absolute_eigh`) and is skipped where y^T s <= 0.
+    ``model`` = (F, g, eig) at ``theta0``, eig the :func:`_absolute_eigh` of
+    the Hessian the step was taken with: the update acts on that positive
+    definite |H|, and is skipped where y^T s <= 0.
     """
     F0, g0, (lam, Q) = model
     N, n = g0.shape
