@@ -758,7 +758,7 @@ def complex_upper_bound(M, blocks, tol=1e-12):
     nf, p, q = M.shape
     xl0, xr0 = balancing_logs(M, blocks)
     M0 = np.exp(xl0)[:, :, None] * M * np.exp(-xr0)[:, None, :]
-    if _Scaling(blocks, p, q).diagonal and nf >= 4 * _WARM_STRIDE:
+    if all(b.scalar_scaling for b in blocks) and nf >= 4 * _WARM_STRIDE:
         upper, theta, scaling = _warm_started_upper(M0, blocks, tol, xl0)
     else:
         upper, theta, scaling = _complex_upper(M0, blocks, tol)
