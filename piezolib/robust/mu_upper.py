@@ -337,29 +337,39 @@ def _log_schatten(s, t):
     return np.log(s1[:, 0]) + np.log(total) / t, r / total[:, None]
 
 
-def _absolute_eigh(H, free):
-    """Eigen-decomposition (lambda, Q) of H on the free parameters, |lambda| floored above 0.
+def _absolute_hessian(H, free, rows=None):
+    """H on the free parameters with its eigenvalues replaced by their magnitudes, floored above 0.
 
+    Only ``rows`` (default: all) are transformed; the others are taken to be
+    positive definite already.  Fixed parameters' rows and columns are zero.
     |lambda|: along negative curvature (the repeated scalars' triangular
     parametrisation is not convex) a step goes downhill, as far as the curvature says.
     """
-    Hf = H[:, free][:, :, free]
-    lam, Q = np.linalg.eigh(0.5 * (Hf + np.swapaxes(Hf, 1, 2)))
-    floor = 1e-9 * np.maximum(np.abs(lam).max(1, keepdims=True), 1.0)
-    return np.maximum(np.abs(lam), floor), Q
+    idx = np.nonzero(free)[0]
+    Hf = H[:, idx[:, None], idx[None, :]]
+    Hf = 0.5 * (Hf + np.swapaxes(Hf, 1, 2))
+    rows = np.ones(len(H), bool) if rows is None else rows
+    if np.any(rows):
+        lam, Q = np.linalg.eigh(Hf[rows])
+        floor = 1e-9 * np.maximum(np.abs(lam).max(1, keepdims=True), 1.0)
+        Hf[rows] = (Q * np.maximum(np.abs(lam), floor)[:, None, :]) @ np.swapaxes(Q, 1, 2)
+    out = np.zeros_like(H)
+    out[:, idx[:, None], idx[None, :]] = Hf
+    return out
 
 
-def _newton_direction(H, g, free, max_step=None, eig=None):
+def _newton_direction(H, g, free, max_step=None, positive=False):
     """Regularised Newton direction -H^-1 g on the free parameters, and its decrement.
 
-    The step's length is limited to ``max_step`` (default ``_MAX_STEP``);
-    ``eig`` is H's :func:`_absolute_eigh` where already computed.
+    H is first made positive definite (:func:`_absolute_hessian`) unless
+    ``positive`` says it is.  The step's length is limited to ``max_step``
+    (default ``_MAX_STEP``).
     """
     max_step = _MAX_STEP if max_step is None else max_step
-    lam, Q = _absolute_eigh(H, free) if eig is None else eig
-    gf = g[:, free]
+    H = H if positive else _absolute_hessian(H, free)
+    idx = np.nonzero(free)[0]
     step = np.zeros_like(g)
-    step[:, free] = -np.einsum("nij,nj,nkj,nk->ni", Q, 1 / lam, Q, gf)
+    step[:, idx] = -np.linalg.solve(H[:, idx[:, None], idx[None, :]], g[:, idx, None])[:, :, 0]
     norm = np.linalg.norm(step, axis=1, keepdims=True)
     step *= np.minimum(1.0, max_step / np.maximum(norm, 1e-300))
     decrement = -np.einsum("ni,ni->n", step, g)
@@ -596,8 +606,9 @@ def _newton_level(M, active, state, scaling, t, free, tol, hessians=None, strict
             fresh = np.ones(active.size, bool)
         else:
             F0, g0, H, fresh = _refreshed_model(Ma, th, scaling, t, free, model)
-        eig = _absolute_eigh(H, free)
-        step, dec = _newton_direction(H, g0, free, eig=eig)
+        # updated Hessians are positive definite already (BFGS on a positive one)
+        H = _absolute_hessian(H, free, fresh)
+        step, dec = _newton_direction(H, g0, free, positive=True)
         Fnew, sbest, cand_best, cand_new = _line_search(Ma, th, step, scaling, t, F0)
         improved = Fnew < F0
         theta[active[improved]] = cand_new[improved]
@@ -610,7 +621,7 @@ def _newton_level(M, active, state, scaling, t, free, tol, hessians=None, strict
         retry = ~fresh & ~done & (~improved | converged)
         if not scaling.diagonal:
             hessians[active[done]] = H[done]
-            model = _updated_model(Ma, theta[active], scaling, t, free, (F0, g0, eig), th,
+            model = _updated_model(Ma, theta[active], scaling, t, (F0, g0, H), th,
                                    improved, retry, done)
             model = tuple(x[~done] for x in model)
         active = active[~done]
@@ -635,14 +646,14 @@ def _refreshed_model(M, theta, scaling, t, free, model):
     return F, g, H, fresh
 
 
-def _updated_model(M, theta, scaling, t, free, model, theta0, improved, retry, done):
+def _updated_model(M, theta, scaling, t, model, theta0, improved, retry, done):
     """The next step's model: BFGS-updated where a step was taken, NaN-marked to recompute.
 
-    ``model`` = (F, g, eig) at ``theta0``, eig the :func:`_absolute_eigh` of
-    the Hessian the step was taken with: the update acts on that positive
-    definite |H|, and is skipped where y^T s <= 0.
+    ``model`` = (F, g, H) at ``theta0``, H the positive definite Hessian the
+    step was taken with (:func:`_absolute_hessian`); the update keeps it
+    positive definite, and is skipped where y^T s <= 0.
     """
-    F0, g0, (lam, Q) = model
+    F0, g0, H = model
     N, n = g0.shape
     F, g = F0.copy(), g0.copy()
     Hn = np.full((N, n, n), np.nan)
@@ -651,10 +662,7 @@ def _updated_model(M, theta, scaling, t, free, model, theta0, improved, retry, d
         F[moved], g[moved], _ = _surrogate(M[moved], theta[moved], scaling, t)
         s = theta[moved] - theta0[moved]
         y = g[moved] - g0[moved]
-        Hm = np.zeros((s.shape[0], n, n))
-        idx = np.nonzero(free)[0]
-        Hm[:, idx[:, None], idx[None, :]] = (Q[moved] * lam[moved][:, None, :]) @ np.swapaxes(
-            Q[moved], 1, 2)
+        Hm = H[moved]
         Hs = np.einsum("nij,nj->ni", Hm, s)
         sHs = np.einsum("ni,ni->n", s, Hs)
         ys = np.einsum("ni,ni->n", y, s)
