@@ -204,14 +204,24 @@ class _Scaling:
         return L
 
     def scaled(self, M, theta):
+        """Dl M Dr^-1 (N, p, q), and each repeated scalar's L_i^-1 (None if there are none)."""
+        xl, xr = self.diag_logs(theta)
+        A = np.exp(xl)[:, :, None] * M * np.exp(-xr)[:, None, :]
         if self.diagonal:
-            xl, xr = self.diag_logs(theta)
-            return np.exp(xl)[:, :, None] * M * np.exp(-xr)[:, None, :], None
-        Dl, Dr, Dli, Dri = self.matrices(theta)
-        return Dl @ M @ Dri, (Dl, Dr, Dli, Dri)
+            return A, None
+        # block by block: D is diagonal apart from the repeated scalars' k x k L_i
+        inverses = []
+        for i, sl, rows, cols in self.tri:
+            bi, bo = self.slots[i]
+            L = self._triangle(theta[:, sl], self.blocks[i].size, rows, cols)
+            Li = np.linalg.inv(L)
+            A[:, bo, :] = L @ A[:, bo, :]
+            A[:, :, bi] = A[:, :, bi] @ Li
+            inverses.append(Li)
+        return A, inverses
 
-    def gradient(self, theta, U, V, w, mats):
-        """Gradient of sum_k w_k log sigma_k with respect to theta."""
+    def gradient(self, theta, U, V, w, inverses):
+        """Gradient of sum_k w_k log sigma_k with respect to theta (``inverses`` from :meth:`scaled`)."""
         N = theta.shape[0]
         grad = np.zeros((N, self.n))
         # diagonal of W_U = U diag(w) U^H and W_V
@@ -222,14 +232,12 @@ class _Scaling:
                 bi, bo = self.slots[i]
                 grad[:, j] = wu[:, bo].sum(1) - wv[:, bi].sum(1)
         if self.tri:
-            Dl, Dr, Dli, Dri = mats
-            GL = Dli @ ((U * w[:, None, :]) @ np.swapaxes(U, 1, 2).conj())
-            GR = Dri @ ((V * w[:, None, :]) @ np.swapaxes(V, 1, 2).conj())
-            for i, sl, rows, cols in self.tri:
+            Uw, Vw = U * w[:, None, :], V * w[:, None, :]
+            for (i, sl, rows, cols), Li in zip(self.tri, inverses):
                 bi, bo = self.slots[i]
-                gl = GL[:, bo, bo]
-                gr = GR[:, bi, bi]
-                diff = gl - gr
+                # block (bo, bo) of L^-1 U diag(w) U^H, minus block (bi, bi) of the V analogue
+                diff = Li @ (Uw[:, bo] @ np.swapaxes(U[:, bo], 1, 2).conj()
+                             - Vw[:, bi] @ np.swapaxes(V[:, bi], 1, 2).conj())
                 k, m = self.blocks[i].size, rows.size
                 idx = np.arange(k)
                 par = theta[:, sl]
@@ -249,13 +257,13 @@ def _surrogate(M, theta, scaling, t, need_grad=True):
 
     Returns F (N,), gradient (N, n) or None, sigma_max (N,).
     """
-    A, mats = scaling.scaled(M, theta)
+    A, inverses = scaling.scaled(M, theta)
     if not need_grad:
         s = _svd(A, compute_uv=False)
         return _log_schatten(s, t)[0], None, s[:, 0]
     U, s, V = _svd(A)
     F, w = _log_schatten(s, t)
-    grad = scaling.gradient(theta, U, V, w, mats)
+    grad = scaling.gradient(theta, U, V, w, inverses)
     return F, grad, s[:, 0]
 
 
