@@ -505,7 +505,7 @@ def _central_difference_hessian(value_and_gradient, x, h, cols):
 
 
 def _line_search(M, theta, step, scaling, t, F0):
-    """Full Newton step, then the shorter fractions only where it did not decrease F.
+    """Full Newton step, then shorter fractions only where the longer ones did not decrease F.
 
     Where none of ``_STEP_FRACTIONS`` decreases F either, fractions down to
     2^-19 are tried: close to a kink of sigma_max (two singular values a
@@ -519,7 +519,9 @@ def _line_search(M, theta, step, scaling, t, F0):
     cand = np.clip(theta + step, -_MAX_LOG_SCALE, _MAX_LOG_SCALE)
     F, _, s = _surrogate(M, cand, scaling, t, need_grad=False)
     cand_F, cand_s = cand.copy(), cand.copy()
-    for fractions in (_STEP_FRACTIONS[1:], _SHORT_FRACTIONS):
+    # halving first: where the full step fails, 1/2 or 1/4 of it mostly succeeds
+    for fractions in (_STEP_FRACTIONS[1:2], _STEP_FRACTIONS[2:3], _STEP_FRACTIONS[3:],
+                      _SHORT_FRACTIONS):
         retry = np.nonzero(~(F < F0))[0]
         if retry.size:
             _shorter_steps(M, theta, step, scaling, t, fractions, retry, (F, s, cand_F, cand_s))
