@@ -165,20 +165,22 @@ def test_scalar_bound_reaches_the_optimum_beside_a_kink():
     assert best >= res.upper[0] * (1 - 1e-7)
 
 
-def test_warm_start_along_frequency_matches_cold_starts():
-    # on a frequency grid, scalar-scaled structures start 3 of 4 frequencies from a
-    # neighbour's scalings at a late smoothing level; the bounds must be those of
-    # cold starts (blocks of 8 frequencies are too few for the warm start), also
-    # when the rows and columns of M are scaled differently at each frequency
+@pytest.mark.parametrize("blk", [[(1, 1)] * 6 + [(1, 2)], [(2, 0), (1, 1), (3, 0), (1, 2)]],
+                         ids=["scalars", "repeated"])
+def test_warm_start_along_frequency_matches_cold_starts(blk):
+    # on a frequency grid, 3 of 4 frequencies start from a neighbour's scalings at
+    # a late smoothing level; the bounds must be those of cold starts (blocks of 8
+    # frequencies are too few for the warm start), also when the rows and columns
+    # of M are scaled differently at each frequency
     rng = np.random.default_rng(2)
-    nf, blk = 64, [(1, 1)] * 6 + [(1, 2)]
+    nf, p, q = 64, *(sum(c or r for r, c in blk), sum(r for r, _ in blk))
     A = np.diag(-10 ** rng.uniform(-1, 2, 4))
-    B, C = crandn(rng, 4, 7), crandn(rng, 8, 4)
+    B, C = crandn(rng, 4, q), crandn(rng, p, 4)
     s = 1j * np.logspace(-2, 3, nf)
-    M = C @ np.linalg.solve(s[:, None, None] * np.eye(4) - A, np.broadcast_to(B, (nf, 4, 7)))
+    M = C @ np.linalg.solve(s[:, None, None] * np.eye(4) - A, np.broadcast_to(B, (nf, 4, q)))
     phase = np.linspace(0, 3, nf)[:, None]
-    M = (10 ** (2 * np.sin(phase + np.arange(8)))[:, :, None] * M
-         * 10 ** (2 * np.cos(phase + np.arange(7)))[:, None, :])
+    M = (10 ** (2 * np.sin(phase + np.arange(p)))[:, :, None] * M
+         * 10 ** (2 * np.cos(phase + np.arange(q)))[:, None, :])
     warm = mussv(M, blk, lower=False)
     cold = np.concatenate([mussv(M[k:k + 8], blk, lower=False).upper for k in range(0, nf, 8)])
     np.testing.assert_allclose(warm.upper, cold, rtol=1e-6)
@@ -186,17 +188,23 @@ def test_warm_start_along_frequency_matches_cold_starts():
     np.testing.assert_allclose(sigma_max(A), warm.upper, rtol=1e-10)
 
 
-def test_carried_scalings_give_the_same_d():
+@pytest.mark.parametrize("blk, units", [
+    ([(1, 1), (2, 2), (1, 1), (1, 2)], ([1, 2, 1, 2], [1, 2, 1, 1])),
+    ([(1, 1), (2, 0), (1, 2)], ([1, 1, 1, 2], [1, 1, 1, 1])),   # each repeated element a unit
+    ([(3, 0), (2, 0)], ([1] * 5, [1] * 5)),                    # no reference block
+], ids=["scalars", "repeated", "repeated-only"])
+def test_carried_scalings_give_the_same_d(blk, units):
     # the warm start carries a neighbour's D from its balancing to this matrix's:
-    # with the same M under two different block balancings, the carried
-    # parameters must give the same scaled matrix, hence the same sigma_max
+    # with the same M under two different balancings (one offset per balancing
+    # unit), the carried parameters must give the same scaled matrix up to a
+    # factor, hence the same sigma_max
     from piezolib.robust.mu_upper import _carried_scalings, _complex_upper
     rng = np.random.default_rng(6)
-    blocks = parse_blk([(1, 1), (2, 2), (1, 1), (1, 2)])
-    M = crandn(rng, 1, 6, 5)
+    blocks = parse_blk(blk)
+    M = crandn(rng, 1, sum(units[0]), sum(units[1]))
     xl, xr = balancing_logs(M, blocks)
-    offset = rng.uniform(-5, 5, 4)
-    xl2, xr2 = xl + np.repeat(offset, [1, 2, 1, 2]), xr + np.repeat(offset, [1, 2, 1, 1])
+    offset = rng.uniform(-5, 5, len(units[0]))
+    xl2, xr2 = xl + np.repeat(offset, units[0]), xr + np.repeat(offset, units[1])
     upper, theta, scaling = _complex_upper(np.exp(xl)[:, :, None] * M * np.exp(-xr)[:, None, :],
                                            blocks, 1e-12)
     carried = _carried_scalings(scaling, theta, xl, xl2)
