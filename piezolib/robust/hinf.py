@@ -52,7 +52,9 @@ class HinfResult:
         Largest gamma at which the Riccati conditions failed (lower end of
         the final bracket), so the optimum lies in (gamma_infeasible, gamma]
         up to numerical error.  A gamma whose central controller merely
-        failed the closed-loop check is never counted as infeasible.
+        failed the closed-loop check is never counted as infeasible, nor one
+        above the returned controller's own norm on P_reg (such verdicts
+        were numerical; ``converged`` is then False).
     norm, omega_peak : float
         ||F_l(P, K)||_inf recomputed on the plant as given (no
         regularisation) and the frequency of its peak [rad/s].
@@ -73,8 +75,9 @@ class HinfResult:
     converged : bool
         False when ``max_iter`` ended the search before the bracket was
         ``rtol`` wide, when no central controller near the optimum passed
-        the closed-loop check (numerically ill-conditioned problem), or when
-        the final check had to raise gamma.
+        the closed-loop check (numerically ill-conditioned problem), when
+        the final check had to raise gamma, or when the returned controller
+        beat a gamma judged infeasible.
     attempts : tuple
         (gamma, outcome) of every trial, in order.
     """
@@ -652,6 +655,14 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60,
         raise HinfSynthesisError(
             f"no controller passed verification (last gamma {gamma:.4g}, "
             f"{len(attempts)} trials)")
+    if peak < lo:
+        # the controller itself does better than gammas judged infeasible: those
+        # verdicts were rounding in ill-conditioned Riccati equations (seen on the
+        # distillation K-step: gamma 2.378 "infeasible", this controller 1.457)
+        lo = max([g for g, v in tried.items() if v == "infeasible" and g < peak] + [floor])
+        converged = False
+        attempts.append((float(peak), "controller beats gammas judged infeasible: those "
+                                      "verdicts were numerical"))
 
     Ak, Bk, Ck, Dk = result
     Ks = ct.ss(Ak, Bk @ nz.Ty, nz.Tu @ Ck, nz.Tu @ Dk @ nz.Ty)
