@@ -241,13 +241,33 @@ def _check_stabilisable(pl, scale):
         shifted = pl.A - lam * np.eye(n)
         tol = 1e-9 * max(1.0, np.linalg.norm(pl.A, 1))
         if la.svdvals(np.hstack([shifted, pl.B2]))[-1] <= tol * max(1, np.linalg.norm(pl.B2)):
-            raise HinfSynthesisError(
-                f"P cannot be stabilised: the mode at {lam * scale:.4g} rad/s is not "
-                "controllable from the control inputs")
+            raise HinfSynthesisError(_lost_mode_message(pl.A, lam, scale, "controllable from "
+                                                                           "the control inputs"))
         if la.svdvals(np.vstack([shifted, pl.C2]))[-1] <= tol * max(1, np.linalg.norm(pl.C2)):
-            raise HinfSynthesisError(
-                f"P cannot be stabilised: the mode at {lam * scale:.4g} rad/s is not "
-                "observable from the measurements")
+            raise HinfSynthesisError(_lost_mode_message(pl.A, lam, scale, "observable from "
+                                                                           "the measurements"))
+
+
+def _lost_mode_message(A, lam, scale, what):
+    """Why the mode ``lam`` (scaled time) fails the stabilisability test.
+
+    A mode that is stable by its own magnitude but within rounding of the
+    axis, in a plant whose poles span more than double precision can resolve
+    (G = 1e36 / (s + 1e12)^3 beside a weight pole at -1e-3 rad/s), proves
+    nothing about stabilisability.
+    """
+    mags = np.abs(np.linalg.eigvals(A)) * scale
+    mags = mags[mags > 0]
+    own_stable = lam.real < -_AXIS_REL_TOL * abs(lam)
+    lam = lam.real if lam.imag == 0 else lam
+    if own_stable and mags.size > 1 and mags.max() / mags.min() >= _SPREAD_LIMIT:
+        return (f"the mode at {lam * scale:.4g} rad/s is stable but within rounding of the "
+                f"imaginary axis, and not {what} to that precision: P's poles span "
+                f"{np.log10(mags.max() / mags.min()):.1f} decades ({mags.min():.3g} to "
+                f"{mags.max():.3g} rad/s), beyond double precision, so this is not a proof "
+                "that P cannot be stabilised; move the slowest weight pole up or drop dynamics "
+                "far beyond the bandwidth")
+    return f"P cannot be stabilised: the mode at {lam * scale:.4g} rad/s is not {what}"
 
 
 @dataclass
@@ -398,6 +418,38 @@ def _newton_refine(A, B, Q, R, S, X, steps=3):
     return best
 
 
+def _stabilising_riccati(A, B, Q, R, S):
+    """(X, '') with X the stabilising solution of :func:`_riccati`'s equation, or (None, reason).
+
+    Where the pencil solution fails or A - B R^-1 (B'X + S') is not stable,
+    scipy's balanced ``solve_continuous_are`` gives a second opinion: on the
+    Lundstrom-scaled distillation K-step (a weight pole 1e9 below the fastest
+    pole) the pencil route called gamma = 2.0 unstabilising and gamma = 1.0
+    "on the axis" where the optimum is 0.973, and scipy's solutions stabilise.
+    """
+    def stabilising(X):
+        K = np.linalg.solve(R, B.T @ X + S.T)
+        return A.shape[0] == 0 or np.linalg.eigvals(A - B @ K).real.max() < 0
+
+    reason = "no stabilising Riccati solution"
+    try:
+        X = _riccati(A, B, Q, R, S)
+        if stabilising(X):
+            return X, ""
+        reason = "Riccati solution not stabilising"
+    except (la.LinAlgError, ValueError):
+        pass
+    try:
+        X = la.solve_continuous_are(A, B, Q, R, s=S, balanced=True)
+    except (la.LinAlgError, ValueError):
+        return None, reason
+    X = (X + X.T) / 2
+    res, size = _riccati_residual(A, B, Q, R, S, X)
+    if np.all(np.isfinite(X)) and res <= _RESIDUAL_TOL * size and stabilising(X):
+        return X, ""
+    return None, reason
+
+
 def _central(pl, gamma):
     """Central controller of the normalised plant at ``gamma``, or a failure reason."""
     A, B1, B2, C1, C2, D11 = pl.A, pl.B1, pl.B2, pl.C1, pl.C2, pl.D11
@@ -412,16 +464,13 @@ def _central(pl, gamma):
     R[:m1, :m1] -= g2 * np.eye(m1)
     Rt = D_1 @ D_1.T
     Rt[:p1, :p1] -= g2 * np.eye(p1)
-    try:
-        X = _riccati(A, B, C1.T @ C1, R, C1.T @ D1_)
-        Y = _riccati(A.T, C.T, B1 @ B1.T, Rt, B1 @ D_1.T)
-    except (la.LinAlgError, ValueError):
-        return None, "no stabilising Riccati solution"
+    X, failure = _stabilising_riccati(A, B, C1.T @ C1, R, C1.T @ D1_)
+    if X is not None:
+        Y, failure = _stabilising_riccati(A.T, C.T, B1 @ B1.T, Rt, B1 @ D_1.T)
+    if failure:
+        return None, failure
     F = -np.linalg.solve(R, D1_.T @ C1 + B.T @ X)
     L = -np.linalg.solve(Rt, D_1 @ B1.T + C @ Y).T
-    if n and (np.linalg.eigvals(A + B @ F).real.max() >= 0
-              or np.linalg.eigvals(A + L @ C).real.max() >= 0):
-        return None, "Riccati solution not stabilising"
     for name, Z in (("X", X), ("Y", Y)):
         ev = np.linalg.eigvalsh(Z) if n else np.zeros(1)
         if ev.min() < -_PSD_TOL * max(1.0, ev.max()):

@@ -243,15 +243,30 @@ def test_wide_pole_spread_s_ks_reaches_the_optimum(fast, assembly):
 
 
 def test_stable_weight_pole_far_below_a_fast_plant_is_not_called_uncontrollable():
-    # reproducer: "mode at -0.001 rad/s is not controllable" for G = 1e30/(s+1e10)^3; the
-    # 13-decade spread is beyond double precision, and the error must say so rather than
-    # claim the plant unstabilisable or the problem infeasible
+    # reproducer: "mode at -0.001 rad/s is not controllable" for G = 1e30/(s+1e10)^3.  Over
+    # this 13-decade spread the Riccati verdicts are unreliable, but scipy's solver (the
+    # second opinion) gives a verified controller; the verdicts it beats are not kept
     s = ct.tf("s")
     P = _s_ks_plant(1e30 / (s + 1e10) ** 3, (s / 1.5 + 10) / (s + 1e-3))
+    res = hinfsyn(P, 1, 1)
+    assert np.all(res.closed_loop_poles.real < 0)
+    M = robust.lower_lft(P, res.K)
+    assert np.all(ct.poles(M).real < 0)
+    assert res.gamma_infeasible < res.norm <= res.gamma * (1 + 1e-3)
+
+
+@pytest.mark.parametrize("k", [12, 14])
+def test_pole_spread_beyond_double_precision_is_reported_as_such(k):
+    # G = 1e(3k)/(s+1e k)^3 beside a weight pole at -1e-3 rad/s: at 15 decades and more the
+    # slow mode cannot be told from the axis; the error must say so, never that P cannot
+    # be stabilised
+    s = ct.tf("s")
+    P = _s_ks_plant(10.0 ** (3 * k) / (s + 10.0 ** k) ** 3, (s / 1.5 + 10) / (s + 1e-3))
     with pytest.raises(HinfSynthesisError) as info:
         hinfsyn(P, 1, 1)
-    assert "cannot be stabilised" not in str(info.value)
-    assert "13.0 decades" in str(info.value) and "not a proof of infeasibility" in str(info.value)
+    text = str(info.value)
+    assert "not a proof" in text and "decades" in text
+    assert not text.startswith("P cannot be stabilised") and "+0j" not in text
 
 
 def test_full_rank_d12_beside_a_large_weight_is_not_regularised():
