@@ -687,7 +687,7 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60,
         dense, _ = hinf_norm(ct.ss(A, B, C, D), omega=_check_grid(A, 2000))
         if dense <= level * (1 + verify_rtol):
             cache[level], hi = candidates[level], level
-            attempts.append((float(level), "central controller of a higher trial, verified here"))
+            attempts.append((float(level), "a trial's central controller, verified at its peak"))
             break
     converged = hi <= lo * (1 + rtol) or lo <= floor
 
