@@ -256,18 +256,25 @@ def _lost_mode_message(A, lam, scale, what):
     (G = 1e36 / (s + 1e12)^3 beside a weight pole at -1e-3 rad/s), proves
     nothing about stabilisability.
     """
-    mags = np.abs(np.linalg.eigvals(A)) * scale
-    mags = mags[mags > 0]
+    spread = _pole_spread(A, scale)
     own_stable = lam.real < -_AXIS_REL_TOL * abs(lam)
     lam = lam.real if lam.imag == 0 else lam
-    if own_stable and mags.size > 1 and mags.max() / mags.min() >= _SPREAD_LIMIT:
+    if own_stable and spread:
         return (f"the mode at {lam * scale:.4g} rad/s is stable but within rounding of the "
-                f"imaginary axis, and not {what} to that precision: P's poles span "
-                f"{np.log10(mags.max() / mags.min()):.1f} decades ({mags.min():.3g} to "
-                f"{mags.max():.3g} rad/s), beyond double precision, so this is not a proof "
-                "that P cannot be stabilised; move the slowest weight pole up or drop dynamics "
-                "far beyond the bandwidth")
+                f"imaginary axis, and not {what} to that precision: {spread}, beyond double "
+                "precision, so this is not a proof that P cannot be stabilised; move the "
+                "slowest weight pole up or drop dynamics far beyond the bandwidth")
     return f"P cannot be stabilised: the mode at {lam * scale:.4g} rad/s is not {what}"
+
+
+def _pole_spread(A, scale):
+    """The phrase "P's poles span N decades (lo to hi rad/s)" beyond ``_SPREAD_LIMIT``, else ''."""
+    mags = np.abs(np.linalg.eigvals(A)) * scale if A.shape[0] else np.zeros(0)
+    mags = mags[mags > 0]
+    if mags.size < 2 or mags.max() / mags.min() < _SPREAD_LIMIT:
+        return ""
+    return (f"P's poles span {np.log10(mags.max() / mags.min()):.1f} decades "
+            f"({mags.min():.3g} to {mags.max():.3g} rad/s)")
 
 
 @dataclass
@@ -521,13 +528,11 @@ def _check_grid(A, n_base):
 
 def _spread_hint(A, scale):
     """A sentence on P's pole spread when it is too wide for double precision."""
-    mags = np.abs(np.linalg.eigvals(A)) * scale if A.shape[0] else np.zeros(0)
-    mags = mags[mags > 0]
-    if mags.size < 2 or mags.max() / mags.min() < _SPREAD_LIMIT:
+    spread = _pole_spread(A, scale)
+    if not spread:
         return ("  P12 and P21 have no zeros on the imaginary axis (checked), so either "
                 "gamma_max is too small or the Riccati equations are ill-conditioned.")
-    return (f"  P's poles span {np.log10(mags.max() / mags.min()):.1f} decades "
-            f"({mags.min():.3g} to {mags.max():.3g} rad/s): the Hamiltonian eigenvalues of "
+    return (f"  {spread}: the Hamiltonian eigenvalues of "
             "the slowest modes cannot be told from the imaginary axis in double precision, "
             "so this is not a proof of infeasibility; move the slowest weight pole up or drop "
             "dynamics far beyond the bandwidth.")

@@ -172,27 +172,25 @@ class _Scaling:
         return padded[..., self.out_map], padded[..., self.in_map]
 
     def matrices(self, theta):
-        """D_l (N, p, p), D_r (N, q, q) and their inverses."""
+        """D_l (N, p, p) and D_r (N, q, q)."""
         N = theta.shape[0]
         xl, xr = self.diag_logs(theta)
         Dl = np.zeros((N, self.p, self.p), complex)
         Dr = np.zeros((N, self.q, self.q), complex)
-        il, ir = np.arange(self.p), np.arange(self.q)
-        Dl[:, il, il] = np.exp(xl)
-        Dr[:, ir, ir] = np.exp(xr)
-        Dli = np.zeros_like(Dl)
-        Dri = np.zeros_like(Dr)
-        Dli[:, il, il] = np.exp(-xl)
-        Dri[:, ir, ir] = np.exp(-xr)
-        for i, sl, rows, cols in self.tri:
-            bi, bo = self.slots[i]
-            L = self._triangle(theta[:, sl], self.blocks[i].size, rows, cols)
-            Li = np.linalg.inv(L)
+        Dl[:, np.arange(self.p), np.arange(self.p)] = np.exp(xl)
+        Dr[:, np.arange(self.q), np.arange(self.q)] = np.exp(xr)
+        for (bi, bo), L, _ in self._triangles(theta):
             Dl[:, bo, bo] = L
             Dr[:, bi, bi] = L
-            Dli[:, bo, bo] = Li
-            Dri[:, bi, bi] = Li
-        return Dl, Dr, Dli, Dri
+        return Dl, Dr
+
+    def _triangles(self, theta):
+        """((inputs, outputs) slices, L_i, L_i^-1) of every repeated scalar's triangular scale."""
+        out = []
+        for i, sl, rows, cols in self.tri:
+            L = self._triangle(theta[:, sl], self.blocks[i].size, rows, cols)
+            out.append((self.slots[i], L, np.linalg.inv(L)))
+        return out
 
     @staticmethod
     def _triangle(par, k, rows, cols):
@@ -211,10 +209,7 @@ class _Scaling:
             return A, None
         # block by block: D is diagonal apart from the repeated scalars' k x k L_i
         inverses = []
-        for i, sl, rows, cols in self.tri:
-            bi, bo = self.slots[i]
-            L = self._triangle(theta[:, sl], self.blocks[i].size, rows, cols)
-            Li = np.linalg.inv(L)
+        for (bi, bo), L, Li in self._triangles(theta):
             A[:, bo, :] = L @ A[:, bo, :]
             A[:, :, bi] = A[:, :, bi] @ Li
             inverses.append(Li)
@@ -811,7 +806,7 @@ def complex_upper_bound(M, blocks, tol=1e-12):
         upper, theta, scaling = _warm_started_upper(M0, blocks, tol, xl0)
     else:
         upper, theta, scaling = _upper_in_chunks(M0, blocks, tol)
-    Dl, Dr, _, _ = scaling.matrices(theta)
+    Dl, Dr = scaling.matrices(theta)
     Dl = Dl * np.exp(xl0)[:, None, :]            # D = D_theta @ diag(exp(x0))
     Dr = Dr * np.exp(xr0)[:, None, :]
     # the unscaled matrix (D = I) is a candidate too
