@@ -24,7 +24,6 @@ Usage, from the repository root::
 """
 
 import argparse
-import importlib.util
 import json
 import pathlib
 import subprocess
@@ -40,17 +39,8 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 DKPY_PYTHON = ROOT / "benchmarks" / ".dkpy-venv" / "bin" / "python"
 
 
-def load_problems():
-    """tests/robust/textbook_problems.py as a module (it is test data, not a package)."""
-    path = ROOT / "tests" / "robust" / "textbook_problems.py"
-    spec = importlib.util.spec_from_file_location("textbook_problems", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules.setdefault("textbook_problems", module)
-    spec.loader.exec_module(module)
-    return module
-
-
-tp = load_problems()
+sys.path.insert(0, str(ROOT / "tests" / "robust"))      # its test-data modules
+import textbook_problems as tp  # noqa: E402
 
 
 class Row(NamedTuple):

@@ -1,13 +1,17 @@
-"""hinfsyn against python-control (SLICOT SB10AD) on seeded random well-posed plants.
+"""hinfsyn against independent references on seeded random well-posed plants.
 
-The reference is the recomputed closed-loop norm of SB10AD's controller (its
-reported gamma is not trusted); the 50-plant sweep is
-``benchmarks/bench_hinf_random.py``.
+Two references: the optimum of the classical two-Riccati test
+(``riccati_reference.py`` next to this file: numpy/scipy only, no code shared
+with hinfsyn), and python-control's hinfsyn (SLICOT SB10AD), whose controller's
+recomputed closed-loop norm is the reference (its reported gamma is not
+trusted).  The 50-plant sweep with both is ``benchmarks/bench_hinf_random.py``.
 """
 
 import control as ct
 import numpy as np
 import pytest
+import riccati_reference as riccati
+from scipy.optimize import brentq
 
 from piezolib.robust.hinf import hinfsyn
 from piezolib.robust.lft import lower_lft
@@ -55,3 +59,33 @@ def test_random_plant_matches_python_control(seed):
         # our infeasibility claim is not contradicted by SB10AD's controller
         assert res.gamma <= ref * (1 + 1e-3)
         assert res.gamma_infeasible <= ref * (1 + 1e-6)
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_random_plant_matches_the_two_riccati_optimum(seed):
+    # A's scale spans four decades, so gamma ranges over about 1 ... 1e5
+    rng = np.random.default_rng(2000 + seed)
+    P = random_well_posed_plant(rng, int(rng.integers(2, 9)))
+    P = ct.ss(P.A * 10 ** rng.uniform(-2, 2), P.B, P.C, P.D)
+    reference = riccati.riccati_optimal_gamma(P)
+    res = hinfsyn(P, 1, 1, rtol=1e-4)
+    assert res.converged and res.norm <= res.gamma * (1 + 1e-3)
+    assert abs(res.gamma / reference - 1) <= 1e-3
+    # the infeasible end of our bracket is below the optimum (up to the bisection's accuracy)
+    assert res.gamma_infeasible <= reference * (1 + 1e-4)
+
+
+def test_riccati_reference_and_hinfsyn_on_a_scalar_problem():
+    # xdot = x + 2 w1 + u, z = (x, u), y = x + w2: the Riccati equations are scalar,
+    # 2 x + x^2 (4 / g^2 - 1) + 1 = 0 and 2 y + y^2 (1 / g^2 - 1) + 4 = 0, and the optimum
+    # solves x(g) y(g) = g^2 (a root found here by brentq: 1 + sqrt(6))
+    def root(g, b2, c2):
+        k = 1 - b2 / g**2
+        return (1 + np.sqrt(1 + c2 * k)) / k
+
+    optimum = brentq(lambda g: root(g, 4, 1) * root(g, 1, 4) - g**2, 2.01, 50, xtol=1e-14)
+    P = ct.ss([[1.0]], [[2.0, 0, 1]], [[1.0], [0], [1]], [[0, 0, 0], [0, 0, 1], [0, 1, 0]])
+    assert abs(riccati.riccati_optimal_gamma(P) / optimum - 1) <= 1e-6
+    assert riccati.riccati_gamma_feasible(P, optimum * (1 + 1e-6))
+    assert not riccati.riccati_gamma_feasible(P, optimum * (1 - 1e-6))
+    assert abs(hinfsyn(P, 1, 1, rtol=1e-6).gamma / optimum - 1) <= 1e-5

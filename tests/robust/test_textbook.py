@@ -7,27 +7,14 @@ python-control, frequency-by-frequency evaluation, exact rational arithmetic).
 ``benchmarks/bench_textbook.py`` prints the same comparisons as a table.
 """
 
-import importlib.util
-import pathlib
-import sys
-
 import control as ct
 import numpy as np
 import pytest
 
+import textbook_problems as tp
 from piezolib import robust
 
 
-def _load_problems():
-    path = pathlib.Path(__file__).with_name("textbook_problems.py")
-    spec = importlib.util.spec_from_file_location("textbook_problems", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules.setdefault("textbook_problems", module)
-    spec.loader.exec_module(module)
-    return module
-
-
-tp = _load_problems()
 
 
 def sigma_max(M):
