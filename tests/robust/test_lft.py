@@ -95,3 +95,20 @@ def test_lft_hinf_norm_agrees_with_the_realisation_on_a_well_conditioned_loop():
     peak, w_peak = robust.lft_hinf_norm(P, K, grid)
     ref, w_ref = robust.hinf_norm(robust.lower_lft(P, K), grid)
     assert peak == pytest.approx(ref, rel=1e-7) and w_peak == pytest.approx(w_ref, rel=1e-3)
+
+
+def test_resolvent_condition_decides_as_the_exact_condition_number():
+    # the cheap bound is exact wherever the threshold decision needs it
+    from piezolib.robust.lft import _POLE_CONDITION, _resolvent_condition
+    rng = np.random.default_rng(4)
+    A = rng.standard_normal((12, 12)) @ np.diag(10 ** rng.uniform(-3, 3, 12))
+    poles = np.linalg.eigvals(A)
+    s = np.r_[1j * np.logspace(-3, 3, 300), poles[:4] * (1 + 10.0 ** -np.arange(4, 12, 2))]
+    resolvent = s[:, None, None] * np.eye(12) - A
+    exact, ours = np.linalg.cond(resolvent), _resolvent_condition(resolvent)
+    assert np.any(exact > _POLE_CONDITION) and np.any(exact <= _POLE_CONDITION)
+    assert np.array_equal(exact > _POLE_CONDITION, ours > _POLE_CONDITION)
+    assert np.all(ours >= exact * (1 - 1e-9))
+    assert np.allclose(ours[exact > _POLE_CONDITION], exact[exact > _POLE_CONDITION], rtol=1e-12)
+    singular = np.stack([np.eye(3), np.diag([1.0, 1.0, 0.0])]).astype(complex)
+    assert np.isinf(_resolvent_condition(singular)[1])
