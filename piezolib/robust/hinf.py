@@ -31,7 +31,7 @@ _ERR_FACTOR = 10.0    # ... or |Re lambda| <= factor * eps * ||A||
 _PENCIL_ZERO_TOL = 100 * np.finfo(float).eps  # Hamiltonian: error bound / ||pencil||
 _SPREAD_LIMIT = 1e11  # pole spread beyond which failures are reported as numerical
 _RESIDUAL_TOL = 1e-5  # relative Riccati residual accepted
-_MAX_BACKOFFS = 8     # gamma raises allowed when the dense-grid verification fails
+_MAX_BACKOFFS = 8     # final verifications: the search's gamma, then 7 growing raises
 
 
 class HinfSynthesisError(ValueError):
@@ -52,7 +52,8 @@ class HinfResult:
     gamma_infeasible : float
         Largest gamma at which the Riccati conditions failed (lower end of
         the final bracket), so the optimum lies in (gamma_infeasible, gamma]
-        up to numerical error.  A gamma whose central controller merely
+        up to numerical error; the D11 bound (0 without D11) where the search
+        went down to 1e-9 gamma without meeting an infeasible gamma.  A gamma whose central controller merely
         failed the closed-loop check is never counted as infeasible, nor one
         above the returned controller's own norm on P_reg (such verdicts
         were numerical; ``converged`` is then False).
@@ -599,7 +600,10 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60,
     HinfSynthesisError
         Unstabilisable or undetectable plant, rank-deficient D12/D21 with
         regularisation switched off, no feasible gamma <= gamma_max, or no
-        verified controller within ``max_iter`` trials.
+        verified controller within ``max_iter`` trials and the final back-offs
+        (up to 7 raises of gamma, by 1 %, 2 %, 4 %, ... or 10 ``rtol`` if larger:
+        the controller must pass the dense-grid check and stabilise the given
+        plant with a margin).
     """
     t0 = time.perf_counter()
     check_lti("P", P)
@@ -723,28 +727,49 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60,
             break
     converged = hi <= lo * (1 + rtol) or lo <= floor
 
-    # final verification on a dense grid, backing off gamma if it fails
-    result = None
+    def given_loop(K):
+        """(Ks, CLs, poles_s, err): K for the given plant and the loop it closes there."""
+        Ak, Bk, Ck, Dk = K
+        Ks = ct.ss(Ak, Bk @ nz.Ty, nz.Tu @ Ck, nz.Tu @ Dk @ nz.Ty)
+        if np.any(nz.D22):
+            # loop shift: K designed for y - D22 u  ->  K (I + D22 K)^-1 on y
+            p2, m2 = nz.D22.shape
+            static = ct.ss(np.zeros((0, 0)), np.zeros((0, m2)), np.zeros((p2, 0)), nz.D22)
+            Ks = ct.feedback(Ks, static, sign=-1)
+        CLs = balance(Ps.lft(balance(Ks), nu=ncon, ny=nmeas))
+        return (Ks, CLs, *_eig_errors(np.asarray(CLs.A, float)))
+
+    # final verification on a dense grid and on the given plant's loop, backing off
+    # gamma (by growing steps) if either fails: near the optimum the central
+    # controller can be so ill-conditioned that the same loop, realised from the
+    # given plant, has a pole at or across the axis
+    result, failure = None, "no controller passed verification"
     gamma = hi
-    for _ in range(_MAX_BACKOFFS):
+    for k in range(_MAX_BACKOFFS):
+        if k:
+            gamma *= 1 + max(10 * rtol, 0.01) * 2 ** (k - 1)
+            converged = False
         K = cache.get(gamma)
         if K is None:
             if not feasible(gamma):
-                gamma *= 1 + max(10 * rtol, 0.01)
                 continue
             K = cache[gamma]
         A, B, C, D = _close_loop(nz.plant, K)
         peak, _ = hinf_norm(ct.ss(A, B, C, D), omega=_check_grid(A, 2000))
-        if peak <= gamma * (1 + verify_rtol):
-            result = K
-            break
-        attempts.append((float(gamma), f"dense-grid peak {peak:.4g} > gamma"))
-        gamma *= 1 + max(10 * rtol, 0.01)
-        converged = False
+        if peak > gamma * (1 + verify_rtol):
+            attempts.append((float(gamma), f"dense-grid peak {peak:.4g} > gamma"))
+            continue
+        Ks, CLs, poles_s, err = given_loop(K)
+        if np.any(_marginal(poles_s, err)):
+            worst = poles_s[np.argmax(poles_s.real)] * ws
+            failure = ("the controller does not stabilise the unregularised plant with a "
+                       f"margin (closed-loop pole at {worst:.4g} rad/s)")
+            attempts.append((float(gamma), f"given plant's loop: pole at {worst:.4g} rad/s"))
+            continue
+        result = K
+        break
     if result is None:
-        raise HinfSynthesisError(
-            f"no controller passed verification (last gamma {gamma:.4g}, "
-            f"{len(attempts)} trials)")
+        raise HinfSynthesisError(f"{failure} (last gamma {gamma:.4g}, {len(attempts)} trials)")
     if peak < lo:
         # the controller itself does better than gammas judged infeasible: those
         # verdicts were rounding in ill-conditioned Riccati equations (seen on the
@@ -753,22 +778,7 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60,
         converged = False
         attempts.append((float(peak), "controller beats gammas judged infeasible: those "
                                       "verdicts were numerical"))
-
-    Ak, Bk, Ck, Dk = result
-    Ks = ct.ss(Ak, Bk @ nz.Ty, nz.Tu @ Ck, nz.Tu @ Dk @ nz.Ty)
-    if np.any(nz.D22):
-        # loop shift: K designed for y - D22 u  ->  K (I + D22 K)^-1 on y
-        p2, m2 = nz.D22.shape
-        static = ct.ss(np.zeros((0, 0)), np.zeros((0, m2)), np.zeros((p2, 0)), nz.D22)
-        Ks = ct.feedback(Ks, static, sign=-1)
     K = from_scaled(balance(Ks), ws, P.output_labels[-nmeas:], P.input_labels[-ncon:], name="K")
-    CLs = balance(Ps.lft(balance(Ks), nu=ncon, ny=nmeas))
-    poles_s, err = _eig_errors(np.asarray(CLs.A, float))
-    if np.any(_marginal(poles_s, err)):
-        worst = poles_s[np.argmax(poles_s.real)] * ws
-        raise HinfSynthesisError(
-            "the controller does not stabilise the unregularised plant with a margin "
-            f"(closed-loop pole at {worst:.4g} rad/s)")
     poles = poles_s * ws
     # the norm from the pointwise loop, not from CLs: near pole-zero cancellations the
     # closed loop's realisation is evaluated badly (1.7e5 instead of 1.38 seen at DC)
@@ -780,6 +790,10 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60,
         attempts.append((float(gamma), f"recomputed norm {norm:.4g} on the given plant > gamma"))
     CL = from_scaled(CLs, ws, P.input_labels[:-ncon], P.output_labels[:-nmeas],
                      name="closed_loop")
+    if tried.get(lo) != "infeasible":
+        # the search reached its floor (1e-9 gamma) without an infeasible gamma: only the
+        # D11 bound is proven (0 without D11), e.g. for square D12 and D21, where gamma -> 0
+        lo = gamma_d
     return HinfResult(K=K, gamma=float(gamma), gamma_infeasible=float(lo), norm=float(norm),
                       omega_peak=float(w_peak * ws), closed_loop=CL,
                       closed_loop_poles=np.sort_complex(poles), regularization=regularization,
