@@ -10,7 +10,10 @@
 Two families: ``siso`` (default; seeds 5000, ...: 2-8 states, one control and one
 measurement, D12 = [0; 1], D21 = [0, 1], A scaled by 10^U(-2, 2)) and ``orthonormal``
 (seeds 90000, ...: ``riccati_reference.random_orthonormal_plant``, up to 3 controls and
-measurements and 10 states, A scaled up to 1e+-3 and B, C up to 1e+-2).
+measurements and 10 states, A scaled up to 1e+-3 and B, C up to 1e+-2) and ``rescaled``
+(seeds 70000, ...: such plants with their controls and measurements rescaled, condition
+numbers up to 1e3, and a random D22; the reference runs on the plant before rescaling,
+which has the same optimum).
 
 Prints, per plant, our gamma with the bracket's infeasible end, gamma_ric and the
 relative difference, SB10AD's numbers and our time; then a summary: plants within
@@ -23,7 +26,7 @@ settles which side is right.
 
 Usage::
 
-    python benchmarks/bench_hinf_random.py [--family siso|orthonormal] [--count 50]
+    python benchmarks/bench_hinf_random.py [--family siso|orthonormal|rescaled] [--count 50]
         [--gamma-max 1e9] [--no-sb10ad]
 """
 
@@ -59,14 +62,25 @@ def random_well_posed_plant(rng, n):
 
 
 def siso_plant(seed):
-    """(P, 1, 1) of the ``siso`` family."""
+    """(P, 1, 1, P_reference) of the ``siso`` family."""
     rng = np.random.default_rng(5000 + seed)
-    return random_well_posed_plant(rng, int(rng.integers(2, 9))), 1, 1
+    P = random_well_posed_plant(rng, int(rng.integers(2, 9)))
+    return P, 1, 1, P
 
 
 def orthonormal_plant(seed):
-    """(P, nmeas, ncon) of the ``orthonormal`` family."""
-    return riccati_reference.random_orthonormal_plant(np.random.default_rng(90000 + seed))
+    """(P, nmeas, ncon, P_reference) of the ``orthonormal`` family."""
+    P, nmeas, ncon = riccati_reference.random_orthonormal_plant(np.random.default_rng(90000 + seed))
+    return P, nmeas, ncon, P
+
+
+def rescaled_plant(seed):
+    """(P, nmeas, ncon, P_reference) of the ``rescaled`` family: an ``orthonormal`` plant
+    with its controls and measurements rescaled and a D22 added (same optimum)."""
+    rng = np.random.default_rng(70000 + seed)
+    P, nmeas, ncon = riccati_reference.random_orthonormal_plant(rng)
+    return (riccati_reference.rescaled_controls_and_measurements(rng, P, nmeas, ncon),
+            nmeas, ncon, P)
 
 
 def _sb10ad(matrices, nmeas, ncon):
@@ -95,6 +109,9 @@ def _sb10ad_in_child(pool, P, nmeas, ncon, timeout):
         return ProcessPoolExecutor(max_workers=1), np.nan, np.nan
 
 
+FAMILIES = {"siso": siso_plant, "orthonormal": orthonormal_plant, "rescaled": rescaled_plant}
+
+
 def _settle(P, nmeas, ncon, below, above):
     """60-digit verdicts at our bracket ends: 'ours right', 'ours wrong' or a note."""
     try:
@@ -110,22 +127,23 @@ def _settle(P, nmeas, ncon, below, above):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--family", choices=("siso", "orthonormal"), default="siso")
+    ap.add_argument("--family", choices=tuple(FAMILIES), default="siso")
     ap.add_argument("--count", type=int, default=50, help="random plants")
     ap.add_argument("--gamma-max", type=float, default=1e9, help="hinfsyn's gamma_max")
     ap.add_argument("--timeout", type=float, default=20.0, help="SB10AD time limit [s]")
     ap.add_argument("--no-sb10ad", action="store_true", help="skip python-control's hinfsyn")
     args = ap.parse_args()
     warnings.simplefilter("ignore")
-    make = siso_plant if args.family == "siso" else orthonormal_plant
+    make = FAMILIES[args.family]
     rel, disputed, settled, overclaims, unconverged, times, failures = [], [], [], [], [], [], []
     print(f"{'seed':>4} {'n':>2} {'gamma':>12} {'infeasible':>12} {'gamma_ric':>12} "
           f"{'rel diff':>9} {'SB10AD':>11} {'SB10AD K':>11} {'time':>6}")
     pool = None if args.no_sb10ad else ProcessPoolExecutor(max_workers=1)
     for seed in range(args.count):
-        P, nmeas, ncon = make(seed)
+        P, nmeas, ncon, P_ref = make(seed)
         n = P.nstates
-        g_ric = riccati_reference.riccati_optimal_gamma(P, nmeas, ncon, gamma_max=args.gamma_max)
+        g_ric = riccati_reference.riccati_optimal_gamma(P_ref, nmeas, ncon,
+                                                        gamma_max=args.gamma_max)
         t = time.perf_counter()
         try:
             res = hinfsyn(P, nmeas, ncon, rtol=1e-4, gamma_max=args.gamma_max)
@@ -149,7 +167,7 @@ def main():
         # the bisection's own accuracy is 1e-4
         if abs(rel[-1]) > 1e-3 or res.gamma_infeasible > g_ric * (1 + 1e-4):
             disputed.append(seed)
-            verdict = _settle(P, nmeas, ncon, res.gamma_infeasible, res.gamma)
+            verdict = _settle(P_ref, nmeas, ncon, res.gamma_infeasible, res.gamma)
             settled.append("ours right" in verdict)
             print(f"       disagreement; {verdict}", flush=True)
     if pool is not None:

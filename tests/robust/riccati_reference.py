@@ -28,8 +28,8 @@ import control as ct
 import numpy as np
 import scipy.linalg as la
 
-__all__ = ["random_orthonormal_plant", "riccati_gamma_feasible", "riccati_optimal_gamma",
-           "riccati_margin_mp"]
+__all__ = ["random_orthonormal_plant", "rescaled_controls_and_measurements", "riccati_gamma_feasible",
+           "riccati_optimal_gamma", "riccati_margin_mp"]
 
 
 def random_orthonormal_plant(rng):
@@ -47,6 +47,25 @@ def random_orthonormal_plant(rng):
     D21 = np.linalg.qr(rng.standard_normal((nw, nw)))[0][:, :ny].T
     D = np.block([[np.zeros((nz, nw)), D12], [D21, np.zeros((ny, nu))]])
     return ct.ss(A, np.hstack([B1, B2]), np.vstack([C1, C2]), D), ny, nu
+
+
+def rescaled_controls_and_measurements(rng, P, nmeas, ncon):
+    """P with u -> T u, y -> S y (random, condition numbers up to 1e3) and a random D22.
+
+    Neither changes the optimal gamma (a controller for one is a controller for the
+    other), so the reference test, which needs D12, D21 orthonormal and D22 = 0, still
+    answers for the result through P.
+    """
+    A, B, C, D = (np.array(x, float) for x in (P.A, P.B, P.C, P.D))
+    nz, nw = C.shape[0] - nmeas, B.shape[1] - ncon
+    T = np.linalg.qr(rng.standard_normal((ncon, ncon)))[0] @ np.diag(
+        10 ** rng.uniform(-1.5, 1.5, ncon))
+    S = np.diag(10 ** rng.uniform(-1.5, 1.5, nmeas)) @ np.linalg.qr(
+        rng.standard_normal((nmeas, nmeas)))[0]
+    B[:, nw:], D[:nz, nw:] = B[:, nw:] @ T, D[:nz, nw:] @ T
+    C[nz:], D[nz:, :nw] = S @ C[nz:], S @ D[nz:, :nw]
+    D[nz:, nw:] = rng.standard_normal((nmeas, ncon)) * 10 ** rng.uniform(-2, 1)
+    return ct.ss(A, B, C, D)
 
 
 def _normalized_parts(P, nmeas, ncon):
