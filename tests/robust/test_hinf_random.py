@@ -116,3 +116,16 @@ def test_optimum_zero_claims_no_positive_infeasible_gamma(seed):
     res = hinfsyn(P, ny, nu, rtol=1e-4, gamma_max=1e9)
     assert res.gamma_infeasible == 0.0
     assert res.norm <= res.gamma < 1e-6
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_rescaled_controls_measurements_and_d22_keep_the_optimum(seed):
+    # u -> T u, y -> S y (condition numbers up to 1e3) and a D22 leave the optimum as it is;
+    # the reference runs on the plant before the change
+    rng = np.random.default_rng(70000 + seed)
+    P, ny, nu = riccati.random_orthonormal_plant(rng)
+    reference = riccati.riccati_optimal_gamma(P, ny, nu)
+    res = hinfsyn(riccati.rescaled_controls_and_measurements(rng, P, ny, nu), ny, nu, rtol=1e-4)
+    assert res.norm <= res.gamma * (1 + 1e-3)
+    assert abs(res.gamma / reference - 1) <= 1e-3
+    assert res.gamma_infeasible <= reference * (1 + 1e-4)
