@@ -8,6 +8,7 @@ closed loop.  Why not ``control.hinfsyn``, and how each step works, is in
 
 import time
 import warnings
+import dataclasses
 from dataclasses import dataclass, field
 
 import control as ct
@@ -36,6 +37,15 @@ _MAX_BACKOFFS = 8     # final verifications: the search's gamma, then 7 growing 
 
 class HinfSynthesisError(ValueError):
     """No verified H-infinity controller: unstabilisable, infeasible or out of trials."""
+
+
+class _ControllersFailed(HinfSynthesisError):
+    """The Riccati conditions held at some gamma, but no central controller verified;
+    ``rho_u``, ``rho_n``: the regularisation weights that were in use."""
+
+    def __init__(self, message, rho_u, rho_n):
+        super().__init__(message)
+        self.rho_u, self.rho_n = rho_u, rho_n
 
 
 @dataclass(frozen=True)
@@ -585,6 +595,9 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60,
     effort_weight, noise_weight : 'auto', float or None
         Regularisation used when D12 / D21 is rank deficient: 'auto' adds
         1e-3 * u (1e-3 * n), a float sets the weight, None raises instead.
+        With 'auto', where the Riccati conditions hold but no central
+        controller verifies at any gamma, the weights 1e-2, 1e-1 and 1 are
+        tried in turn (``HinfResult.regularization`` then says so).
     time_scale : float, optional
         Internal time scale omega_s [rad/s]; default
         :func:`piezolib.robust.lti.time_scale_of` ``(P)``.
@@ -605,6 +618,39 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60,
         the controller must pass the dense-grid check and stabilise the given
         plant with a margin).
     """
+    t0 = time.perf_counter()
+    options = dict(gamma_max=gamma_max, rtol=rtol, max_iter=max_iter, time_scale=time_scale,
+                   verify_rtol=verify_rtol)
+    try:
+        return _hinfsyn_once(P, nmeas, ncon, effort_weight=effort_weight,
+                             noise_weight=noise_weight, **options)
+    except _ControllersFailed as exc:
+        auto_u = isinstance(effort_weight, str) and bool(exc.rho_u)
+        auto_n = isinstance(noise_weight, str) and bool(exc.rho_n)
+        if not (auto_u or auto_n):
+            raise
+        first = exc
+    # the default regularisation can leave the central controllers too ill-conditioned to
+    # verify (a random plant with D12 = 0: X spanning 14 decades, every loop unstable up to
+    # gamma 1e9, where 1.0 gives the optimum): stronger weights, each reported
+    for factor in (10, 100, 1000):
+        weight = DEFAULT_EFFORT_WEIGHT * factor
+        try:
+            res = _hinfsyn_once(P, nmeas, ncon, effort_weight=weight if auto_u else effort_weight,
+                                noise_weight=weight if auto_n else noise_weight, **options)
+        except _ControllersFailed:
+            continue
+        return dataclasses.replace(
+            res, elapsed=time.perf_counter() - t0,
+            regularization=f"{res.regularization} (raised from the default "
+                           f"{DEFAULT_EFFORT_WEIGHT:g}: smaller weights left no verifiable "
+                           "controller)")
+    raise first
+
+
+def _hinfsyn_once(P, nmeas, ncon, *, gamma_max, rtol, max_iter, effort_weight, noise_weight,
+                  time_scale, verify_rtol):
+    """:func:`hinfsyn` with the given regularisation weights (no escalation)."""
     t0 = time.perf_counter()
     check_lti("P", P)
     if P.isdtime(strict=True):
@@ -683,6 +729,16 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60,
     hi = max(2.0 * gamma_d, 1.0)
     while not feasible(hi):
         if hi >= gamma_max or out_of_trials():
+            held = [g for g, v in tried.items() if v == "numerical"]
+            if held:
+                raise _ControllersFailed(
+                    f"the Riccati conditions hold at gamma = {min(held):.4g} ... {max(held):.4g}, "
+                    f"but no central controller there passed the closed-loop check (last: "
+                    f"{attempts[-1][1]}): the synthesis is ill-conditioned at these gammas "
+                    f"({len(attempts)} trials, gamma_max={gamma_max:.3g})."
+                    + (f"  A larger effort_weight / noise_weight than the {max(rho_u, rho_n):g} "
+                       "added may help." if rho_u or rho_n else _spread_hint(pl.A, ws)),
+                    rho_u, rho_n)
             raise HinfSynthesisError(
                 f"no gamma <= {min(hi, gamma_max):.3g} is feasible within gamma_max="
                 f"{gamma_max:.3g} and max_iter={max_iter} ({len(attempts)} trials); last outcome: "

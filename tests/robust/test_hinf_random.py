@@ -13,7 +13,7 @@ import pytest
 import riccati_reference as riccati
 from scipy.optimize import brentq
 
-from piezolib.robust.hinf import hinfsyn
+from piezolib.robust.hinf import HinfSynthesisError, hinfsyn
 from piezolib.robust.lft import lower_lft
 from piezolib.robust.lti import hinf_norm
 
@@ -129,3 +129,19 @@ def test_rescaled_controls_measurements_and_d22_keep_the_optimum(seed):
     assert res.norm <= res.gamma * (1 + 1e-3)
     assert abs(res.gamma / reference - 1) <= 1e-3
     assert res.gamma_infeasible <= reference * (1 + 1e-4)
+
+
+def test_default_regularisation_is_raised_where_no_controller_verifies():
+    # a random plant with D12 = 0: with the default effort output 1e-3 u (and 1e-2, 1e-1)
+    # X spans 14 decades and every central controller's loop is unstable up to gamma 1e9
+    # (60-digit two-Riccati test: feasible from about 8e6); with 1.0 the search converges
+    P, ny, nu = riccati.random_orthonormal_plant(np.random.default_rng(60073))
+    D = np.array(P.D)
+    D[:-ny, -nu:] = 0
+    P = ct.ss(P.A, P.B, P.C, D)
+    res = hinfsyn(P, ny, nu, rtol=1e-4, gamma_max=1e9)
+    assert res.effort_weight == 1.0 and "raised from the default" in res.regularization
+    assert res.converged and res.norm <= res.gamma * (1 + 1e-3)
+    assert np.all(ct.poles(P.lft(res.K, nu=nu, ny=ny)).real < 0)
+    with pytest.raises(HinfSynthesisError, match="effort_weight"):
+        hinfsyn(P, ny, nu, rtol=1e-4, gamma_max=1e9, effort_weight=1e-3)
