@@ -55,7 +55,7 @@ def certify(M, beta, max_nodes):
     Mb = M / beta
     centres, radii = np.zeros((1, k), complex), np.ones((1, k))
     levels, total = [], 0
-    while centres.size:
+    while True:                 # every level either clears all nodes or splits some
         loop = np.eye(k) - Mb[None] * centres[:, None, :]
         sub = np.linalg.solve(loop, Mb[None] * radii[:, None, :])
         upper = mussv(sub, [(1, 1)] * k, lower=False).upper
@@ -73,12 +73,12 @@ def certify(M, beta, max_nodes):
         child = np.arange(len(widest))
         centres[child, widest] += radii[child, widest] * np.tile(COVER, open_.sum())
         radii[child, widest] /= 2
-    return True, levels
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--cases", type=int, default=20, help="cases per family (as bench_mu_structures)")
+    ap.add_argument("--cases", type=int, default=20,
+                    help="cases per family (as bench_mu_structures)")
     ap.add_argument("--n", type=int, default=1000, help="frequencies per case")
     ap.add_argument("--points", type=int, default=11, help="gap points sampled evenly")
     ap.add_argument("--max-nodes", type=int, default=5000, help="nodes per point before giving up")

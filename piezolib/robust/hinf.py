@@ -8,8 +8,7 @@ closed loop.  Why not ``control.hinfsyn``, and how each step works, is in
 
 import time
 import warnings
-import dataclasses
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import control as ct
 import numpy as np
@@ -63,10 +62,11 @@ class HinfResult:
         Largest gamma at which the Riccati conditions failed (lower end of
         the final bracket), so the optimum lies in (gamma_infeasible, gamma]
         up to numerical error; the D11 bound (0 without D11) where the search
-        went down to 1e-9 gamma without meeting an infeasible gamma.  A gamma whose central controller merely
-        failed the closed-loop check is never counted as infeasible, nor one
-        above the returned controller's own norm on P_reg (such verdicts
-        were numerical; ``converged`` is then False).
+        went down to 1e-9 gamma without meeting an infeasible gamma.  A gamma
+        whose central controller merely failed the closed-loop check is never
+        counted as infeasible, nor one above the returned controller's own
+        norm on P_reg (such verdicts were numerical; ``converged`` is then
+        False).
     norm, omega_peak : float
         ||F_l(P, K)||_inf recomputed on the plant as given (no
         regularisation) and the frequency of its peak [rad/s].
@@ -640,7 +640,7 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60,
                                 noise_weight=weight if auto_n else noise_weight, **options)
         except _ControllersFailed:
             continue
-        return dataclasses.replace(
+        return replace(
             res, elapsed=time.perf_counter() - t0,
             regularization=f"{res.regularization} (raised from the default "
                            f"{DEFAULT_EFFORT_WEIGHT:g}: smaller weights left no verifiable "
