@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 
 from piezolib.robust.mu import mussv
 from piezolib.robust.mu_lifted import _LiftedCertificate, _refine_point
@@ -14,6 +15,12 @@ def wide_gap_matrix(seed):
     g = np.random.default_rng(seed)
     M = g.standard_normal((8, 8)) + 1j * g.standard_normal((8, 8))
     return np.diag(np.exp(g.standard_normal(8))) @ M
+
+
+def balanced(M, res):
+    """diag(d) M diag(d)^-1 with mussv's scalings (the same mu for scalar blocks)."""
+    d = np.abs(np.diagonal(res.Dl[0]))
+    return d[:, None] * M / d[None, :]
 
 
 def certificate_holds(M, S, beta):
@@ -50,11 +57,11 @@ def test_refined_bound_is_certified_and_closes_the_gap(seed):
     assert refined.upper[0] < plain.upper[0]
     assert refined.gap[0] <= 0.005
     # the multipliers behind the bound certify it, checked from the definition
-    d = np.abs(np.diagonal(plain.Dl[0]))
-    bound, theta = _refine_point(M, d, None, 0.0, 0.0, 60)
-    S = _LiftedCertificate(M).multipliers(theta)
-    assert certificate_holds(M, S, bound * (1 + 1e-9))
-    assert not certificate_holds(M, S, bound * (1 - 1e-3))
+    Mb = balanced(M, plain)
+    bound, theta = _refine_point(Mb, None, 0.0, 0.0, 60)
+    S = _LiftedCertificate(Mb).multipliers(theta)
+    assert certificate_holds(Mb, S, bound * (1 + 1e-9))
+    assert not certificate_holds(Mb, S, bound * (1 - 1e-3))
     # and no perturbation found by brute force beats it: max over random phases of rho(Q M)
     g = np.random.default_rng(0)
     Q = np.exp(2j * np.pi * g.random((20000, 8)))
@@ -62,12 +69,11 @@ def test_refined_bound_is_certified_and_closes_the_gap(seed):
     assert rho.max() <= bound
 
 
-def test_d_scaled_multipliers_give_the_d_scaled_bound():
+def test_identity_multipliers_on_the_balanced_matrix_give_the_d_scaled_bound():
     M = wide_gap_matrix(59)
     res = mussv(M, EIGHT)
-    cert = _LiftedCertificate(M)
-    d = np.abs(np.diagonal(res.Dl[0]))
-    assert np.sqrt(cert.bound_squared(cert.start(d))) == pytest.approx(res.upper[0], rel=1e-9)
+    cert = _LiftedCertificate(balanced(M, res))
+    assert np.sqrt(cert.bound_squared(cert.start())) == pytest.approx(res.upper[0], rel=1e-9)
 
 
 def test_barrier_derivatives_match_finite_differences():
@@ -75,7 +81,7 @@ def test_barrier_derivatives_match_finite_differences():
     n = 3
     M = g.standard_normal((n, n)) + 1j * g.standard_normal((n, n))
     cert = _LiftedCertificate(M)
-    theta = cert.start(np.ones(n)) + 0.01 * g.standard_normal(n ** 3)
+    theta = cert.start() + 0.01 * g.standard_normal(n ** 3)
     tau = 1.2 * cert.bound_squared(theta)
     grad, curvature = cert.newton_step(theta, tau)
     hess = -curvature
@@ -100,6 +106,27 @@ def test_refine_on_a_frequency_response_keeps_every_bound_valid():
     assert np.all(refined.gap <= 0.01)
     untouched = plain.gap <= 0.01
     np.testing.assert_array_equal(refined.upper[untouched], plain.upper[untouched])
+
+
+@settings(max_examples=15, deadline=None)
+@given(base=st.sampled_from([9, 59, 195, 210]), seed=st.integers(0, 2 ** 32 - 1),
+       size=st.floats(0, 0.03), spread=st.floats(0, 3))
+def test_refined_bounds_stay_ordered_and_certified_near_wide_gaps(base, seed, size, spread):
+    # a perturbed wide-gap matrix under a diagonal similarity (which leaves mu unchanged)
+    g = np.random.default_rng(seed)
+    scale = 10 ** g.uniform(-spread, spread, 8)
+    M = (scale[:, None] / scale[None, :]) * (
+        wide_gap_matrix(base) + size * (g.standard_normal((8, 8)) + 1j * g.standard_normal((8, 8))))
+    plain = mussv(M, EIGHT)
+    refined = mussv(M, EIGHT, refine=0.002)
+    assert refined.lower[0] == plain.lower[0]
+    assert refined.lower[0] <= refined.upper[0] <= plain.upper[0]
+    if plain.gap[0] > 0.002:
+        assert refined.upper[0] < plain.upper[0]
+        Mb = balanced(M, plain)
+        bound, theta = _refine_point(Mb, None, 0.0, 0.0, 60)
+        S = _LiftedCertificate(Mb).multipliers(theta)
+        assert certificate_holds(Mb, S, bound * (1 + 1e-9))
 
 
 @pytest.mark.parametrize("refine, blk, lower, match", [
