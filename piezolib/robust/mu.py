@@ -248,14 +248,12 @@ def mussv(M, blk, omega=None, *, lower=True, restarts=3, iterations=60, tol=1e-1
     else:
         low, Delta = complex_lower_bound(arr, blocks, Dl, Dr, upper, iterations=iterations,
                                          rng=rng, restarts=restarts)
+    if refine is not None:
+        upper = lifted_scalar_upper_bound(arr, upper, low, d, refine)
     # both bounds are exact numbers for their D and Q; when they meet, the
     # lower one can exceed the upper one by rounding only (a larger excess
     # would be a bug, and is left visible)
     low = np.where(low <= upper * (1 + 1e-9), np.minimum(low, upper), low)
-    if refine is not None:
-        d_scalar = np.abs(np.diagonal(Dl, axis1=1, axis2=2))
-        upper = lifted_scalar_upper_bound(arr, upper, low, d_scalar, refine)
-        low = np.where(low <= upper * (1 + 1e-9), np.minimum(low, upper), low)
     upper, low, Delta = upper * c, low * c, Delta / c[:, None, None]
     if G is not None:
         G = G * c[:, None, None]

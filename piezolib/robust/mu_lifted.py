@@ -29,6 +29,8 @@ against about 1 ms per frequency for the D-scaled bound, so :func:`mussv` applie
 only where asked (``refine``) and only where the gap exceeds the requested tolerance.
 """
 
+from functools import lru_cache
+
 import numpy as np
 import scipy.linalg as sla
 from scipy import sparse
@@ -63,6 +65,17 @@ def _hermitian_basis(n):
     return np.array(H)
 
 
+@lru_cache(maxsize=None)
+def _lift_constants(n):
+    """What the certificate needs for n scalars whatever M is (shared, not to be modified):
+    the symmetric basis P, the Hermitian basis H, the sparse map from matrix entries to
+    basis coefficients (one or two per basis matrix: turns a Hessian over entries into one
+    over theta) and the trace of each unknown's basis matrix."""
+    H = _hermitian_basis(n)
+    return (_symmetric_basis(n), H, sparse.csr_matrix(H.reshape(n * n, n * n)),
+            np.tile(np.einsum("kaa->k", H).real, n))
+
+
 class _LiftedCertificate:
     """The matrices of the certificate for one M (n x n) and its Newton derivatives.
 
@@ -71,13 +84,8 @@ class _LiftedCertificate:
 
     def __init__(self, M):
         n = self.n = M.shape[0]
-        self.P = _symmetric_basis(n)
+        self.P, self.H, self.to_basis, self.trace = _lift_constants(n)
         self.N = np.kron(M, np.eye(n)) @ self.P
-        self.H = _hermitian_basis(n)
-        # basis coefficients of the matrix entries (one or two per basis matrix): turns a
-        # Hessian over matrix entries into one over theta
-        self.to_basis = sparse.csr_matrix(self.H.reshape(n * n, n * n))
-        self.trace = np.tile(np.einsum("kaa->k", self.H).real, n)
 
     def start(self):
         """theta of S_i = I / n^2 (unit total trace): the bound is sigma_max(M)."""
