@@ -15,7 +15,7 @@ import numpy as np
 
 from piezolib._checks import check_finite_array, check_integer
 from piezolib.robust.blocks import parse_blk
-from piezolib.robust.mu_lifted import MAX_LIFTED_SCALARS, lifted_scalar_upper_bound
+from piezolib.robust.mu_lifted import MAX_LIFTED_UNKNOWNS, lifted_unknowns, lifted_upper_bound
 from piezolib.robust.mu_lower import complex_lower_bound, mixed_lower_bound
 from piezolib.robust.mu_mixed import mixed_upper_bound
 from piezolib.robust.mu_upper import complex_upper_bound
@@ -142,12 +142,14 @@ def _check_refine(refine, blocks, lower):
     if isinstance(refine, bool) or not isinstance(refine, (int, float, np.floating)) \
             or not 0 < refine < 1:
         raise ValueError(f"refine must be None or a relative gap in (0, 1), got {refine!r}")
-    if not all(b.blk_row in ((1, 1), (1, 0)) for b in blocks):
-        raise ValueError("refine applies to structures of complex scalar blocks (1, 1) only, "
-                         f"got blk {[b.blk_row for b in blocks]}")
-    if len(blocks) > MAX_LIFTED_SCALARS:
-        raise ValueError(f"refine handles at most {MAX_LIFTED_SCALARS} scalar blocks, "
-                         f"got {len(blocks)}")
+    if any(b.is_real for b in blocks):
+        raise ValueError("refine applies to complex structures (full blocks and complex "
+                         f"scalars) only, got blk {[b.blk_row for b in blocks]}")
+    if lifted_unknowns(blocks) > MAX_LIFTED_UNKNOWNS:
+        raise ValueError(f"refine handles structures of at most {MAX_LIFTED_UNKNOWNS} "
+                         "unknowns (blocks x q^2, q = columns of M), got "
+                         f"{len(blocks)} x {sum(b.rows for b in blocks)}^2 = "
+                         f"{lifted_unknowns(blocks)}")
     if not lower:
         raise ValueError("refine needs the lower bound: it refines where the gap is wide; "
                          "pass lower=True")
@@ -185,14 +187,17 @@ def mussv(M, blk, omega=None, *, lower=True, restarts=3, iterations=60, tol=1e-1
     seed : int, optional
         Seed of the random starts (results are deterministic).
     refine : float, optional
-        For structures of complex scalar blocks ``(1, 1)`` only (at most
-        :data:`~piezolib.robust.mu_lifted.MAX_LIFTED_SCALARS`): at frequencies whose
-        relative gap exceeds ``refine`` (e.g. 0.01), tighten the upper bound with the
-        symmetric-lift certificate of :mod:`piezolib.robust.mu_lifted`, each until its
-        gap is at most ``refine / 2`` or that certificate's optimum is reached.  For
-        8 scalars it cost 3-7 ms per refined frequency on a 1,000-point grid (a
-        neighbour's certificate mostly carries over), about 0.2 s at an isolated
-        frequency.  Default None (the D-scaled bound only).
+        For complex structures (full blocks and complex scalars, at most
+        :data:`~piezolib.robust.mu_lifted.MAX_LIFTED_UNKNOWNS` unknowns, i.e. blocks x q^2
+        <= 1200): at frequencies whose relative gap exceeds ``refine`` (e.g. 0.01),
+        tighten the upper bound with the symmetric-lift certificate of
+        :mod:`piezolib.robust.mu_lifted`, each until its gap is at most ``refine / 2`` or
+        the certificate's optimum (or its cap of 60 centres) is reached.  For 8 scalars it
+        cost 3-7 ms per refined frequency on a 1,000-point grid (a neighbour's
+        certificate mostly carries over), about 0.2 s at an isolated frequency; for
+        six or seven blocks (repeated scalars, full blocks) on q = 11-13, 4-15 s more
+        on a 1,000-point grid with 145-289 refined frequencies.  Default None (the
+        D-scaled bound only).
 
     Returns
     -------
@@ -249,7 +254,7 @@ def mussv(M, blk, omega=None, *, lower=True, restarts=3, iterations=60, tol=1e-1
         low, Delta = complex_lower_bound(arr, blocks, Dl, Dr, upper, iterations=iterations,
                                          rng=rng, restarts=restarts)
     if refine is not None:
-        upper = lifted_scalar_upper_bound(arr, upper, low, d, refine)
+        upper = lifted_upper_bound(arr, blocks, upper, low, Dl, Dr, refine)
     # both bounds are exact numbers for their D and Q; when they meet, the
     # lower one can exceed the upper one by rounding only (a larger excess
     # would be a bug, and is left visible)

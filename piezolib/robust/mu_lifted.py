@@ -1,32 +1,37 @@
-"""A tighter upper bound of mu for complex scalar blocks: the symmetric-lift certificate.
+"""A tighter upper bound of mu for complex structures: the symmetric-lift certificate.
 
-For n complex scalar blocks (each 1 x 1), mu(M) >= beta holds exactly when some
-x != 0 has |(M x)_i| >= beta |x_i| for every i, i.e. q_i(x) = |(M x)_i|^2 - beta^2 |x_i|^2
->= 0 for all i.  The D-scaled bound certifies mu < beta with weights d_i >= 0 such
-that sum_i d_i q_i(x) < 0 for every x != 0.  This module certifies it with
-quadratic-form multipliers instead: positive semidefinite n x n matrices S_i with
+With M p x q and x = Delta y, y = M x, mu(M) >= beta holds exactly when some x != 0
+satisfies the constraints of every block b at level beta: for a full block (or a 1 x 1
+scalar) q_b(x) = ||y_b||^2 - beta^2 ||x_b||^2 >= 0; for a repeated scalar delta I_r the same
+inequality and, in addition, x_b parallel to y_b (x_b = delta y_b).  The D-scaled bound
+certifies mu < beta with constant weights, sum_b d_b q_b(x) < 0 for every x != 0 (on the
+D-balanced matrix).  This module weights each q_b by a positive semidefinite quadratic form
+instead, with S_b Hermitian q x q:
 
-    sum_i q_i(x) x^H S_i x < 0   for every x != 0,
+    sum_b q_b(x) x^H S_b x < 0   for every x != 0 whose repeated-scalar parts are parallel,
 
-which rules out x with all q_i(x) >= 0.  The left side is a Hermitian form in the
-symmetric tensor z = x (x) x; demanding it negative on all symmetric tensors is the
-linear matrix inequality
+which rules out every such x.  The left side is a Hermitian form in the symmetric tensor
+z = x (x) x, and parallelism is linear in z: x_i y_j - x_j y_i = 0 for each pair i < j inside a
+repeated scalar (y = M x, so each such product is a fixed combination of the entries of z).
+Demanding the form negative on the symmetric tensors that meet those linear equations (an
+orthonormal basis V) is the linear matrix inequality
 
-    F(S) = beta^2 P^T D P - N^H D N > 0,   D = blockdiag(S_1, ..., S_n),
+    F(S) = beta^2 V^H D_x V - N^H D_y N > 0,   N = (M (x) I_q) V,
 
-with P an orthonormal basis of the symmetric tensors of C^n (x) C^n and
-N = (M (x) I) P.  S_i = d_i I gives back the D-scaled bound, so the certificate is
-never weaker; on random 8-scalar matrices it closes most of the D-scaled bound's gap
-(``benchmarks/README.md``).  The smallest certified beta is the largest generalized
-eigenvalue of (N^H D N, P^T D P), minimised over S by the method of centres: the
-analytic centre of {S : F_tau(S) > 0, S_i > 0, sum_i tr S_i = 1} for a level tau that
-moves down towards the eigenvalue at the previous centre.  Every returned bound is the
-eigenvalue of the S it came from, recomputed from scratch, so it is a certificate
-whatever the iteration did.  Derivation in ``docs/robust.md``.
+with D_x = sum_b E_b^H E_b (x) S_b and D_y = sum_b F_b^H F_b (x) S_b (E_b, F_b select the
+block's entries of x and y).  S_b = I gives back the D-scaled bound on the D-balanced matrix
+(for n scalars exactly; the parallelism can only lower it), so the certificate is never
+weaker.  The smallest certified beta is the square root of the largest generalized
+eigenvalue of (N^H D_y N, V^H D_x V), minimised over S by the method of centres: the analytic
+centre of {S : F_tau(S) > 0, S_b > 0, sum_b tr S_b = 1} for a level tau that moves down
+towards the eigenvalue at the previous centre.  Every returned bound is the eigenvalue of
+the S it came from, recomputed from scratch, so it is a certificate whatever the iteration
+did.  Derivation in ``docs/robust.md``.
 
-It costs about n^3 unknowns (512 for n = 8) and about 10 ms per Newton step,
-against about 1 ms per frequency for the D-scaled bound, so :func:`mussv` applies it
-only where asked (``refine``) and only where the gap exceeds the requested tolerance.
+It costs nb q^2 unknowns (512 for 8 scalars, 726 for six blocks on q = 11) and 15-40 ms
+per Newton step, against about 1 ms per frequency for the D-scaled bound, so :func:`mussv`
+applies it only where asked (``refine``) and only where the gap exceeds the requested
+tolerance.
 """
 
 from functools import lru_cache
@@ -35,10 +40,16 @@ import numpy as np
 import scipy.linalg as sla
 from scipy import sparse
 
-__all__ = ["lifted_scalar_upper_bound", "MAX_LIFTED_SCALARS"]
+__all__ = ["lifted_upper_bound", "lifted_unknowns", "MAX_LIFTED_UNKNOWNS"]
 
-#: the Newton system has n^3 unknowns; beyond 10 scalars (1,000) a step costs seconds
-MAX_LIFTED_SCALARS = 10
+#: the Newton system has nb q^2 unknowns; beyond about 1,200 a step costs a tenth of a second
+MAX_LIFTED_UNKNOWNS = 1200
+
+
+def lifted_unknowns(blocks):
+    """Real unknowns of the certificate for a structure: one q x q Hermitian S_b per block."""
+    q = sum(b.rows for b in blocks)
+    return len(blocks) * q * q
 
 
 def _symmetric_basis(n):
@@ -67,53 +78,81 @@ def _hermitian_basis(n):
 
 @lru_cache(maxsize=None)
 def _lift_constants(n):
-    """What the certificate needs for n scalars whatever M is (shared, not to be modified):
-    the symmetric basis P, the Hermitian basis H, the sparse map from matrix entries to
-    basis coefficients (one or two per basis matrix: turns a Hessian over entries into one
-    over theta) and the trace of each unknown's basis matrix."""
+    """What the certificate needs for q = n whatever M is (shared, not to be modified): the
+    symmetric basis P, the Hermitian basis H, the sparse map from matrix entries to basis
+    coefficients (one or two per basis matrix: turns a Hessian over entries into one over
+    theta) and the trace of each basis matrix."""
     H = _hermitian_basis(n)
     return (_symmetric_basis(n), H, sparse.csr_matrix(H.reshape(n * n, n * n)),
-            np.tile(np.einsum("kaa->k", H).real, n))
+            np.einsum("kaa->k", H).real)
+
+
+def _parallel_functionals(M, blocks):
+    """Rows (w, q^2): x_i y_j - x_j y_i (y = M x) for each pair i < j inside a repeated
+    scalar, as linear functionals of z = x (x) x (entry i q + k holds x_i x_k)."""
+    p, q = M.shape
+    rows = []
+    xo = yo = 0
+    for b in blocks:
+        if b.repeated:
+            for i, j in zip(*np.triu_indices(b.rows, 1)):
+                ell = np.zeros((q, q), complex)
+                ell[xo + i] += M[yo + j]
+                ell[xo + j] -= M[yo + i]
+                rows.append(ell.ravel())
+        xo += b.rows
+        yo += b.cols
+    return np.array(rows).reshape(-1, q * q)
 
 
 class _LiftedCertificate:
-    """The matrices of the certificate for one M (n x n) and its Newton derivatives.
+    """The matrices of the certificate for one M (p x q) and its Newton derivatives.
 
-    The unknowns theta (n^3 reals) hold S_i = sum_k theta[i, k] H_k.
+    The unknowns theta (nb q^2 reals) hold S_b = sum_k theta[b, k] H_k.
     """
 
-    def __init__(self, M):
-        n = self.n = M.shape[0]
-        self.P, self.H, self.to_basis, self.trace = _lift_constants(n)
-        self.N = np.kron(M, np.eye(n)) @ self.P
+    def __init__(self, M, blocks):
+        p, q = M.shape
+        self.p, self.q, self.nb = p, q, len(blocks)
+        self.V, self.H, self.to_basis, trace = _lift_constants(q)
+        self.trace = np.tile(trace, self.nb)
+        # block index of each entry of x (Delta's output) and of y (its input)
+        self.bx = np.repeat(np.arange(self.nb), [b.rows for b in blocks])
+        self.by = np.repeat(np.arange(self.nb), [b.cols for b in blocks])
+        L = _parallel_functionals(M, blocks)
+        if len(L):
+            # the symmetric tensors on which every repeated scalar's parts are parallel
+            _, _, vh = np.linalg.svd(L @ self.V)
+            self.V = self.V @ vh[len(L):].conj().T
+        self.N = np.kron(M, np.eye(q)) @ self.V
 
     def start(self):
-        """theta of S_i = I / n^2 (unit total trace): the bound is sigma_max(M)."""
-        n = self.n
-        theta = np.zeros((n, n * n))
-        theta[:, :n] = 1.0 / n ** 2
+        """theta of S_b = I / (nb q) (unit total trace): the D-scaled bound on a balanced M."""
+        q, nb = self.q, self.nb
+        theta = np.zeros((nb, q * q))
+        theta[:, :q] = 1.0 / (nb * q)
         return theta.ravel()
 
     def multipliers(self, theta):
-        return np.einsum("ik,kab->iab", theta.reshape(self.n, -1), self.H)
+        return np.einsum("ik,kab->iab", theta.reshape(self.nb, -1), self.H)
 
     def _forms(self, S):
-        """(N^H D N, P^T D P) for D = blockdiag(S)."""
-        n, m = self.n, self.P.shape[1]
-        N4 = self.N.reshape(n, n, m)
-        P4 = self.P.reshape(n, n, m)
-        A = np.einsum("iam,iab,ibk->mk", N4.conj(), S, N4, optimize=True)
-        B = np.einsum("iam,iab,ibk->mk", P4, S, P4, optimize=True)
-        return A, B
+        """(N^H D_y N, V^H D_x V) for the multipliers S."""
+        q, m = self.q, self.V.shape[1]
+        N4 = self.N.reshape(self.p, q, m)
+        V4 = self.V.reshape(q, q, m)
+        A = np.einsum("iam,iab,ibk->mk", N4.conj(), S[self.by], N4, optimize=True)
+        B = np.einsum("iam,iab,ibk->mk", V4.conj(), S[self.bx], V4, optimize=True)
+        return (A + A.conj().T) / 2, (B + B.conj().T) / 2
 
     def bound_squared(self, theta):
-        """Largest generalized eigenvalue of (N^H D N, P^T D P): the certified beta^2."""
+        """Largest generalized eigenvalue of (N^H D_y N, V^H D_x V): the certified beta^2."""
         A, B = self._forms(self.multipliers(theta))
         m = A.shape[0]
         return sla.eigh(A, B, eigvals_only=True, subset_by_index=[m - 1, m - 1])[0]
 
     def barrier(self, theta, tau):
-        """log det F_tau(S) + sum_i log det S_i, or None outside the domain."""
+        """log det F_tau(S) + sum_b log det S_b, or None outside the domain."""
         S = self.multipliers(theta)
         A, B = self._forms(S)
         try:
@@ -122,38 +161,54 @@ class _LiftedCertificate:
         except np.linalg.LinAlgError:
             return None
 
-    def _pair_trace(self, E):
-        """Hessian over theta from E[(d, a), i, j, (b, c)] = coefficient of
-        Delta_i[d, a] Delta_j[b, c] in a quadratic form of the block-diagonal Delta."""
-        n, T = self.n, self.to_basis
-        n2 = n * n
-        E = (T @ E.reshape(n2, -1)).reshape(-1, n2)
-        E = (T @ E.T).T.reshape(n2, n, n, n2)       # [k, i, j, l]
-        H = E.real.transpose(1, 0, 2, 3).reshape(n ** 3, n ** 3)
-        return (H + H.T) / 2
+    def _pair_form(self, X, Y, rows1, rows2):
+        """tr(X dD1 Y dD2) as coefficients K[b1, (j, k), b2, (l, i)] of dS_b1[j, k] dS_b2[l, i].
+
+        dD1 = sum_a e_a e_a^H (x) dS_rows1[a] (likewise dD2), so the coefficient sums
+        X[c, i, a, j] Y[a, k, c, l] over the entries a of block b1 and c of block b2.
+        """
+        q, nb = self.q, self.nb
+        X4 = X.reshape(len(rows2), q, len(rows1), q)
+        Y4 = Y.reshape(len(rows1), q, len(rows2), q)
+        K = np.empty((nb, q * q, nb, q * q), complex)
+        for b1 in range(nb):
+            a = rows1 == b1
+            for b2 in range(nb):
+                c = rows2 == b2
+                Xr = X4[c][:, :, a].transpose(2, 0, 3, 1).reshape(-1, q * q)   # [ac, ji]
+                Yr = Y4[a][:, :, c].transpose(0, 2, 1, 3).reshape(-1, q * q)   # [ac, kl]
+                E = (Xr.T @ Yr).reshape(q, q, q, q).transpose(0, 2, 3, 1)
+                K[b1, :, b2, :] = E.reshape(q * q, q * q)
+        return K
 
     def newton_step(self, theta, tau):
         """Gradient of the barrier at theta and its Hessian's negative (positive definite)."""
-        n = self.n
+        p, q, nb, T = self.p, self.q, self.nb, self.to_basis
         S = self.multipliers(theta)
         A, B = self._forms(S)
         R = np.linalg.inv(tau * B - A)
-        U = self.P @ R @ self.P.T
+        U = self.V @ R @ self.V.conj().T
         V = self.N @ R @ self.N.conj().T
-        W = self.N @ R @ self.P.T
+        W = self.N @ R @ self.V.conj().T
         Si = np.linalg.inv(S)
-        G = (tau * U - V).reshape(n, n, n, n)[np.arange(n), :, np.arange(n), :] + Si
+        G = Si.copy()
+        np.add.at(G, self.bx, tau * U.reshape(q, q, q, q)[np.arange(q), :, np.arange(q), :])
+        np.add.at(G, self.by, -V.reshape(p, q, p, q)[np.arange(p), :, np.arange(p), :])
         grad = np.einsum("iab,kba->ik", G, self.H).real.ravel()
-        # d^2 log det F = -tr(R dF R dF) with dF = tau P^T dD P - N^H dD N, i.e.
-        # -tr(tau^2 U dD U dD - 2 tau W dD W^H dD + V dD V dD); each tr(X dD Y dD) has the
-        # coefficient X_ij[a, b] Y_ji[c, d] on dS_i[d, a] dS_j[b, c]
-        X = np.stack([tau ** 2 * U, -2 * tau * W, V]).reshape(3, n, n, n, n)
-        Y = np.stack([U, W.conj().T, V]).reshape(3, n, n, n, n)
-        E = np.einsum("tiajb,tjcid->daijbc", X, Y, optimize=True)
-        # and -tr(S_i^-1 dS_i S_i^-1 dS_i) from the log det S_i, on the diagonal blocks only
-        i = np.arange(n)
-        E[:, :, i, i] += np.einsum("iab,icd->daibc", Si, Si)
-        return grad, self._pair_trace(E)
+        # d^2 log det F = -tr(R dF R dF) with dF = tau V^H dD_x V - N^H dD_y N, i.e.
+        # -(tau^2 tr(U dD_x U dD_x) - 2 tau tr(W dD_x W^H dD_y) + tr(V dD_y V dD_y))
+        K = (tau ** 2 * self._pair_form(U, U, self.bx, self.bx)
+             - 2 * tau * self._pair_form(W, W.conj().T, self.bx, self.by)
+             + self._pair_form(V, V, self.by, self.by))
+        # and -tr(S_b^-1 dS_b S_b^-1 dS_b) from the log det S_b
+        for b in range(nb):
+            K[b, :, b, :] += np.einsum("ij,kl->jkli", Si[b], Si[b]).reshape(q * q, q * q)
+        # entries to theta on both sides: T[k, (j, k')] = H_k[j, k']
+        K = np.stack([T @ K[b].reshape(q * q, -1) for b in range(nb)])
+        K = K.reshape(nb * q * q, nb, q * q)
+        K = np.stack([(T @ K[:, b].T).T for b in range(nb)], axis=1)
+        H = K.reshape(nb * q * q, nb * q * q).real
+        return grad, (H + H.T) / 2
 
     def centre(self, theta, tau, steps=30):
         """Analytic centre of the level set tau (damped Newton, sum of traces fixed)."""
@@ -182,14 +237,14 @@ class _LiftedCertificate:
         return theta
 
 
-def _refine_point(M, theta0, accept, target, max_centres):
-    """Method of centres on a D-balanced M, from the better of S_i = I and theta0.
+def _refine_point(M, blocks, theta0, accept, target, max_centres):
+    """Method of centres on a D-balanced M, from the better of S_b = I and theta0.
 
     Returns (certified bound, theta).  A start whose bound is <= accept is kept as it
     is; otherwise the centres go on until the bound is <= target (< accept, so that
     the next frequency's start has room).
     """
-    cert = _LiftedCertificate(M)
+    cert = _LiftedCertificate(M, blocks)
     starts = [cert.start()] + ([theta0] if theta0 is not None else [])
     values = [cert.bound_squared(t) for t in starts]
     k = int(np.argmin(values))
@@ -211,17 +266,20 @@ def _refine_point(M, theta0, accept, target, max_centres):
     return np.sqrt(best), best_theta
 
 
-def lifted_scalar_upper_bound(M, upper, lower, d, gap, *, max_centres=60):
-    """Tighten the D-scaled upper bound of mu for complex scalar blocks where its gap is wide.
+def lifted_upper_bound(M, blocks, upper, lower, Dl, Dr, gap, *, max_centres=60):
+    """Tighten the D-scaled upper bound of mu for a complex structure where its gap is wide.
 
     Parameters
     ----------
-    M : ndarray, shape (nf, n, n)
-        Matrices, one per frequency, with n <= :data:`MAX_LIFTED_SCALARS` scalar blocks.
+    M : ndarray, shape (nf, p, q)
+        Matrices, one per frequency.
+    blocks : tuple of Block
+        Complex blocks (full or repeated scalar) fitting M, with at most
+        :data:`MAX_LIFTED_UNKNOWNS` unknowns (:func:`lifted_unknowns`).
     upper, lower : ndarray, shape (nf,)
         D-scaled upper bound and a lower bound of mu at every frequency.
-    d : ndarray, shape (nf, n)
-        The D-scaled bound's scalings (upper = sigma_max(diag(d) M diag(d)^-1)).
+    Dl, Dr : ndarray, shapes (nf, p, p) and (nf, q, q)
+        The D-scaled bound's scalings (upper = sigma_max(Dl M Dr^-1)).
     gap : float
         Points whose relative gap (upper - lower) / upper exceeds ``gap`` are refined:
         the previous frequency's certificate is kept where it brings the gap within
@@ -237,9 +295,9 @@ def lifted_scalar_upper_bound(M, upper, lower, d, gap, *, max_centres=60):
 
     Notes
     -----
-    The certificate is computed for diag(d) M diag(d)^-1, whose mu is M's.  Neighbouring
+    The certificate is computed for Dl M Dr^-1, whose mu is M's.  Neighbouring
     frequencies usually share a certificate: each refined point starts from the previous
-    refined point's multipliers where they certify a smaller bound than S_i = I.
+    refined point's multipliers where they certify a smaller bound than S_b = I.
     """
     upper = np.array(upper, float)
     theta = None
@@ -247,8 +305,8 @@ def lifted_scalar_upper_bound(M, upper, lower, d, gap, *, max_centres=60):
     for k in np.nonzero(upper - lower > gap * upper)[0]:
         # on the D-balanced matrix (same mu) the certificate starts at the D-scaled bound
         # and its eigenproblem stays well conditioned however M is scaled
-        balanced = d[k][:, None] * M[k] / d[k][None, :]
-        bound, th = _refine_point(balanced, theta if previous == k - 1 else None,
+        balanced = np.linalg.solve(Dr[k].T, (Dl[k] @ M[k]).T).T
+        bound, th = _refine_point(balanced, blocks, theta if previous == k - 1 else None,
                                   lower[k] / (1 - gap), lower[k] / (1 - gap / 2), max_centres)
         if bound < upper[k]:
             upper[k] = bound

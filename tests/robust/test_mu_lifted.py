@@ -1,13 +1,31 @@
-"""The symmetric-lift upper bound of mu for complex scalar blocks (mussv(..., refine=...))."""
+"""The symmetric-lift upper bound of mu for complex structures (mussv(..., refine=...))."""
 
 import numpy as np
 import pytest
+import scipy.linalg as sla
 from hypothesis import given, settings, strategies as st
 
+from piezolib.robust.blocks import parse_blk
 from piezolib.robust.mu import mussv
 from piezolib.robust.mu_lifted import _LiftedCertificate, _refine_point
 
 EIGHT = [(1, 1)] * 8
+EIGHT_BLOCKS = parse_blk(EIGHT, 8, 8)
+
+
+#: two repeated scalars, a scalar and a 1 x 2 full block (M is 7 x 6)
+MIXED = [(2, 0), (1, 1), (2, 0), (1, 2)]
+
+
+def blk_dims(blk):
+    """(p, q) of the M a structure fits."""
+    return (sum(c if c else abs(r) for r, c in blk), sum(abs(r) for r, c in blk))
+
+
+def mixed_matrix(seed):
+    """A seeded random 7 x 6 matrix (D-scaled gaps of 2-5 % for MIXED at seeds 5, 14, 52)."""
+    g = np.random.default_rng(seed)
+    return g.standard_normal((7, 6)) + 1j * g.standard_normal((7, 6))
 
 
 def wide_gap_matrix(seed):
@@ -18,33 +36,72 @@ def wide_gap_matrix(seed):
 
 
 def balanced(M, res):
-    """diag(d) M diag(d)^-1 with mussv's scalings (the same mu for scalar blocks)."""
-    d = np.abs(np.diagonal(res.Dl[0]))
-    return d[:, None] * M / d[None, :]
+    """Dl M Dr^-1 with mussv's scalings (the same mu)."""
+    return res.Dl[0] @ M @ np.linalg.inv(res.Dr[0])
 
 
-def certificate_holds(M, S, beta):
-    """Check mu(M) < beta from multipliers S, built here from the definition.
+def converged_certificate(M, blk, res):
+    """(balanced M, bound, multipliers) of the certificate centred to convergence."""
+    Mb = balanced(M, res)
+    blocks = parse_blk(blk, *M.shape)
+    bound, theta = _refine_point(Mb, blocks, None, 0.0, 0.0, 60)
+    return Mb, bound, _LiftedCertificate(Mb, blocks).multipliers(theta)
 
-    For every x: sum_i (|(M x)_i|^2 - beta^2 |x_i|^2) x^H S_i x < 0 must hold on all
-    symmetric tensors z = x (x) x; the form is z^H (K^H D K - beta^2 D) z with
-    D = blockdiag(S_i) (index i * n + k) and K = M (x) I.
+
+def parallel_symmetric_tensors(M, blk):
+    """Orthonormal basis of the symmetric tensors z = x (x) x of C^q (x) C^q on which every
+    repeated scalar's x_b is parallel to its y_b = (M x)_b, built from the definition: z is
+    fixed by the swap operator, and x_i y_j - x_j y_i = (e_i (x) M_j - e_j (x) M_i) z = 0."""
+    p, q = M.shape
+    eye = np.eye(q)
+    swap = np.zeros((q * q, q * q))
+    for a in range(q):
+        for b in range(q):
+            swap[a * q + b, b * q + a] = 1
+    rows = [np.eye(q * q) - swap]
+    xo = yo = 0
+    for r, c in blk:
+        if c == 0:
+            for i in range(r):
+                for j in range(i + 1, r):
+                    rows.append([np.kron(eye[xo + i], M[yo + j])
+                                 - np.kron(eye[xo + j], M[yo + i])])
+        xo += abs(r)
+        yo += c if c else abs(r)
+    return sla.null_space(np.vstack(rows))
+
+
+def certificate_holds(M, blk, S, beta):
+    """Check mu(M) < beta from multipliers S (one per block), built here from the definition.
+
+    For every x with parallel repeated-scalar parts: sum_b (||y_b||^2 - beta^2 ||x_b||^2)
+    x^H S_b x < 0 (y = M x); on z = x (x) x the form is z^H (K^H D_y K - beta^2 D_x) z with
+    K = M (x) I, D_x = blockdiag(S_b(a)) over the entries a of x (index a q + k) and D_y
+    likewise over the entries of y; it must be negative on all those tensors.
     """
-    n = M.shape[0]
-    D = np.zeros((n * n, n * n), complex)
-    for i in range(n):
-        D[i * n:(i + 1) * n, i * n:(i + 1) * n] = S[i]
-    K = np.kron(M, np.eye(n))
-    form = K.conj().T @ D @ K - beta ** 2 * D
-    swap = np.zeros((n * n, n * n))
-    for a in range(n):
-        for b in range(n):
-            swap[a * n + b, b * n + a] = 1
-    # orthonormal basis of the symmetric tensors: the +1 eigenvectors of the swap
-    w, V = np.linalg.eigh(swap)
-    sym = V[:, w > 0]
+    p, q = M.shape
+    bx = [b for b, (r, c) in enumerate(blk) for _ in range(abs(r))]
+    by = [b for b, (r, c) in enumerate(blk) for _ in range(c if c else abs(r))]
+    Dx = sla.block_diag(*[S[b] for b in bx])
+    Dy = sla.block_diag(*[S[b] for b in by])
+    K = np.kron(M, np.eye(q))
+    form = K.conj().T @ Dy @ K - beta ** 2 * Dx
+    Z = parallel_symmetric_tensors(M, blk)
     psd = all(np.linalg.eigvalsh(s).min() > 0 for s in S)
-    return psd and np.linalg.eigvalsh(sym.conj().T @ form @ sym).max() < 0
+    return psd and np.linalg.eigvalsh(Z.conj().T @ form @ Z).max() < 0
+
+
+def refined_bounds_are_ordered_and_certified(M, blk, tol):
+    """Refining keeps the lower bound, lowers the upper one where the gap exceeds tol, and
+    the converged certificate holds by the definition."""
+    plain = mussv(M, blk)
+    refined = mussv(M, blk, refine=tol)
+    assert refined.lower[0] == plain.lower[0]
+    assert refined.lower[0] <= refined.upper[0] <= plain.upper[0]
+    if plain.gap[0] > tol:
+        assert refined.upper[0] < plain.upper[0]
+        Mb, bound, S = converged_certificate(M, blk, plain)
+        assert certificate_holds(Mb, blk, S, bound * (1 + 1e-9))
 
 
 @pytest.mark.parametrize("seed", [195, 210, 9])
@@ -57,11 +114,9 @@ def test_refined_bound_is_certified_and_closes_the_gap(seed):
     assert refined.upper[0] < plain.upper[0]
     assert refined.gap[0] <= 0.005
     # the multipliers behind the bound certify it, checked from the definition
-    Mb = balanced(M, plain)
-    bound, theta = _refine_point(Mb, None, 0.0, 0.0, 60)
-    S = _LiftedCertificate(Mb).multipliers(theta)
-    assert certificate_holds(Mb, S, bound * (1 + 1e-9))
-    assert not certificate_holds(Mb, S, bound * (1 - 1e-3))
+    Mb, bound, S = converged_certificate(M, EIGHT, plain)
+    assert certificate_holds(Mb, EIGHT, S, bound * (1 + 1e-9))
+    assert not certificate_holds(Mb, EIGHT, S, bound * (1 - 1e-3))
     # and no perturbation found by brute force beats it: max over random phases of rho(Q M)
     g = np.random.default_rng(0)
     Q = np.exp(2j * np.pi * g.random((20000, 8)))
@@ -72,26 +127,77 @@ def test_refined_bound_is_certified_and_closes_the_gap(seed):
 def test_identity_multipliers_on_the_balanced_matrix_give_the_d_scaled_bound():
     M = wide_gap_matrix(59)
     res = mussv(M, EIGHT)
-    cert = _LiftedCertificate(balanced(M, res))
+    cert = _LiftedCertificate(balanced(M, res), EIGHT_BLOCKS)
     assert np.sqrt(cert.bound_squared(cert.start())) == pytest.approx(res.upper[0], rel=1e-9)
 
 
-def test_barrier_derivatives_match_finite_differences():
+@pytest.mark.parametrize("blk, exact", [([(1, 2), (2, 1), (1, 1)], True),
+                                        (MIXED, False)])
+def test_identity_multipliers_start_at_or_below_the_d_scaled_bound(blk, exact):
+    # full blocks: the same bound; repeated scalars: parallelism can only lower it
+    p, q = blk_dims(blk)
+    M = np.random.default_rng(4).standard_normal((p, q)) + 0.5j
+    res = mussv(M, blk)
+    cert = _LiftedCertificate(balanced(M, res), parse_blk(blk, p, q))
+    start = np.sqrt(cert.bound_squared(cert.start()))
+    assert start <= res.upper[0] * (1 + 1e-12)
+    if exact:
+        assert start == pytest.approx(res.upper[0], rel=1e-9)
+
+
+@pytest.mark.parametrize("blk", [[(1, 1)] * 3, [(2, 0), (1, 2), (1, 1)]])
+def test_barrier_derivatives_match_finite_differences(blk):
     g = np.random.default_rng(1)
-    n = 3
-    M = g.standard_normal((n, n)) + 1j * g.standard_normal((n, n))
-    cert = _LiftedCertificate(M)
-    theta = cert.start() + 0.01 * g.standard_normal(n ** 3)
+    p, q = blk_dims(blk)
+    M = g.standard_normal((p, q)) + 1j * g.standard_normal((p, q))
+    cert = _LiftedCertificate(M, parse_blk(blk, p, q))
+    theta = cert.start() + 0.01 * g.standard_normal(cert.start().size)
     tau = 1.2 * cert.bound_squared(theta)
     grad, curvature = cert.newton_step(theta, tau)
     hess = -curvature
-    h, eye = 1e-5, np.eye(n ** 3)
+    h, eye = 1e-5, np.eye(theta.size)
     fd_grad = [(cert.barrier(theta + h * e, tau) - cert.barrier(theta - h * e, tau)) / (2 * h)
                for e in eye]
     fd_hess = [(cert.newton_step(theta + h * e, tau)[0] - cert.newton_step(theta - h * e, tau)[0])
                / (2 * h) for e in eye]
     np.testing.assert_allclose(grad, fd_grad, atol=1e-6 * np.abs(grad).max())
     np.testing.assert_allclose(hess, np.array(fd_hess), atol=1e-5 * np.abs(hess).max())
+
+
+def random_structured_delta(g, blk, count):
+    """count random Delta of unit norm in the structure: unit phases times I for repeated
+    scalars, matrices with all singular values 1 for full blocks."""
+    deltas = []
+    for _ in range(count):
+        parts = []
+        for r, c in blk:
+            if c == 0:
+                parts.append(np.exp(2j * np.pi * g.random()) * np.eye(r))
+            else:
+                u, _, vh = np.linalg.svd(g.standard_normal((r, c)) + 1j * g.standard_normal((r, c)),
+                                         full_matrices=False)
+                parts.append(u @ vh)
+        deltas.append(sla.block_diag(*parts))
+    return np.array(deltas)
+
+
+@pytest.mark.parametrize("seed", [5, 14, 52])
+def test_refined_bound_is_certified_for_repeated_scalars_and_full_blocks(seed):
+    M = mixed_matrix(seed)
+    plain = mussv(M, MIXED)
+    assert plain.gap[0] > 0.02
+    refined = mussv(M, MIXED, refine=0.01)
+    assert refined.lower[0] == plain.lower[0]
+    assert refined.gap[0] <= 0.01 < plain.gap[0]
+    Mb, bound, S = converged_certificate(M, MIXED, plain)
+    assert bound <= refined.upper[0] * (1 + 1e-12)
+    assert certificate_holds(Mb, MIXED, S, bound * (1 + 1e-9))
+    assert not certificate_holds(Mb, MIXED, S, bound * (1 - 1e-3))
+    # without the parallelism of the repeated scalars the same multipliers prove nothing
+    assert not certificate_holds(Mb, [(r, c if c else r) for r, c in MIXED], S, bound)
+    # and no random perturbation beats it
+    Delta = random_structured_delta(np.random.default_rng(0), MIXED, 5000)
+    assert np.abs(np.linalg.eigvals(M[None] @ Delta)).max() <= bound
 
 
 def test_refine_on_a_frequency_response_keeps_every_bound_valid():
@@ -117,16 +223,52 @@ def test_refined_bounds_stay_ordered_and_certified_near_wide_gaps(base, seed, si
     scale = 10 ** g.uniform(-spread, spread, 8)
     M = (scale[:, None] / scale[None, :]) * (
         wide_gap_matrix(base) + size * (g.standard_normal((8, 8)) + 1j * g.standard_normal((8, 8))))
-    plain = mussv(M, EIGHT)
-    refined = mussv(M, EIGHT, refine=0.002)
-    assert refined.lower[0] == plain.lower[0]
-    assert refined.lower[0] <= refined.upper[0] <= plain.upper[0]
-    if plain.gap[0] > 0.002:
-        assert refined.upper[0] < plain.upper[0]
-        Mb = balanced(M, plain)
-        bound, theta = _refine_point(Mb, None, 0.0, 0.0, 60)
-        S = _LiftedCertificate(Mb).multipliers(theta)
-        assert certificate_holds(Mb, S, bound * (1 + 1e-9))
+    refined_bounds_are_ordered_and_certified(M, EIGHT, 0.002)
+
+
+def test_refine_on_a_mixed_structure_frequency_response_keeps_every_bound_valid():
+    g = np.random.default_rng(7)
+    M = np.array([mixed_matrix(52) + 0.03 * k * (g.standard_normal((7, 6)) + 1j)
+                  for k in range(5)])
+    plain = mussv(M, MIXED)
+    refined = mussv(M, MIXED, refine=0.01)
+    assert np.sum(plain.gap > 0.01) >= 3
+    np.testing.assert_array_equal(refined.lower, plain.lower)
+    assert np.all(refined.lower <= refined.upper) and np.all(refined.upper <= plain.upper)
+    assert np.all(refined.gap <= 0.01)
+    untouched = plain.gap <= 0.01
+    np.testing.assert_array_equal(refined.upper[untouched], plain.upper[untouched])
+
+
+def structure_similarity(g, blk, spread):
+    """Random (Dl, Dr) with Dl Delta = Delta Dr for every Delta in the structure, so that
+    Dl M Dr^-1 has M's mu: an invertible matrix (singular values spanning up to 10^(2 spread))
+    for a repeated scalar, a positive d times identities for a full block."""
+    left, right = [], []
+    for r, c in blk:
+        if c == 0:
+            u, _, vh = np.linalg.svd(g.standard_normal((r, r)) + 1j * g.standard_normal((r, r)))
+            D = u @ np.diag(10 ** g.uniform(-spread, spread, r)) @ vh
+            left.append(D)
+            right.append(D)
+        else:
+            d = 10 ** g.uniform(-spread, spread)
+            left.append(d * np.eye(c))
+            right.append(d * np.eye(r))
+    return sla.block_diag(*left), sla.block_diag(*right)
+
+
+@settings(max_examples=15, deadline=None)
+@given(base=st.sampled_from([5, 14, 52]), seed=st.integers(0, 2 ** 32 - 1),
+       size=st.floats(0, 0.05), spread=st.floats(0, 3))
+def test_refined_bounds_stay_ordered_and_certified_under_structured_similarities(
+        base, seed, size, spread):
+    # a perturbed wide-gap matrix under a similarity that leaves mu unchanged, including
+    # full (not only diagonal) matrices on the repeated scalars
+    g = np.random.default_rng(seed)
+    Dl, Dr = structure_similarity(g, MIXED, spread)
+    M = Dl @ (mixed_matrix(base) + size * (g.standard_normal((7, 6)) + 1j)) @ np.linalg.inv(Dr)
+    refined_bounds_are_ordered_and_certified(M, MIXED, 0.002)
 
 
 @pytest.mark.parametrize("refine, blk, lower, match", [
@@ -134,9 +276,8 @@ def test_refined_bounds_stay_ordered_and_certified_near_wide_gaps(base, seed, si
     (1.0, EIGHT, True, "refine must be"),
     (True, EIGHT, True, "refine must be"),
     ("0.01", EIGHT, True, "refine must be"),
-    (0.01, [(1, 1)] * 6 + [(2, 2)], True, "complex scalar blocks"),
-    (0.01, [(1, 1)] * 6 + [(2, 0)], True, "complex scalar blocks"),
-    (0.01, [(-1, 0)] + [(1, 1)] * 7, True, "complex scalar blocks"),
+    (0.01, [(-1, 0)] + [(1, 1)] * 7, True, "complex structures"),
+    (0.01, [(1, 1)] * 6 + [(-2, 0)], True, "complex structures"),
     (0.01, EIGHT, False, "lower bound"),
 ])
 def test_refine_rejects_what_it_cannot_do(refine, blk, lower, match):
@@ -144,6 +285,7 @@ def test_refine_rejects_what_it_cannot_do(refine, blk, lower, match):
         mussv(np.eye(8), blk, refine=refine, lower=lower)
 
 
-def test_refine_rejects_more_scalars_than_it_handles():
-    with pytest.raises(ValueError, match="at most 10 scalar blocks"):
-        mussv(np.eye(11), [(1, 1)] * 11, refine=0.01)
+@pytest.mark.parametrize("blk, q", [([(1, 1)] * 11, 11), ([(3, 0)] * 4 + [(1, 1)] * 3, 15)])
+def test_refine_rejects_structures_beyond_its_size_cap(blk, q):
+    with pytest.raises(ValueError, match=f"refine handles .* 1200 unknowns.* {q}\\^2"):
+        mussv(np.eye(q), blk, refine=0.01)
