@@ -171,10 +171,8 @@ def main():
         variants = {name: {}}
         if name in REFINED:
             variants[f"{name}, refine"] = {"refine": tol}
-        stats = {v: dict(times=[], case_ok=[], gaps=[], nonzero=[], t_ours=[]) for v in variants}
-        for v, opts in variants.items():
-            if opts:
-                stats[v]["refined"] = []
+        stats = {v: dict(times=[], case_ok=[], gaps=[], nonzero=[], t_ours=[],
+                         **({"refined": []} if opts else {})) for v, opts in variants.items()}
         t_dk = []
         for i, blk in enumerate(blks):
             p, q = blk_dims(blk)

@@ -40,6 +40,8 @@ import numpy as np
 import scipy.linalg as sla
 from scipy import sparse
 
+from piezolib.robust.mu_upper import scaled_matrix
+
 __all__ = ["lifted_upper_bound", "lifted_unknowns", "MAX_LIFTED_UNKNOWNS"]
 
 #: the Newton system has nb q^2 unknowns; beyond about 1,200 a step costs a tenth of a second
@@ -302,10 +304,10 @@ def lifted_upper_bound(M, blocks, upper, lower, Dl, Dr, gap, *, max_centres=60):
     upper = np.array(upper, float)
     theta = None
     previous = -2
-    for k in np.nonzero(upper - lower > gap * upper)[0]:
-        # on the D-balanced matrix (same mu) the certificate starts at the D-scaled bound
-        # and its eigenproblem stays well conditioned however M is scaled
-        balanced = np.linalg.solve(Dr[k].T, (Dl[k] @ M[k]).T).T
+    wide = np.nonzero(upper - lower > gap * upper)[0]
+    # on the D-balanced matrix (same mu) the certificate starts at the D-scaled bound
+    # and its eigenproblem stays well conditioned however M is scaled
+    for k, balanced in zip(wide, scaled_matrix(M[wide], Dl[wide], Dr[wide])):
         bound, th = _refine_point(balanced, blocks, theta if previous == k - 1 else None,
                                   lower[k] / (1 - gap), lower[k] / (1 - gap / 2), max_centres)
         if bound < upper[k]:

@@ -789,6 +789,25 @@ def _skewed(Dl, scaling):
     return out
 
 
+def scaled_matrix(M, Dl, Dr):
+    """Dl M Dr^-1 for stacks of matrices (nf, p, q), by a solve rather than an inverse."""
+    return np.swapaxes(np.linalg.solve(np.swapaxes(Dr, 1, 2), np.swapaxes(Dl @ M, 1, 2)), 1, 2)
+
+
+def _optimised_scaling(M, blocks, tol):
+    """(upper, Dl, Dr, scaling) from the Osborne start and the Newton steps, D not normalised."""
+    xl0, xr0 = balancing_logs(M, blocks)
+    M0 = np.exp(xl0)[:, :, None] * M * np.exp(-xr0)[:, None, :]
+    if M.shape[0] >= 4 * _WARM_STRIDE:
+        upper, theta, scaling = _warm_started_upper(M0, blocks, tol, xl0)
+    else:
+        upper, theta, scaling = _upper_in_chunks(M0, blocks, tol)
+    Dl, Dr = scaling.matrices(theta)
+    Dl = Dl * np.exp(xl0)[:, None, :]            # D = D_theta @ diag(exp(x0))
+    Dr = Dr * np.exp(xr0)[:, None, :]
+    return upper, Dl, Dr, scaling
+
+
 def _recentred(M, blocks, tol, upper, Dl, Dr, scaling):
     """Optimise the D-scaling again from Dl M Dr^-1 where a repeated scalar's scale is skewed.
 
@@ -801,12 +820,11 @@ def _recentred(M, blocks, tol, upper, Dl, Dr, scaling):
     for _ in range(_RECENTRE_ROUNDS):
         if not sel.size:
             break
-        M1 = Dl[sel] @ M[sel] @ np.linalg.inv(Dr[sel])
-        _, _, step_l, step_r = complex_upper_bound(M1, blocks, tol, recentre=False)
+        _, step_l, step_r, _ = _optimised_scaling(scaled_matrix(M[sel], Dl[sel], Dr[sel]),
+                                                  blocks, tol)
         Dl1, Dr1 = step_l @ Dl[sel], step_r @ Dr[sel]
         # the bound of the composed scaling itself, so that upper = sigma_max(Dl M Dr^-1)
-        up1 = _svd(np.linalg.solve(np.swapaxes(Dr1, 1, 2), np.swapaxes(Dl1 @ M[sel], 1, 2)),
-                   compute_uv=False)[:, 0]
+        up1 = _svd(scaled_matrix(M[sel], Dl1, Dr1), compute_uv=False)[:, 0]
         better = up1 < upper[sel]
         sel = sel[better]
         upper[sel], Dl[sel], Dr[sel] = up1[better], Dl1[better], Dr1[better]
@@ -814,12 +832,14 @@ def _recentred(M, blocks, tol, upper, Dl, Dr, scaling):
     return upper, Dl, Dr
 
 
-def complex_upper_bound(M, blocks, tol=1e-12, recentre=True):
+def complex_upper_bound(M, blocks, tol=1e-12):
     """D-scaled upper bound of mu for a structure without real blocks.
 
     The D-scaling starts from Osborne balancing (:func:`balancing_logs`,
     which reaches scaling ratios far beyond what the Newton steps could
-    travel) and is refined by Newton steps on the smooth surrogate.
+    travel) and is refined by Newton steps on the smooth surrogate; where a
+    repeated scalar's scale ends far from diagonal, again from the balanced
+    matrix (:func:`_recentred`).
 
     Parameters
     ----------
@@ -830,9 +850,6 @@ def complex_upper_bound(M, blocks, tol=1e-12, recentre=True):
         (:func:`piezolib.robust.blocks.parse_blk`).
     tol : float, optional
         Newton steps stop when they lower the surrogate's logarithm by less.
-    recentre : bool, optional
-        Optimise again from the balanced matrix where a repeated scalar's scale ends
-        far from diagonal (:func:`_recentred`; default True).
 
     Returns
     -------
@@ -845,16 +862,8 @@ def complex_upper_bound(M, blocks, tol=1e-12, recentre=True):
         The scalings (real when every block has a scalar scaling).
     """
     nf, p, q = M.shape
-    xl0, xr0 = balancing_logs(M, blocks)
-    M0 = np.exp(xl0)[:, :, None] * M * np.exp(-xr0)[:, None, :]
-    if nf >= 4 * _WARM_STRIDE:
-        upper, theta, scaling = _warm_started_upper(M0, blocks, tol, xl0)
-    else:
-        upper, theta, scaling = _upper_in_chunks(M0, blocks, tol)
-    Dl, Dr = scaling.matrices(theta)
-    Dl = Dl * np.exp(xl0)[:, None, :]            # D = D_theta @ diag(exp(x0))
-    Dr = Dr * np.exp(xr0)[:, None, :]
-    if recentre and not scaling.diagonal:
+    upper, Dl, Dr, scaling = _optimised_scaling(M, blocks, tol)
+    if not scaling.diagonal:
         upper, Dl, Dr = _recentred(M, blocks, tol, upper, Dl, Dr, scaling)
     # the unscaled matrix (D = I) is a candidate too
     plain = np.linalg.svd(M, compute_uv=False)[:, 0]
