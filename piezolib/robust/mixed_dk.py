@@ -36,6 +36,7 @@ from piezolib.robust.hinf import HinfSynthesisError, hinfsyn
 from piezolib.robust.lft import lft_response, lower_lft
 from piezolib.robust.lti import balance, from_scaled, time_scale_of, to_scaled
 from piezolib.robust.mu import MuResult, mussv
+from piezolib.robust.mu_upper import scaled_matrix
 
 __all__ = ["MixedMusynResult", "mixed_musyn", "complex_relaxation", "real_block_shrink"]
 
@@ -186,7 +187,7 @@ def real_block_shrink(M, blk, target, *, rounds=2, tol=1e-6):
     for _ in range(rounds):
         res = mussv(shrunk(alpha), relaxed, lower=False)
         Dl, Dr = res.Dl, res.Dr
-        A = Dl @ M @ np.linalg.inv(Dr)
+        A = scaled_matrix(M, Dl, Dr)
 
         def sigma(a):
             B = np.where(real_rows[None, :, None], a[:, None, None] * A, A)

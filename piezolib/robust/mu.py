@@ -195,9 +195,9 @@ def mussv(M, blk, omega=None, *, lower=True, restarts=3, iterations=60, tol=1e-1
         the certificate's optimum (or its cap of 60 centres) is reached.  For 8 scalars it
         cost 3-7 ms per refined frequency on a 1,000-point grid (a neighbour's
         certificate mostly carries over), about 0.2 s at an isolated frequency; for
-        six or seven blocks (repeated scalars, full blocks) on q = 11-13, 4-15 s more
-        on a 1,000-point grid with 145-289 refined frequencies.  Default None (the
-        D-scaled bound only).
+        six or seven blocks (repeated scalars, full blocks) on q = 10-13, seconds to
+        about a minute more on a 1,000-point grid with 145-450 refined frequencies.
+        Default None (the D-scaled bound only).
 
     Returns
     -------

@@ -10,7 +10,9 @@ instead, with S_b Hermitian q x q:
 
     sum_b q_b(x) x^H S_b x < 0   for every x != 0 whose repeated-scalar parts are parallel,
 
-which rules out every such x.  The left side is a Hermitian form in the symmetric tensor
+which rules out every such x.  A repeated scalar also gives y_b y_b^H - beta^2 x_b x_b^H >= 0
+(x_b = delta y_b), so its r x r multiplier T_b >= 0 adds (y_b^H T_b y_b - beta^2 x_b^H T_b x_b)
+||x||^2 to the left side.  The left side is a Hermitian form in the symmetric tensor
 z = x (x) x, and parallelism is linear in z: x_i y_j - x_j y_i = 0 for each pair i < j inside a
 repeated scalar (y = M x, so each such product is a fixed combination of the entries of z).
 Demanding the form negative on the symmetric tensors that meet those linear equations (an
@@ -18,10 +20,10 @@ orthonormal basis V) is the linear matrix inequality
 
     F(S) = beta^2 V^H D_x V - N^H D_y N > 0,   N = (M (x) I_q) V,
 
-with D_x = sum_b E_b^H E_b (x) S_b and D_y = sum_b F_b^H F_b (x) S_b (E_b, F_b select the
-block's entries of x and y).  S_b = I gives back the D-scaled bound on the D-balanced matrix
-(for n scalars exactly; the parallelism can only lower it), so the certificate is never
-weaker.  The smallest certified beta is the square root of the largest generalized
+with D_x = sum_b E_b^H E_b (x) S_b + sum_b E_b^H T_b E_b (x) I and D_y likewise with F_b
+(E_b, F_b select the block's entries of x and y; T_b only for repeated scalars).  S_b = I
+gives back the D-scaled bound on the D-balanced matrix (for n scalars exactly; the
+parallelism can only lower it), so the certificate is never weaker.  The smallest certified beta is the square root of the largest generalized
 eigenvalue of (N^H D_y N, V^H D_x V), minimised over S by the method of centres: the analytic
 centre of {S : F_tau(S) > 0, S_b > 0, sum_b tr S_b = 1} for a level tau that moves down
 towards the eigenvalue at the previous centre.  Every returned bound is the eigenvalue of
@@ -49,7 +51,8 @@ MAX_LIFTED_UNKNOWNS = 1200
 
 
 def lifted_unknowns(blocks):
-    """Real unknowns of the certificate for a structure: one q x q Hermitian S_b per block."""
+    """Real unknowns of the certificate for a structure: one q x q Hermitian S_b per block
+    (each repeated scalar adds r^2 for its T_b, which the cap leaves out: few, and cheap)."""
     q = sum(b.rows for b in blocks)
     return len(blocks) * q * q
 
@@ -110,7 +113,8 @@ def _parallel_functionals(M, blocks):
 class _LiftedCertificate:
     """The matrices of the certificate for one M (p x q) and its Newton derivatives.
 
-    The unknowns theta (nb q^2 reals) hold S_b = sum_k theta[b, k] H_k.
+    The unknowns theta hold S_b = sum_k theta[b, k] H_k (nb q^2 reals), then the entries of
+    each repeated scalar's T_b in the r x r Hermitian basis (r^2 reals each).
     """
 
     def __init__(self, M, blocks):
@@ -127,39 +131,74 @@ class _LiftedCertificate:
             _, _, vh = np.linalg.svd(L @ self.V)
             self.V = self.V @ vh[len(L):].conj().T
         self.N = np.kron(M, np.eye(q)) @ self.V
+        # each repeated scalar's r x r multiplier T_b: entries of x and y, and its basis
+        starts_x = np.cumsum([0] + [b.rows for b in blocks])
+        starts_y = np.cumsum([0] + [b.cols for b in blocks])
+        self.tensors = [(np.arange(starts_x[k], starts_x[k] + b.rows),
+                         np.arange(starts_y[k], starts_y[k] + b.cols), _lift_constants(b.rows)[1])
+                        for k, b in enumerate(blocks) if b.repeated]
+        self.n_s = self.nb * q * q
+        self.trace = np.concatenate([self.trace] + [q * np.einsum("kaa->k", H).real
+                                                    for _, _, H in self.tensors])
 
     def start(self):
-        """theta of S_b = I / (nb q) (unit total trace): the D-scaled bound on a balanced M."""
+        """theta of S_b = I / (nb q) (unit total trace): the D-scaled bound on a balanced M.
+
+        A repeated scalar's share is split between S_b and T_b = I / (10 nb q) (T_b = t I
+        weighs its constraint as S_b = t I does), which leaves the bound as it is.
+        """
         q, nb = self.q, self.nb
         theta = np.zeros((nb, q * q))
         theta[:, :q] = 1.0 / (nb * q)
-        return theta.ravel()
+        parts = [theta]
+        for rows, _, H in self.tensors:
+            theta[self.bx[rows[0]], :q] *= 0.9
+            t = np.zeros(len(H))
+            t[:len(rows)] = 0.1 / (nb * q)
+            parts.append(t)
+        return np.concatenate([p.ravel() for p in parts])
 
     def multipliers(self, theta):
-        return np.einsum("ik,kab->iab", theta.reshape(self.nb, -1), self.H)
+        """S_b, shape (nb, q, q)."""
+        return np.einsum("ik,kab->iab", theta[:self.n_s].reshape(self.nb, -1), self.H)
 
-    def _forms(self, S):
-        """(N^H D_y N, V^H D_x V) for the multipliers S."""
+    def tensor_multipliers(self, theta):
+        """T_b (r_b x r_b) of the repeated scalars, in the order of the structure."""
+        out, k = [], self.n_s
+        for _, _, H in self.tensors:
+            out.append(np.einsum("k,kab->ab", theta[k:k + len(H)], H))
+            k += len(H)
+        return out
+
+    def _forms(self, S, T=()):
+        """(N^H D_y N, V^H D_x V) for the multipliers S and T."""
         q, m = self.q, self.V.shape[1]
         N4 = self.N.reshape(self.p, q, m)
         V4 = self.V.reshape(q, q, m)
         A = np.einsum("iam,iab,ibk->mk", N4.conj(), S[self.by], N4, optimize=True)
         B = np.einsum("iam,iab,ibk->mk", V4.conj(), S[self.bx], V4, optimize=True)
+        for (rows, cols, _), Tb in zip(self.tensors, T):
+            # (y_b^H T_b y_b - beta^2 x_b^H T_b x_b) ||x||^2: T_b (x) I on the entries of y, x
+            A = A + np.einsum("jam,jl,lak->mk", N4[cols].conj(), Tb, N4[cols], optimize=True)
+            B = B + np.einsum("jam,jl,lak->mk", V4[rows].conj(), Tb, V4[rows], optimize=True)
         return (A + A.conj().T) / 2, (B + B.conj().T) / 2
+
+    def _all_forms(self, theta):
+        S, T = self.multipliers(theta), self.tensor_multipliers(theta)
+        return S, T, *self._forms(S, T)
 
     def bound_squared(self, theta):
         """Largest generalized eigenvalue of (N^H D_y N, V^H D_x V): the certified beta^2."""
-        A, B = self._forms(self.multipliers(theta))
+        _, _, A, B = self._all_forms(theta)
         m = A.shape[0]
         return sla.eigh(A, B, eigvals_only=True, subset_by_index=[m - 1, m - 1])[0]
 
     def barrier(self, theta, tau):
-        """log det F_tau(S) + sum_b log det S_b, or None outside the domain."""
-        S = self.multipliers(theta)
-        A, B = self._forms(S)
+        """log det F_tau + sum_b log det S_b + sum_b log det T_b, or None outside the domain."""
+        S, T, A, B = self._all_forms(theta)
         try:
             return sum(2 * np.log(np.linalg.cholesky(X).diagonal().real).sum()
-                       for X in [tau * B - A, *S])
+                       for X in [tau * B - A, *S, *T])
         except np.linalg.LinAlgError:
             return None
 
@@ -183,20 +222,33 @@ class _LiftedCertificate:
                 K[b1, :, b2, :] = E.reshape(q * q, q * q)
         return K
 
+    def _s_gradient(self, U, Y, tau):
+        """tr(X dF) per S unknown, from U = V X V^H and Y = N X N^H (dF as in newton_step)."""
+        p, q = self.p, self.q
+        G = np.zeros((self.nb, q, q), complex)
+        np.add.at(G, self.bx, tau * U.reshape(q, q, q, q)[np.arange(q), :, np.arange(q), :])
+        np.add.at(G, self.by, -Y.reshape(p, q, p, q)[np.arange(p), :, np.arange(p), :])
+        return np.einsum("iab,kba->ik", G, self.H).real.ravel()
+
+    def _tensor_directions(self, tau):
+        """dF = tau V^H dD_x V - N^H dD_y N for each basis matrix of every T_b: (nT, m, m)."""
+        q, m = self.q, self.V.shape[1]
+        N4, V4 = self.N.reshape(self.p, q, m), self.V.reshape(q, q, m)
+        out = [tau * np.einsum("jam,kjl,lan->kmn", V4[rows].conj(), H, V4[rows], optimize=True)
+               - np.einsum("jam,kjl,lan->kmn", N4[cols].conj(), H, N4[cols], optimize=True)
+               for rows, cols, H in self.tensors]
+        return np.concatenate(out) if out else np.zeros((0, m, m))
+
     def newton_step(self, theta, tau):
         """Gradient of the barrier at theta and its Hessian's negative (positive definite)."""
-        p, q, nb, T = self.p, self.q, self.nb, self.to_basis
-        S = self.multipliers(theta)
-        A, B = self._forms(S)
+        q, nb, T = self.q, self.nb, self.to_basis
+        S, Ts, A, B = self._all_forms(theta)
         R = np.linalg.inv(tau * B - A)
         U = self.V @ R @ self.V.conj().T
         V = self.N @ R @ self.N.conj().T
         W = self.N @ R @ self.V.conj().T
         Si = np.linalg.inv(S)
-        G = Si.copy()
-        np.add.at(G, self.bx, tau * U.reshape(q, q, q, q)[np.arange(q), :, np.arange(q), :])
-        np.add.at(G, self.by, -V.reshape(p, q, p, q)[np.arange(p), :, np.arange(p), :])
-        grad = np.einsum("iab,kba->ik", G, self.H).real.ravel()
+        grad = self._s_gradient(U, V, tau) + np.einsum("iab,kba->ik", Si, self.H).real.ravel()
         # d^2 log det F = -tr(R dF R dF) with dF = tau V^H dD_x V - N^H dD_y N, i.e.
         # -(tau^2 tr(U dD_x U dD_x) - 2 tau tr(W dD_x W^H dD_y) + tr(V dD_y V dD_y))
         K = (tau ** 2 * self._pair_form(U, U, self.bx, self.bx)
@@ -210,7 +262,31 @@ class _LiftedCertificate:
         K = K.reshape(nb * q * q, nb, q * q)
         K = np.stack([(T @ K[:, b].T).T for b in range(nb)], axis=1)
         H = K.reshape(nb * q * q, nb * q * q).real
+        if self.tensors:
+            grad, H = self._with_tensor_terms(grad, H, R, Ts, tau)
         return grad, (H + H.T) / 2
+
+    def _with_tensor_terms(self, grad, H, R, Ts, tau):
+        """Gradient and curvature extended by the T_b unknowns (few: r_b^2 per scalar)."""
+        F = self._tensor_directions(tau)
+        G = R @ F
+        n = len(F)
+        g_t = np.einsum("kaa->k", G).real
+        h_tt = (G.reshape(n, -1) @ np.swapaxes(G, 1, 2).reshape(n, -1).T).real
+        k = 0
+        for (_, _, Hb), Tb in zip(self.tensors, Ts):
+            Ti = np.linalg.inv(Tb)
+            TH = Ti @ Hb
+            sl = slice(k, k + len(Hb))
+            g_t[sl] += np.einsum("kaa->k", TH).real
+            h_tt[sl, sl] += np.einsum("kab,lba->kl", TH, TH).real
+            k += len(Hb)
+        # tr(R dF_S R F_k): the S gradient with R replaced by R F_k R
+        X = G @ R
+        h_st = np.array([self._s_gradient(self.V @ x @ self.V.conj().T,
+                                          self.N @ x @ self.N.conj().T, tau) for x in X]).T
+        return (np.concatenate([grad, g_t]),
+                np.block([[H, h_st], [h_st.T, h_tt]]))
 
     def centre(self, theta, tau, steps=30):
         """Analytic centre of the level set tau (damped Newton, sum of traces fixed)."""

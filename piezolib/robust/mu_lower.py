@@ -10,6 +10,7 @@ user-facing entry point.
 import numpy as np
 
 from piezolib.robust.blocks import block_slices
+from piezolib.robust.mu_upper import scaled_matrix
 
 __all__ = ["complex_lower_bound", "mixed_lower_bound"]
 
@@ -199,7 +200,7 @@ def complex_lower_bound(M, blocks, Dl, Dr, upper, *, iterations=60, restarts=3, 
     # start from the top singular vectors of the scaled and unscaled M:
     # with A = Dl M Dr^-1 = sigma u v^H + ..., b = Dr^-1 v and w = Dr^H v
     # satisfy the power iteration's alignment conditions when D is optimal
-    _, s, Vh = np.linalg.svd(Dl @ M @ np.linalg.inv(Dr))
+    _, s, Vh = np.linalg.svd(scaled_matrix(M, Dl, Dr))
     V = np.swapaxes(Vh, 1, 2).conj()
     v0 = np.linalg.svd(M)[2][:, 0, :].conj()
     starts = [_aligned_start(Dr, V[:, :, 0]), (v0, v0)]

@@ -41,11 +41,15 @@ def balanced(M, res):
 
 
 def converged_certificate(M, blk, res):
-    """(balanced M, bound, multipliers) of the certificate centred to convergence."""
+    """(balanced M, bound, multipliers) of the certificate centred to convergence; the
+    multipliers are (S, T): S_b for every block, T_b by block index for repeated scalars."""
     Mb = balanced(M, res)
     blocks = parse_blk(blk, *M.shape)
     bound, theta = _refine_point(Mb, blocks, None, 0.0, 0.0, 60)
-    return Mb, bound, _LiftedCertificate(Mb, blocks).multipliers(theta)
+    cert = _LiftedCertificate(Mb, blocks)
+    repeated = [k for k, b in enumerate(blocks) if b.repeated]
+    return Mb, bound, (cert.multipliers(theta), dict(zip(repeated,
+                                                           cert.tensor_multipliers(theta))))
 
 
 def parallel_symmetric_tensors(M, blk):
@@ -71,23 +75,31 @@ def parallel_symmetric_tensors(M, blk):
     return sla.null_space(np.vstack(rows))
 
 
-def certificate_holds(M, blk, S, beta):
-    """Check mu(M) < beta from multipliers S (one per block), built here from the definition.
+def certificate_holds(M, blk, multipliers, beta):
+    """Check mu(M) < beta from multipliers (S, T), built here from the definition.
 
     For every x with parallel repeated-scalar parts: sum_b (||y_b||^2 - beta^2 ||x_b||^2)
-    x^H S_b x < 0 (y = M x); on z = x (x) x the form is z^H (K^H D_y K - beta^2 D_x) z with
-    K = M (x) I, D_x = blockdiag(S_b(a)) over the entries a of x (index a q + k) and D_y
-    likewise over the entries of y; it must be negative on all those tensors.
+    x^H S_b x + sum_b (y_b^H T_b y_b - beta^2 x_b^H T_b x_b) ||x||^2 < 0 (y = M x; T_b for
+    the blocks T names); on z = x (x) x the form is z^H (K^H D_y K - beta^2 D_x) z with
+    K = M (x) I, D_x = blockdiag(S_b(a)) over the entries a of x (index a q + k) plus
+    T_x (x) I, T_x holding each T_b on its block's entries of x, and D_y likewise over the
+    entries of y; it must be negative on all those tensors.
     """
+    S, T = multipliers
     p, q = M.shape
     bx = [b for b, (r, c) in enumerate(blk) for _ in range(abs(r))]
     by = [b for b, (r, c) in enumerate(blk) for _ in range(c if c else abs(r))]
-    Dx = sla.block_diag(*[S[b] for b in bx])
-    Dy = sla.block_diag(*[S[b] for b in by])
+    Tx, Ty = np.zeros((q, q), complex), np.zeros((p, p), complex)
+    for b, Tb in T.items():
+        rows, cols = np.flatnonzero(np.equal(bx, b)), np.flatnonzero(np.equal(by, b))
+        Tx[np.ix_(rows, rows)] = Tb
+        Ty[np.ix_(cols, cols)] = Tb
+    Dx = sla.block_diag(*[S[b] for b in bx]) + np.kron(Tx, np.eye(q))
+    Dy = sla.block_diag(*[S[b] for b in by]) + np.kron(Ty, np.eye(q))
     K = np.kron(M, np.eye(q))
     form = K.conj().T @ Dy @ K - beta ** 2 * Dx
     Z = parallel_symmetric_tensors(M, blk)
-    psd = all(np.linalg.eigvalsh(s).min() > 0 for s in S)
+    psd = all(np.linalg.eigvalsh(s).min() > 0 for s in [*S, *T.values()])
     return psd and np.linalg.eigvalsh(Z.conj().T @ form @ Z).max() < 0
 
 
@@ -106,8 +118,8 @@ def refined_bounds_are_ordered_and_certified(M, blk, tol):
     assert refined.lower[0] <= refined.upper[0] <= plain.upper[0]
     if plain.gap[0] > tol:
         assert refined.upper[0] < plain.upper[0]
-        Mb, bound, S = converged_certificate(M, blk, plain)
-        assert certificate_holds(Mb, blk, S, bound * (1 + 1e-9))
+        Mb, bound, mult = converged_certificate(M, blk, plain)
+        assert certificate_holds(Mb, blk, mult, bound * (1 + 1e-9))
 
 
 @pytest.mark.parametrize("seed", [195, 210, 9])
@@ -118,9 +130,9 @@ def test_refined_bound_is_certified_and_closes_the_gap(seed):
     assert refined.upper[0] < plain.upper[0]
     assert refined.gap[0] <= 0.005
     # the multipliers behind the bound certify it, checked from the definition
-    Mb, bound, S = converged_certificate(M, EIGHT, plain)
-    assert certificate_holds(Mb, EIGHT, S, bound * (1 + 1e-9))
-    assert not certificate_holds(Mb, EIGHT, S, bound * (1 - 1e-3))
+    Mb, bound, mult = converged_certificate(M, EIGHT, plain)
+    assert certificate_holds(Mb, EIGHT, mult, bound * (1 + 1e-9))
+    assert not certificate_holds(Mb, EIGHT, mult, bound * (1 - 1e-3))
     # and no perturbation found by brute force beats it: max over random phases of rho(Q M)
     g = np.random.default_rng(0)
     Q = np.exp(2j * np.pi * g.random((20000, 8)))
@@ -155,11 +167,12 @@ def test_barrier_derivatives_match_finite_differences(blk):
     p, q = blk_dims(blk)
     M = g.standard_normal((p, q)) + 1j * g.standard_normal((p, q))
     cert = _LiftedCertificate(M, parse_blk(blk, p, q))
-    theta = cert.start() + 0.01 * g.standard_normal(cert.start().size)
+    start = cert.start()
+    theta = start + 0.1 * start.max() * g.standard_normal(start.size)
     tau = 1.2 * cert.bound_squared(theta)
     grad, curvature = cert.newton_step(theta, tau)
     hess = -curvature
-    h, eye = 1e-5, np.eye(theta.size)
+    h, eye = 1e-6, np.eye(theta.size)
     fd_grad = [(cert.barrier(theta + h * e, tau) - cert.barrier(theta - h * e, tau)) / (2 * h)
                for e in eye]
     fd_hess = [(cert.newton_step(theta + h * e, tau)[0] - cert.newton_step(theta - h * e, tau)[0])
@@ -191,12 +204,12 @@ def test_refined_bound_is_certified_for_repeated_scalars_and_full_blocks(seed):
     plain, refined = plain_and_refined(M, MIXED, 0.01)
     assert plain.gap[0] > 0.02
     assert refined.gap[0] <= 0.01 < plain.gap[0]
-    Mb, bound, S = converged_certificate(M, MIXED, plain)
+    Mb, bound, mult = converged_certificate(M, MIXED, plain)
     assert bound <= refined.upper[0] * (1 + 1e-12)
-    assert certificate_holds(Mb, MIXED, S, bound * (1 + 1e-9))
-    assert not certificate_holds(Mb, MIXED, S, bound * (1 - 1e-3))
+    assert certificate_holds(Mb, MIXED, mult, bound * (1 + 1e-9))
+    assert not certificate_holds(Mb, MIXED, mult, bound * (1 - 1e-3))
     # without the parallelism of the repeated scalars the same multipliers prove nothing
-    assert not certificate_holds(Mb, [(r, c if c else r) for r, c in MIXED], S, bound)
+    assert not certificate_holds(Mb, [(r, c if c else r) for r, c in MIXED], mult, bound)
     # and no random perturbation beats it
     Delta = random_structured_delta(np.random.default_rng(0), MIXED, 5000)
     assert np.abs(np.linalg.eigvals(M[None] @ Delta)).max() <= bound
