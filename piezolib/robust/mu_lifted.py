@@ -23,8 +23,9 @@ orthonormal basis V) is the linear matrix inequality
 with D_x = sum_b E_b^H E_b (x) S_b + sum_b E_b^H T_b E_b (x) I and D_y likewise with F_b
 (E_b, F_b select the block's entries of x and y; T_b only for repeated scalars).  S_b = I
 gives back the D-scaled bound on the D-balanced matrix (for n scalars exactly; the
-parallelism can only lower it), so the certificate is never weaker.  The smallest certified beta is the square root of the largest generalized
-eigenvalue of (N^H D_y N, V^H D_x V), minimised over S by the method of centres: the analytic
+parallelism can only lower it), so the certificate is never weaker.  The smallest
+certified beta is the square root of the largest generalized eigenvalue of
+(N^H D_y N, V^H D_x V), minimised over S (and T) by the method of centres: the analytic
 centre of {S : F_tau(S) > 0, S_b > 0, sum_b tr S_b = 1} for a level tau that moves down
 towards the eigenvalue at the previous centre.  Every returned bound is the eigenvalue of
 the S it came from, recomputed from scratch, so it is a certificate whatever the iteration
