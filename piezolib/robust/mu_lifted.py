@@ -43,6 +43,7 @@ import numpy as np
 import scipy.linalg as sla
 from scipy import sparse
 
+from piezolib.robust.blocks import block_slices
 from piezolib.robust.mu_upper import scaled_matrix
 
 __all__ = ["lifted_upper_bound", "lifted_unknowns", "MAX_LIFTED_UNKNOWNS"]
@@ -98,16 +99,13 @@ def _parallel_functionals(M, blocks):
     scalar, as linear functionals of z = x (x) x (entry i q + k holds x_i x_k)."""
     p, q = M.shape
     rows = []
-    xo = yo = 0
-    for b in blocks:
+    for b, (xs, ys) in zip(blocks, block_slices(blocks)):
         if b.repeated:
             for i, j in zip(*np.triu_indices(b.rows, 1)):
                 ell = np.zeros((q, q), complex)
-                ell[xo + i] += M[yo + j]
-                ell[xo + j] -= M[yo + i]
+                ell[xs.start + i] += M[ys.start + j]
+                ell[xs.start + j] -= M[ys.start + i]
                 rows.append(ell.ravel())
-        xo += b.rows
-        yo += b.cols
     return np.array(rows).reshape(-1, q * q)
 
 
@@ -122,7 +120,6 @@ class _LiftedCertificate:
         p, q = M.shape
         self.p, self.q, self.nb = p, q, len(blocks)
         self.V, self.H, self.to_basis, trace = _lift_constants(q)
-        self.trace = np.tile(trace, self.nb)
         # block index of each entry of x (Delta's output) and of y (its input)
         self.bx = np.repeat(np.arange(self.nb), [b.rows for b in blocks])
         self.by = np.repeat(np.arange(self.nb), [b.cols for b in blocks])
@@ -132,15 +129,24 @@ class _LiftedCertificate:
             _, _, vh = np.linalg.svd(L @ self.V)
             self.V = self.V @ vh[len(L):].conj().T
         self.N = np.kron(M, np.eye(q)) @ self.V
-        # each repeated scalar's r x r multiplier T_b: entries of x and y, and its basis
-        starts_x = np.cumsum([0] + [b.rows for b in blocks])
-        starts_y = np.cumsum([0] + [b.cols for b in blocks])
-        self.tensors = [(np.arange(starts_x[k], starts_x[k] + b.rows),
-                         np.arange(starts_y[k], starts_y[k] + b.cols), _lift_constants(b.rows)[1])
-                        for k, b in enumerate(blocks) if b.repeated]
+        # each repeated scalar's r x r multiplier T_b: its Hermitian basis, and the forms
+        # N^H (T (x) I) N and V^H (T (x) I) V of each basis matrix T on the block's entries
+        m = self.V.shape[1]
+        N4, V4 = self.N.reshape(p, q, m), self.V.reshape(q, q, m)
+        self.tensors, forms_y, forms_x = [], [], []
+        for b, (xs, ys) in zip(blocks, block_slices(blocks)):
+            if b.repeated:
+                H = _lift_constants(b.rows)[1]
+                self.tensors.append((xs.start, H))
+                forms_y.append(np.einsum("jam,kjl,lan->kmn", N4[ys].conj(), H, N4[ys],
+                                         optimize=True))
+                forms_x.append(np.einsum("jam,kjl,lan->kmn", V4[xs].conj(), H, V4[xs],
+                                         optimize=True))
+        self.tensor_forms = (np.concatenate(forms_y) if forms_y else np.zeros((0, m, m)),
+                             np.concatenate(forms_x) if forms_x else np.zeros((0, m, m)))
         self.n_s = self.nb * q * q
-        self.trace = np.concatenate([self.trace] + [q * np.einsum("kaa->k", H).real
-                                                    for _, _, H in self.tensors])
+        self.trace = np.concatenate([np.tile(trace, self.nb)]
+                                    + [q * np.einsum("kaa->k", H).real for _, H in self.tensors])
 
     def start(self):
         """theta of S_b = I / (nb q) (unit total trace): the D-scaled bound on a balanced M.
@@ -152,10 +158,10 @@ class _LiftedCertificate:
         theta = np.zeros((nb, q * q))
         theta[:, :q] = 1.0 / (nb * q)
         parts = [theta]
-        for rows, _, H in self.tensors:
-            theta[self.bx[rows[0]], :q] *= 0.9
+        for x0, H in self.tensors:
+            theta[self.bx[x0], :q] *= 0.9
             t = np.zeros(len(H))
-            t[:len(rows)] = 0.1 / (nb * q)
+            t[:H.shape[1]] = 0.1 / (nb * q)
             parts.append(t)
         return np.concatenate([p.ravel() for p in parts])
 
@@ -166,27 +172,25 @@ class _LiftedCertificate:
     def tensor_multipliers(self, theta):
         """T_b (r_b x r_b) of the repeated scalars, in the order of the structure."""
         out, k = [], self.n_s
-        for _, _, H in self.tensors:
+        for _, H in self.tensors:
             out.append(np.einsum("k,kab->ab", theta[k:k + len(H)], H))
             k += len(H)
         return out
 
-    def _forms(self, S, T=()):
-        """(N^H D_y N, V^H D_x V) for the multipliers S and T."""
+    def _all_forms(self, theta):
+        """(S, T, N^H D_y N, V^H D_x V) for the multipliers theta holds."""
         q, m = self.q, self.V.shape[1]
+        S = self.multipliers(theta)
         N4 = self.N.reshape(self.p, q, m)
         V4 = self.V.reshape(q, q, m)
         A = np.einsum("iam,iab,ibk->mk", N4.conj(), S[self.by], N4, optimize=True)
         B = np.einsum("iam,iab,ibk->mk", V4.conj(), S[self.bx], V4, optimize=True)
-        for (rows, cols, _), Tb in zip(self.tensors, T):
-            # (y_b^H T_b y_b - beta^2 x_b^H T_b x_b) ||x||^2: T_b (x) I on the entries of y, x
-            A = A + np.einsum("jam,jl,lak->mk", N4[cols].conj(), Tb, N4[cols], optimize=True)
-            B = B + np.einsum("jam,jl,lak->mk", V4[rows].conj(), Tb, V4[rows], optimize=True)
-        return (A + A.conj().T) / 2, (B + B.conj().T) / 2
-
-    def _all_forms(self, theta):
-        S, T = self.multipliers(theta), self.tensor_multipliers(theta)
-        return S, T, *self._forms(S, T)
+        # (y_b^H T_b y_b - beta^2 x_b^H T_b x_b) ||x||^2, linear in T's coefficients
+        t = theta[self.n_s:]
+        A = A + np.tensordot(t, self.tensor_forms[0], 1)
+        B = B + np.tensordot(t, self.tensor_forms[1], 1)
+        return (S, self.tensor_multipliers(theta), (A + A.conj().T) / 2,
+                (B + B.conj().T) / 2)
 
     def bound_squared(self, theta):
         """Largest generalized eigenvalue of (N^H D_y N, V^H D_x V): the certified beta^2."""
@@ -231,15 +235,6 @@ class _LiftedCertificate:
         np.add.at(G, self.by, -Y.reshape(p, q, p, q)[np.arange(p), :, np.arange(p), :])
         return np.einsum("iab,kba->ik", G, self.H).real.ravel()
 
-    def _tensor_directions(self, tau):
-        """dF = tau V^H dD_x V - N^H dD_y N for each basis matrix of every T_b: (nT, m, m)."""
-        q, m = self.q, self.V.shape[1]
-        N4, V4 = self.N.reshape(self.p, q, m), self.V.reshape(q, q, m)
-        out = [tau * np.einsum("jam,kjl,lan->kmn", V4[rows].conj(), H, V4[rows], optimize=True)
-               - np.einsum("jam,kjl,lan->kmn", N4[cols].conj(), H, N4[cols], optimize=True)
-               for rows, cols, H in self.tensors]
-        return np.concatenate(out) if out else np.zeros((0, m, m))
-
     def newton_step(self, theta, tau):
         """Gradient of the barrier at theta and its Hessian's negative (positive definite)."""
         q, nb, T = self.q, self.nb, self.to_basis
@@ -269,13 +264,14 @@ class _LiftedCertificate:
 
     def _with_tensor_terms(self, grad, H, R, Ts, tau):
         """Gradient and curvature extended by the T_b unknowns (few: r_b^2 per scalar)."""
-        F = self._tensor_directions(tau)
+        # dF = tau V^H dD_x V - N^H dD_y N for each basis matrix of every T_b
+        F = tau * self.tensor_forms[1] - self.tensor_forms[0]
         G = R @ F
         n = len(F)
         g_t = np.einsum("kaa->k", G).real
         h_tt = (G.reshape(n, -1) @ np.swapaxes(G, 1, 2).reshape(n, -1).T).real
         k = 0
-        for (_, _, Hb), Tb in zip(self.tensors, Ts):
+        for (_, Hb), Tb in zip(self.tensors, Ts):
             Ti = np.linalg.inv(Tb)
             TH = Ti @ Hb
             sl = slice(k, k + len(Hb))
