@@ -189,14 +189,15 @@ def mussv(M, blk, omega=None, *, lower=True, restarts=3, iterations=60, tol=1e-1
     refine : float, optional
         For complex structures (full blocks and complex scalars, at most
         :data:`~piezolib.robust.mu_lifted.MAX_LIFTED_UNKNOWNS` unknowns, i.e. blocks x q^2
-        <= 1200): at frequencies whose relative gap exceeds ``refine`` (e.g. 0.01),
+        <= 2500): at frequencies whose relative gap exceeds ``refine`` (e.g. 0.01),
         tighten the upper bound with the symmetric-lift certificate of
         :mod:`piezolib.robust.mu_lifted`, each until its gap is at most ``refine / 2`` or
         the certificate's optimum (or its cap of 60 centres) is reached.  For 8 scalars it
         cost 3-7 ms per refined frequency on a 1,000-point grid (a neighbour's
         certificate mostly carries over), about 0.2 s at an isolated frequency; for
         six or seven blocks (repeated scalars, full blocks) on q = 10-13, seconds to
-        about a minute more on a 1,000-point grid with 145-450 refined frequencies.
+        about a minute more on a 1,000-point grid with 145-450 refined frequencies, and
+        up to two or three minutes for seven or eight blocks on q = 15-17.
         Default None (the D-scaled bound only).
 
     Returns

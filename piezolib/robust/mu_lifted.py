@@ -31,25 +31,26 @@ towards the eigenvalue at the previous centre.  Every returned bound is the eige
 the S it came from, recomputed from scratch, so it is a certificate whatever the iteration
 did.  Derivation in ``docs/robust.md``.
 
-It costs nb q^2 unknowns (512 for 8 scalars, 726 for six blocks on q = 11) and 15-40 ms
-per Newton step, against about 1 ms per frequency for the D-scaled bound, so :func:`mussv`
-applies it only where asked (``refine``) and only where the gap exceeds the requested
-tolerance.
+It costs nb q^2 unknowns (512 for 8 scalars, 1,575 for seven blocks on q = 15) and a
+Newton step about 9 ms for 8 scalars, 70 ms on q = 15 and 170 ms for eight blocks on q = 17
+(2,312 unknowns; from about 1,500 unknowns on, the dense Cholesky factor is most of it),
+against about 1 ms per frequency for the D-scaled bound, so :func:`mussv` applies it only
+where asked (``refine``) and only where the gap exceeds the requested tolerance.
 """
 
 from functools import lru_cache
 
 import numpy as np
 import scipy.linalg as sla
-from scipy import sparse
 
 from piezolib.robust.blocks import block_slices
 from piezolib.robust.mu_upper import scaled_matrix
 
 __all__ = ["lifted_upper_bound", "lifted_unknowns", "MAX_LIFTED_UNKNOWNS"]
 
-#: the Newton system has nb q^2 unknowns; beyond about 1,200 a step costs a tenth of a second
-MAX_LIFTED_UNKNOWNS = 1200
+#: the Newton system has nb q^2 unknowns; its dense Cholesky factor dominates a step from
+#: about 1,500 on, and beyond 2,500 a step costs more than a fifth of a second
+MAX_LIFTED_UNKNOWNS = 2500
 
 
 def lifted_unknowns(blocks):
@@ -83,15 +84,35 @@ def _hermitian_basis(n):
     return np.array(H)
 
 
+def _basis_gather(n):
+    """The map from n x n matrix entries to Hermitian basis coefficients as two gathers:
+    coefficient k of X is c1[k] X.flat[i1[k]] + c2[k] X.flat[i2[k]] (one entry for E_aa,
+    the pair (a, b), (b, a) for the others, in the order of :func:`_hermitian_basis`)."""
+    a, b = np.triu_indices(n, 1)
+    diag = np.arange(n) * (n + 1)
+    i1 = np.concatenate([diag, np.column_stack([a * n + b] * 2).ravel()])
+    i2 = np.concatenate([diag, np.column_stack([b * n + a] * 2).ravel()])
+    c1 = np.concatenate([np.ones(n), np.tile([1, 1j], len(a))])
+    c2 = np.concatenate([np.zeros(n), np.tile([1, -1j], len(a))])
+    return i1, i2, c1, c2
+
+
 @lru_cache(maxsize=None)
 def _lift_constants(n):
     """What the certificate needs for q = n whatever M is (shared, not to be modified): the
-    symmetric basis P, the Hermitian basis H, the sparse map from matrix entries to basis
-    coefficients (one or two per basis matrix: turns a Hessian over entries into one over
-    theta) and the trace of each basis matrix."""
+    symmetric basis P, the Hermitian basis H, the gathers from matrix entries to basis
+    coefficients (:func:`_basis_gather`) and the trace of each basis matrix."""
     H = _hermitian_basis(n)
-    return (_symmetric_basis(n), H, sparse.csr_matrix(H.reshape(n * n, n * n)),
-            np.einsum("kaa->k", H).real)
+    return _symmetric_basis(n), H, _basis_gather(n), np.einsum("kaa->k", H).real
+
+
+def _entry_products(X4, Y4, a, c):
+    """Sum over the entries a (slice) and c (slice) of X4[c, i, a, j] Y4[a, k, c, l], as a
+    (q^2, q^2) matrix with rows (j, k) and columns (l, i)."""
+    q = X4.shape[1]
+    Xr = X4[c, :, a].transpose(2, 0, 3, 1).reshape(-1, q * q)   # [(a, c), (j, i)]
+    Yr = Y4[a, :, c].transpose(0, 2, 1, 3).reshape(-1, q * q)   # [(a, c), (k, l)]
+    return (Xr.T @ Yr).reshape(q, q, q, q).transpose(0, 2, 3, 1).reshape(q * q, q * q)
 
 
 def _parallel_functionals(M, blocks):
@@ -119,7 +140,8 @@ class _LiftedCertificate:
     def __init__(self, M, blocks):
         p, q = M.shape
         self.p, self.q, self.nb = p, q, len(blocks)
-        self.V, self.H, self.to_basis, trace = _lift_constants(q)
+        self.V, self.H, self.gather, trace = _lift_constants(q)
+        self.slices = block_slices(blocks)
         # block index of each entry of x (Delta's output) and of y (its input)
         self.bx = np.repeat(np.arange(self.nb), [b.rows for b in blocks])
         self.by = np.repeat(np.arange(self.nb), [b.cols for b in blocks])
@@ -134,10 +156,10 @@ class _LiftedCertificate:
         m = self.V.shape[1]
         N4, V4 = self.N.reshape(p, q, m), self.V.reshape(q, q, m)
         self.tensors, forms_y, forms_x = [], [], []
-        for b, (xs, ys) in zip(blocks, block_slices(blocks)):
+        for k, (b, (xs, ys)) in enumerate(zip(blocks, self.slices)):
             if b.repeated:
                 H = _lift_constants(b.rows)[1]
-                self.tensors.append((xs.start, H))
+                self.tensors.append((k, H))
                 forms_y.append(np.einsum("jam,kjl,lan->kmn", N4[ys].conj(), H, N4[ys],
                                          optimize=True))
                 forms_x.append(np.einsum("jam,kjl,lan->kmn", V4[xs].conj(), H, V4[xs],
@@ -158,8 +180,8 @@ class _LiftedCertificate:
         theta = np.zeros((nb, q * q))
         theta[:, :q] = 1.0 / (nb * q)
         parts = [theta]
-        for x0, H in self.tensors:
-            theta[self.bx[x0], :q] *= 0.9
+        for b, H in self.tensors:
+            theta[b, :q] *= 0.9
             t = np.zeros(len(H))
             t[:H.shape[1]] = 0.1 / (nb * q)
             parts.append(t)
@@ -207,62 +229,91 @@ class _LiftedCertificate:
         except np.linalg.LinAlgError:
             return None
 
-    def _pair_form(self, X, Y, rows1, rows2):
-        """tr(X dD1 Y dD2) as coefficients K[b1, (j, k), b2, (l, i)] of dS_b1[j, k] dS_b2[l, i].
+    def _s_gradient(self, Ud, Yd, tau):
+        """tr(X dF) per S unknown, from the diagonal q x q blocks of V X V^H and N X N^H
+        (shapes (..., q, q, q), (..., p, q, q); dF as in :meth:`newton_step`); shape
+        (..., nb q^2)."""
+        lead = Ud.shape[:-3]
+        G = np.stack([tau * Ud[..., xs, :, :].sum(-3) - Yd[..., ys, :, :].sum(-3)
+                      for xs, ys in self.slices], axis=-3)
+        return np.einsum("...iab,kba->...ik", G, self.H).real.reshape(lead + (-1,))
 
-        dD1 = sum_a e_a e_a^H (x) dS_rows1[a] (likewise dD2), so the coefficient sums
-        X[c, i, a, j] Y[a, k, c, l] over the entries a of block b1 and c of block b2.
+    def _to_basis(self, E):
+        """Re(T E T^T) for the map T from entries to basis coefficients (real (q^2, q^2))."""
+        i1, i2, c1, c2 = self.gather
+        E = c1[:, None] * E[i1] + c2[:, None] * E[i2]
+        return (E[:, i1] * c1 + E[:, i2] * c2).real
+
+    def _s_curvature(self, U, Y, W, Si, tau):
+        """Negative Hessian of the barrier over the S unknowns, (nb q^2, nb q^2).
+
+        d^2 log det F = -tr(R dF R dF) with dF = tau V^H dD_x V - N^H dD_y N, i.e.
+        -(tau^2 tr(U dD_x U dD_x) - 2 tau tr(W dD_x W^H dD_y) + tr(Y dD_y Y dD_y)), for
+        U = V R V^H, Y = N R N^H, W = N R V^H; and -tr(S_b^-1 dS_b S_b^-1 dS_b) from
+        log det S_b.  Blocks b1 <= b2 are computed, the others mirrored.
         """
-        q, nb = self.q, self.nb
-        X4 = X.reshape(len(rows2), q, len(rows1), q)
-        Y4 = Y.reshape(len(rows1), q, len(rows2), q)
-        K = np.empty((nb, q * q, nb, q * q), complex)
-        for b1 in range(nb):
-            a = rows1 == b1
-            for b2 in range(nb):
-                c = rows2 == b2
-                Xr = X4[c][:, :, a].transpose(2, 0, 3, 1).reshape(-1, q * q)   # [ac, ji]
-                Yr = Y4[a][:, :, c].transpose(0, 2, 1, 3).reshape(-1, q * q)   # [ac, kl]
-                E = (Xr.T @ Yr).reshape(q, q, q, q).transpose(0, 2, 3, 1)
-                K[b1, :, b2, :] = E.reshape(q * q, q * q)
-        return K
-
-    def _s_gradient(self, U, Y, tau):
-        """tr(X dF) per S unknown, from U = V X V^H and Y = N X N^H (dF as in newton_step)."""
-        p, q = self.p, self.q
-        G = np.zeros((self.nb, q, q), complex)
-        np.add.at(G, self.bx, tau * U.reshape(q, q, q, q)[np.arange(q), :, np.arange(q), :])
-        np.add.at(G, self.by, -Y.reshape(p, q, p, q)[np.arange(p), :, np.arange(p), :])
-        return np.einsum("iab,kba->ik", G, self.H).real.ravel()
+        p, q, nb, n = self.p, self.q, self.nb, self.q * self.q
+        U4, Y4 = U.reshape(q, q, q, q), Y.reshape(p, q, p, q)
+        Wx, Wy = W.reshape(p, q, q, q), W.conj().T.reshape(q, q, p, q)
+        H = np.empty((nb * n, nb * n))
+        for b1, (x1, y1) in enumerate(self.slices):
+            for b2, (x2, y2) in enumerate(self.slices[b1:], b1):
+                # dS_b1 in D_x with dS_b2 in D_y, and the other way round (transposed)
+                E = (tau ** 2 * _entry_products(U4, U4, x1, x2)
+                     + _entry_products(Y4, Y4, y1, y2)
+                     - tau * (_entry_products(Wx, Wy, x1, y2)
+                              + _entry_products(Wx, Wy, x2, y1).T))
+                if b1 == b2:
+                    E += np.einsum("ij,kl->jkli", Si[b1], Si[b1]).reshape(n, n)
+                H[b1 * n:(b1 + 1) * n, b2 * n:(b2 + 1) * n] = block = self._to_basis(E)
+                H[b2 * n:(b2 + 1) * n, b1 * n:(b1 + 1) * n] = block.T
+        return H
 
     def newton_step(self, theta, tau):
         """Gradient of the barrier at theta and its Hessian's negative (positive definite)."""
-        q, nb, T = self.q, self.nb, self.to_basis
+        q, Vh, Nh = self.q, self.V.conj().T, self.N.conj().T
         S, Ts, A, B = self._all_forms(theta)
         R = np.linalg.inv(tau * B - A)
-        U = self.V @ R @ self.V.conj().T
-        V = self.N @ R @ self.N.conj().T
-        W = self.N @ R @ self.V.conj().T
+        VR, NR = self.V @ R, self.N @ R
+        U, Y, W = VR @ Vh, NR @ Nh, NR @ Vh
         Si = np.linalg.inv(S)
-        grad = self._s_gradient(U, V, tau) + np.einsum("iab,kba->ik", Si, self.H).real.ravel()
-        # d^2 log det F = -tr(R dF R dF) with dF = tau V^H dD_x V - N^H dD_y N, i.e.
-        # -(tau^2 tr(U dD_x U dD_x) - 2 tau tr(W dD_x W^H dD_y) + tr(V dD_y V dD_y))
-        K = (tau ** 2 * self._pair_form(U, U, self.bx, self.bx)
-             - 2 * tau * self._pair_form(W, W.conj().T, self.bx, self.by)
-             + self._pair_form(V, V, self.by, self.by))
-        # and -tr(S_b^-1 dS_b S_b^-1 dS_b) from the log det S_b
-        for b in range(nb):
-            K[b, :, b, :] += np.einsum("ij,kl->jkli", Si[b], Si[b]).reshape(q * q, q * q)
-        # entries to theta on both sides: T[k, (j, k')] = H_k[j, k']
-        K = np.stack([T @ K[b].reshape(q * q, -1) for b in range(nb)])
-        K = K.reshape(nb * q * q, nb, q * q)
-        K = np.stack([(T @ K[:, b].T).T for b in range(nb)], axis=1)
-        H = K.reshape(nb * q * q, nb * q * q).real
+        diagonal = np.arange(q)
+        grad = (self._s_gradient(U.reshape(q, q, q, q)[diagonal, :, diagonal],
+                                 Y.reshape(self.p, q, self.p, q)[np.arange(self.p), :,
+                                                                 np.arange(self.p)], tau)
+                + np.einsum("iab,kba->ik", Si, self.H).real.ravel())
+        H = self._s_curvature(U, Y, W, Si, tau)
         if self.tensors:
-            grad, H = self._with_tensor_terms(grad, H, R, Ts, tau)
+            grad, H = self._with_tensor_terms(grad, H, R, Ts, tau, (U, Y, W))
         return grad, (H + H.T) / 2
 
-    def _with_tensor_terms(self, grad, H, R, Ts, tau):
+    def _tensor_sandwiches(self, products, tau):
+        """Diagonal q x q blocks of V X_k V^H and N X_k N^H for X_k = R F_k R, each T basis
+        matrix k (F_k = tau V_b^H (T_k (x) I) V_b - N_b^H (T_k (x) I) N_b on the block's
+        entries), from U = V R V^H, Y = N R N^H, W = N R V^H: V R F_k R V^H is
+        tau U[:, x_b] (T_k (x) I) U[x_b, :] - W^H[:, y_b] (T_k (x) I) W[y_b, :], and so on."""
+        p, q = self.p, self.q
+        U, Y, W = products
+        U4, Y4 = U.reshape(q, q, q, q), Y.reshape(p, q, p, q)
+        W4, Wh4 = W.reshape(p, q, q, q), W.conj().T.reshape(q, q, p, q)
+
+        def sandwich(L4, R4, s):
+            # sum_w L4[c, u, s_i, w] R4[s_j, w, c, v] as (c, i j, u, v)
+            left = L4[:, :, s].transpose(0, 2, 1, 3)[:, :, None]
+            Z = left @ R4[s].transpose(2, 0, 1, 3)[:, None]
+            return Z.reshape(len(Z), -1, q, q)
+
+        Ud, Yd = [], []
+        for b, Hb in self.tensors:
+            xs, ys = self.slices[b]
+            Hf = Hb.reshape(len(Hb), -1)
+            Ud.append(np.tensordot(Hf, tau * sandwich(U4, U4, xs) - sandwich(Wh4, W4, ys),
+                                   ([1], [1])))
+            Yd.append(np.tensordot(Hf, tau * sandwich(W4, Wh4, xs) - sandwich(Y4, Y4, ys),
+                                   ([1], [1])))
+        return np.concatenate(Ud), np.concatenate(Yd)
+
+    def _with_tensor_terms(self, grad, H, R, Ts, tau, products):
         """Gradient and curvature extended by the T_b unknowns (few: r_b^2 per scalar)."""
         # dF = tau V^H dD_x V - N^H dD_y N for each basis matrix of every T_b
         F = tau * self.tensor_forms[1] - self.tensor_forms[0]
@@ -279,9 +330,7 @@ class _LiftedCertificate:
             h_tt[sl, sl] += np.einsum("kab,lba->kl", TH, TH).real
             k += len(Hb)
         # tr(R dF_S R F_k): the S gradient with R replaced by R F_k R
-        X = G @ R
-        h_st = np.array([self._s_gradient(self.V @ x @ self.V.conj().T,
-                                          self.N @ x @ self.N.conj().T, tau) for x in X]).T
+        h_st = self._s_gradient(*self._tensor_sandwiches(products, tau), tau).T
         return (np.concatenate([grad, g_t]),
                 np.block([[H, h_st], [h_st.T, h_tt]]))
 

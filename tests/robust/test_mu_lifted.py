@@ -7,7 +7,8 @@ from hypothesis import given, settings, strategies as st
 
 from piezolib.robust.blocks import parse_blk
 from piezolib.robust.mu import mussv
-from piezolib.robust.mu_lifted import _LiftedCertificate, _refine_point
+from piezolib.robust.mu_lifted import (MAX_LIFTED_UNKNOWNS, _LiftedCertificate, _refine_point,
+                                      lifted_unknowns)
 
 EIGHT = [(1, 1)] * 8
 EIGHT_BLOCKS = parse_blk(EIGHT, 8, 8)
@@ -300,7 +301,9 @@ def test_refine_rejects_what_it_cannot_do(refine, blk, lower, match):
         mussv(np.eye(8), blk, refine=refine, lower=lower)
 
 
-@pytest.mark.parametrize("blk, q", [([(1, 1)] * 11, 11), ([(3, 0)] * 4 + [(1, 1)] * 3, 15)])
+@pytest.mark.parametrize("blk, q", [([(1, 1)] * 16, 16), ([(3, 0)] * 5 + [(2, 2)] * 3, 21)])
 def test_refine_rejects_structures_beyond_its_size_cap(blk, q):
-    with pytest.raises(ValueError, match=f"refine handles .* 1200 unknowns.* {q}\\^2"):
+    assert lifted_unknowns(parse_blk(blk, q, q)) > MAX_LIFTED_UNKNOWNS
+    match = f"refine handles .* {MAX_LIFTED_UNKNOWNS} unknowns.* {q}\\^2"
+    with pytest.raises(ValueError, match=match):
         mussv(np.eye(q), blk, refine=0.01)
