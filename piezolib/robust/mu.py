@@ -197,7 +197,9 @@ def mussv(M, blk, omega=None, *, lower=True, restarts=3, iterations=60, tol=1e-1
         certificate mostly carries over), about 0.2 s at an isolated frequency; for
         six or seven blocks (repeated scalars, full blocks) on q = 10-13, seconds to
         about a minute more on a 1,000-point grid with 145-450 refined frequencies, and
-        up to two or three minutes for seven or eight blocks on q = 15-17.
+        two minutes for seven or eight blocks on q = 15-17, and up to about half an hour
+        where the certificate does not close the gap and uses its 60 centres at hundreds
+        of frequencies (four repeated scalars and a 3 x 3 block on q = 15).
         Default None (the D-scaled bound only).
 
     Returns
