@@ -244,17 +244,17 @@ class _LiftedCertificate:
         E = c1[:, None] * E[i1] + c2[:, None] * E[i2]
         return (E[:, i1] * c1 + E[:, i2] * c2).real
 
-    def _s_curvature(self, U, Y, W, Si, tau):
+    def _s_curvature(self, views, Si, tau):
         """Negative Hessian of the barrier over the S unknowns, (nb q^2, nb q^2).
 
         d^2 log det F = -tr(R dF R dF) with dF = tau V^H dD_x V - N^H dD_y N, i.e.
         -(tau^2 tr(U dD_x U dD_x) - 2 tau tr(W dD_x W^H dD_y) + tr(Y dD_y Y dD_y)), for
-        U = V R V^H, Y = N R N^H, W = N R V^H; and -tr(S_b^-1 dS_b S_b^-1 dS_b) from
-        log det S_b.  Blocks b1 <= b2 are computed, the others mirrored.
+        U = V R V^H, Y = N R N^H, W = N R V^H (``views``, :meth:`_product_views`); and
+        -tr(S_b^-1 dS_b S_b^-1 dS_b) from log det S_b.  Blocks b1 <= b2 are computed, the
+        others mirrored.
         """
-        p, q, nb, n = self.p, self.q, self.nb, self.q * self.q
-        U4, Y4 = U.reshape(q, q, q, q), Y.reshape(p, q, p, q)
-        Wx, Wy = W.reshape(p, q, q, q), W.conj().T.reshape(q, q, p, q)
+        nb, n = self.nb, self.q * self.q
+        U4, Y4, Wx, Wy = views
         H = np.empty((nb * n, nb * n))
         for b1, (x1, y1) in enumerate(self.slices):
             for b2, (x2, y2) in enumerate(self.slices[b1:], b1):
@@ -269,33 +269,37 @@ class _LiftedCertificate:
                 H[b2 * n:(b2 + 1) * n, b1 * n:(b1 + 1) * n] = block.T
         return H
 
+    def _product_views(self, R):
+        """U = V R V^H, Y = N R N^H, W = N R V^H and W^H, each with its two entry indices
+        split: shapes (q, q, q, q), (p, q, p, q), (p, q, q, q), (q, q, p, q)."""
+        p, q, Vh = self.p, self.q, self.V.conj().T
+        VR, NR = self.V @ R, self.N @ R
+        W = NR @ Vh
+        return ((VR @ Vh).reshape(q, q, q, q), (NR @ self.N.conj().T).reshape(p, q, p, q),
+                W.reshape(p, q, q, q), W.conj().T.reshape(q, q, p, q))
+
     def newton_step(self, theta, tau):
         """Gradient of the barrier at theta and its Hessian's negative (positive definite)."""
-        q, Vh, Nh = self.q, self.V.conj().T, self.N.conj().T
         S, Ts, A, B = self._all_forms(theta)
         R = np.linalg.inv(tau * B - A)
-        VR, NR = self.V @ R, self.N @ R
-        U, Y, W = VR @ Vh, NR @ Nh, NR @ Vh
+        views = self._product_views(R)
+        U4, Y4 = views[:2]
         Si = np.linalg.inv(S)
-        diagonal = np.arange(q)
-        grad = (self._s_gradient(U.reshape(q, q, q, q)[diagonal, :, diagonal],
-                                 Y.reshape(self.p, q, self.p, q)[np.arange(self.p), :,
-                                                                 np.arange(self.p)], tau)
+        x, y = np.arange(self.q), np.arange(self.p)
+        grad = (self._s_gradient(U4[x, :, x], Y4[y, :, y], tau)
                 + np.einsum("iab,kba->ik", Si, self.H).real.ravel())
-        H = self._s_curvature(U, Y, W, Si, tau)
+        H = self._s_curvature(views, Si, tau)
         if self.tensors:
-            grad, H = self._with_tensor_terms(grad, H, R, Ts, tau, (U, Y, W))
+            grad, H = self._with_tensor_terms(grad, H, R, Ts, tau, views)
         return grad, (H + H.T) / 2
 
-    def _tensor_sandwiches(self, products, tau):
+    def _tensor_sandwiches(self, views, tau):
         """Diagonal q x q blocks of V X_k V^H and N X_k N^H for X_k = R F_k R, each T basis
         matrix k (F_k = tau V_b^H (T_k (x) I) V_b - N_b^H (T_k (x) I) N_b on the block's
-        entries), from U = V R V^H, Y = N R N^H, W = N R V^H: V R F_k R V^H is
+        entries), from U = V R V^H, Y = N R N^H, W = N R V^H (``views``): V R F_k R V^H is
         tau U[:, x_b] (T_k (x) I) U[x_b, :] - W^H[:, y_b] (T_k (x) I) W[y_b, :], and so on."""
-        p, q = self.p, self.q
-        U, Y, W = products
-        U4, Y4 = U.reshape(q, q, q, q), Y.reshape(p, q, p, q)
-        W4, Wh4 = W.reshape(p, q, q, q), W.conj().T.reshape(q, q, p, q)
+        q = self.q
+        U4, Y4, W4, Wh4 = views
 
         def sandwich(L4, R4, s):
             # sum_w L4[c, u, s_i, w] R4[s_j, w, c, v] as (c, i j, u, v)
@@ -313,7 +317,7 @@ class _LiftedCertificate:
                                    ([1], [1])))
         return np.concatenate(Ud), np.concatenate(Yd)
 
-    def _with_tensor_terms(self, grad, H, R, Ts, tau, products):
+    def _with_tensor_terms(self, grad, H, R, Ts, tau, views):
         """Gradient and curvature extended by the T_b unknowns (few: r_b^2 per scalar)."""
         # dF = tau V^H dD_x V - N^H dD_y N for each basis matrix of every T_b
         F = tau * self.tensor_forms[1] - self.tensor_forms[0]
@@ -330,7 +334,7 @@ class _LiftedCertificate:
             h_tt[sl, sl] += np.einsum("kab,lba->kl", TH, TH).real
             k += len(Hb)
         # tr(R dF_S R F_k): the S gradient with R replaced by R F_k R
-        h_st = self._s_gradient(*self._tensor_sandwiches(products, tau), tau).T
+        h_st = self._s_gradient(*self._tensor_sandwiches(views, tau), tau).T
         return (np.concatenate([grad, g_t]),
                 np.block([[H, h_st], [h_st.T, h_tt]]))
 
