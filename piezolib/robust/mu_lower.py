@@ -7,6 +7,8 @@ notes in ``docs/robust.md``; :func:`piezolib.robust.mu.mussv` is the
 user-facing entry point.
 """
 
+from typing import NamedTuple
+
 import numpy as np
 
 from piezolib.robust.blocks import block_slices
@@ -16,20 +18,41 @@ __all__ = ["complex_lower_bound", "mixed_lower_bound"]
 
 
 def _unit(x):
-    n = np.linalg.norm(x, axis=-1, keepdims=True)
-    return np.where(n > 0, x / np.where(n > 0, n, 1), 0)
+    """Rows of x scaled to unit norm (zero rows stay zero)."""
+    n = np.sqrt((x.real ** 2 + x.imag ** 2).sum(-1, keepdims=True))
+    return x * np.divide(1.0, n, out=np.zeros_like(n), where=n > 0)
+
+
+class _Layout(NamedTuple):
+    """Where the blocks sit: 1 x 1 full blocks as index arrays (handled all at once in the
+    power iteration), the others as (block, inputs slice, outputs slice)."""
+    unit_in: np.ndarray
+    unit_out: np.ndarray
+    others: list
 
 
 def _layout(blocks):
-    """(block, inputs slice, outputs slice) of every block."""
-    return [(b, bi, bo) for b, (bi, bo) in zip(blocks, block_slices(blocks))]
+    """The :class:`_Layout` of a structure."""
+    unit = [b.is_full and b.rows == b.cols == 1 for b in blocks]
+    slices = block_slices(blocks)
+    ui, uo = (np.array([s[k].start for u, s in zip(unit, slices) if u], int) for k in (0, 1))
+    return _Layout(ui, uo, [(b, bi, bo) for b, u, (bi, bo) in zip(blocks, unit, slices)
+                            if not u])
+
+
+def _phase(x):
+    """x / |x| elementwise, 0 where x = 0."""
+    mag = np.abs(x)
+    return x * np.divide(1.0, mag, out=np.zeros_like(mag), where=mag > 0)
 
 
 def _structured_q(layout, a, w, q_dim, p_dim):
     """Structured Q (N, q, p), ||Q_i|| <= 1, aligned with a (p-space) and w (q-space)."""
     N = a.shape[0]
     Q = np.zeros((N, q_dim, p_dim), complex)
-    for b, bi, bo in layout:
+    ui, uo = layout.unit_in, layout.unit_out
+    Q[:, ui, uo] = _phase(w[:, ui]) * _phase(a[:, uo]).conj()
+    for b, bi, bo in layout.others:
         ab, wb = a[:, bo], w[:, bi]
         if b.is_full:
             Q[:, bi, bo] = np.einsum("ni,nj->nij", _unit(wb), _unit(ab).conj())
@@ -43,44 +66,46 @@ def _structured_q(layout, a, w, q_dim, p_dim):
 def _power_iteration(M, layout, b, w, iterations, real_only):
     """Packard-Doyle power iteration from starts b, w (rows of a batch).
 
-    Returns the best (value, Q, lambda) seen at the checkpoints; rows whose
-    value has settled stop iterating.
+    A row stops once its gain |M b| repeats to 1e-13 from one sweep to the next (a
+    fixed point, up to the eigenvalue's phase), or after ``iterations`` sweeps, at its
+    structured Q.  Returns (value, Q, lambda) per row: value = |lambda|, the largest
+    |eigenvalue| of Q M (real ones only if real_only), which certifies the lower bound.
     """
     N, p, q = M.shape
     MH = np.swapaxes(M, 1, 2).conj()
-    best_val = np.zeros(N)
-    best_Q = np.zeros((N, q, p), complex)
-    best_lam = np.ones(N, complex)
+    Q = np.zeros((N, q, p), complex)
     b, w = _unit(b), _unit(w)
     active = np.arange(N)
     Ma, MHa = M, MH
-    check = 15                      # sweeps between the (costly) eigenvalue checks
+    gain = np.full(N, np.inf)
     for it in range(iterations):
-        a, w, b = _power_sweep(Ma, MHa, layout, b, w)
-        if (it + 1) % check and it != iterations - 1:
-            continue
-        Q = _structured_q(layout, a, w, q, p)
-        val, lam = _eigen_gain(Q, Ma, real_only)
-        old = best_val[active]
-        better = val > old
-        rows = active[better]
-        best_val[rows], best_Q[rows], best_lam[rows] = val[better], Q[better], lam[better]
-        keep = np.abs(val - old) > 1e-13 * np.maximum(val, 1e-300)
-        active, b, w = active[keep], b[keep], w[keep]
-        if active.size == 0:
-            break
-        Ma, MHa = M[active], MH[active]
-    return best_val, best_Q, best_lam
+        a, w, b, new_gain = _power_sweep(Ma, MHa, layout, b, w)
+        done = np.abs(new_gain - gain) <= 1e-13 * new_gain
+        if it == iterations - 1:
+            done[:] = True
+        if done.any():
+            Q[active[done]] = _structured_q(layout, a[done], w[done], q, p)
+            keep = ~done
+            active, w, b, new_gain = active[keep], w[keep], b[keep], new_gain[keep]
+            if active.size == 0:
+                break
+            Ma, MHa = M[active], MH[active]
+        gain = new_gain
+    # the eigenvalue is the certificate, and it costs more than a sweep: once, at the end
+    value, lam = _eigen_gain(Q, M, real_only)
+    return value, Q, lam
 
 
 def _power_sweep(M, MH, layout, b, w):
-    """One sweep b -> a = M b -> z -> w = M^H z -> b, block by block."""
-    a = _unit(np.einsum("npq,nq->np", M, b))
+    """One sweep b -> a = M b -> z -> w = M^H z -> b, block by block; also |M b|."""
+    Mb = np.einsum("npq,nq->np", M, b)
+    gain = np.sqrt((Mb.real ** 2 + Mb.imag ** 2).sum(1))
+    a = _unit(Mb)
     w_new = _unit(np.einsum("nqp,np->nq", MH, _align(layout, a, w, "z")))
-    w = np.where(np.linalg.norm(w_new, axis=1, keepdims=True) > 0, w_new, w)
+    w = np.where(np.any(w_new != 0, axis=1, keepdims=True), w_new, w)
     bn = _unit(_align(layout, a, w, "b"))
-    b = np.where(np.linalg.norm(bn, axis=1, keepdims=True) > 0, bn, b)
-    return a, w, b
+    b = np.where(np.any(bn != 0, axis=1, keepdims=True), bn, b)
+    return a, w, b, gain
 
 
 def _align(layout, a, w, side):
@@ -93,7 +118,12 @@ def _align(layout, a, w, side):
     """
     to_z = side == "z"
     out = np.zeros_like(a if to_z else w)
-    for blk, bi, bo in layout:
+    ui, uo = layout.unit_in, layout.unit_out
+    if to_z:
+        out[:, uo] = np.abs(w[:, ui]) * _phase(a[:, uo])
+    else:
+        out[:, ui] = np.abs(a[:, uo]) * _phase(w[:, ui])
+    for blk, bi, bo in layout.others:
         ab, wb = a[:, bo], w[:, bi]
         dest = bo if to_z else bi
         if blk.is_full:
