@@ -191,7 +191,7 @@ def mussv(M, blk, omega=None, *, lower=True, restarts=3, iterations=60, tol=1e-1
         :data:`~piezolib.robust.mu_lifted.MAX_LIFTED_UNKNOWNS` unknowns, i.e. blocks x q^2
         <= 2500): at frequencies whose relative gap exceeds ``refine`` (e.g. 0.01),
         tighten the upper bound with the symmetric-lift certificate of
-        :mod:`piezolib.robust.mu_lifted`, each until its gap is at most ``refine / 2`` or
+        :mod:`piezolib.robust.mu_lifted`, each until its gap is at most ``0.9 refine`` or
         the certificate's optimum (or its cap of 60 centres) is reached.  For 8 scalars it
         cost 3-7 ms per refined frequency on a 1,000-point grid (a neighbour's
         certificate mostly carries over), about 0.2 s at an isolated frequency; for

@@ -411,8 +411,8 @@ def lifted_upper_bound(M, blocks, upper, lower, Dl, Dr, gap, *, max_centres=60):
     gap : float
         Points whose relative gap (upper - lower) / upper exceeds ``gap`` are refined:
         the previous frequency's certificate is kept where it brings the gap within
-        ``gap``; otherwise the method of centres runs until the gap is at most gap / 2
-        or it has converged.
+        ``gap``; otherwise the method of centres runs until the gap is at most
+        0.9 gap (a little room for the next frequency's start) or it has converged.
     max_centres : int, optional
         Cap on the analytic centres per point.
 
@@ -435,7 +435,7 @@ def lifted_upper_bound(M, blocks, upper, lower, Dl, Dr, gap, *, max_centres=60):
     # and its eigenproblem stays well conditioned however M is scaled
     for k, balanced in zip(wide, scaled_matrix(M[wide], Dl[wide], Dr[wide])):
         bound, th = _refine_point(balanced, blocks, theta if previous == k - 1 else None,
-                                  lower[k] / (1 - gap), lower[k] / (1 - gap / 2), max_centres)
+                                  lower[k] / (1 - gap), lower[k] / (1 - 0.9 * gap), max_centres)
         if bound < upper[k]:
             upper[k] = bound
         theta, previous = th, k
