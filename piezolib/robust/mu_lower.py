@@ -17,10 +17,19 @@ from piezolib.robust.mu_upper import scaled_matrix
 __all__ = ["complex_lower_bound", "mixed_lower_bound"]
 
 
+def _over(x, n):
+    """x / n (n >= 0, broadcast against x), 0 where n = 0."""
+    return x * np.divide(1.0, n, out=np.zeros_like(n), where=n > 0)
+
+
+def _row_norms(x):
+    """Euclidean norms of the rows (last axis) of a complex x."""
+    return np.sqrt((x.real ** 2 + x.imag ** 2).sum(-1))
+
+
 def _unit(x):
     """Rows of x scaled to unit norm (zero rows stay zero)."""
-    n = np.sqrt((x.real ** 2 + x.imag ** 2).sum(-1, keepdims=True))
-    return x * np.divide(1.0, n, out=np.zeros_like(n), where=n > 0)
+    return _over(x, _row_norms(x)[..., None])
 
 
 class _Layout(NamedTuple):
@@ -42,8 +51,7 @@ def _layout(blocks):
 
 def _phase(x):
     """x / |x| elementwise, 0 where x = 0."""
-    mag = np.abs(x)
-    return x * np.divide(1.0, mag, out=np.zeros_like(mag), where=mag > 0)
+    return _over(x, np.abs(x))
 
 
 def _structured_q(layout, a, w, q_dim, p_dim):
@@ -99,8 +107,8 @@ def _power_iteration(M, layout, b, w, iterations, real_only):
 def _power_sweep(M, MH, layout, b, w):
     """One sweep b -> a = M b -> z -> w = M^H z -> b, block by block; also |M b|."""
     Mb = np.einsum("npq,nq->np", M, b)
-    gain = np.sqrt((Mb.real ** 2 + Mb.imag ** 2).sum(1))
-    a = _unit(Mb)
+    gain = _row_norms(Mb)
+    a = _over(Mb, gain[:, None])
     w_new = _unit(np.einsum("nqp,np->nq", MH, _align(layout, a, w, "z")))
     w = np.where(np.any(w_new != 0, axis=1, keepdims=True), w_new, w)
     bn = _unit(_align(layout, a, w, "b"))
