@@ -182,6 +182,26 @@ def test_barrier_derivatives_match_finite_differences(blk):
     np.testing.assert_allclose(hess, np.array(fd_hess), atol=1e-5 * np.abs(hess).max())
 
 
+@pytest.mark.parametrize("seed", [5, 14, 52])
+def test_extrapolating_beyond_two_centres_lowers_a_certified_bound(seed):
+    M = mixed_matrix(seed)
+    Mb = balanced(M, mussv(M, MIXED))
+    cert = _LiftedCertificate(Mb, parse_blk(MIXED, 7, 6))
+    start = cert.start()
+    tau = 1.005 * cert.bound_squared(start)
+    first = cert.centre(start, tau)
+    lam = cert.bound_squared(first)
+    second = cert.centre(first, lam + 0.5 * (tau - lam))
+    lam = cert.bound_squared(second)
+    theta, value = cert.extrapolate(first, second, lam)
+    # a point off the centres, still a certificate: positive multipliers, its own bound
+    assert cert.positive(theta)
+    assert value == cert.bound_squared(theta)
+    assert value < 0.995 * lam              # on these cases the long step pays
+    mult = (cert.multipliers(theta), dict(zip([0, 2], cert.tensor_multipliers(theta))))
+    assert certificate_holds(Mb, MIXED, mult, np.sqrt(value) * (1 + 1e-9))
+
+
 def random_structured_delta(g, blk, count):
     """count random Delta of unit norm in the structure: unit phases times I for repeated
     scalars, matrices with all singular values 1 for full blocks."""
