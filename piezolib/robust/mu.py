@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import control as ct
 import numpy as np
+from threadpoolctl import ThreadpoolController
 
 from piezolib._checks import check_finite_array, check_integer
 from piezolib.robust.blocks import parse_blk
@@ -21,6 +22,9 @@ from piezolib.robust.mu_mixed import mixed_upper_bound
 from piezolib.robust.mu_upper import complex_upper_bound
 
 __all__ = ["MuResult", "mussv"]
+
+#: the BLAS libraries numpy and scipy loaded, to run mussv single-threaded
+_BLAS = ThreadpoolController()
 
 
 @dataclass(frozen=True)
@@ -244,21 +248,24 @@ def mussv(M, blk, omega=None, *, lower=True, restarts=3, iterations=60, tol=1e-1
     c = np.where(c > 0, c, 1.0)
     arr = arr / c[:, None, None]
 
-    if has_real:
-        upper, d, g, Dl, Dr, G = mixed_upper_bound(arr, blocks)
-    else:
-        upper, d, Dl, Dr = complex_upper_bound(arr, blocks, tol)
-        g = G = None
-    if not lower:
-        low, Delta = np.zeros(nf), np.zeros((nf, q, p), complex)
-    elif has_real:
-        low, Delta = mixed_lower_bound(arr, blocks, upper, iterations=iterations, rng=rng,
-                                       restarts=restarts)
-    else:
-        low, Delta = complex_lower_bound(arr, blocks, Dl, Dr, upper, iterations=iterations,
-                                         rng=rng, restarts=restarts)
-    if refine is not None:
-        upper = lifted_upper_bound(arr, blocks, upper, low, Dl, Dr, refine)
+    # the matrices are small (q is at most a few tens), so BLAS threads only add overhead:
+    # on 2 cores they made refining 8 scalars 8x slower (docs/robust.md)
+    with _BLAS.limit(limits=1, user_api="blas"):
+        if has_real:
+            upper, d, g, Dl, Dr, G = mixed_upper_bound(arr, blocks)
+        else:
+            upper, d, Dl, Dr = complex_upper_bound(arr, blocks, tol)
+            g = G = None
+        if not lower:
+            low, Delta = np.zeros(nf), np.zeros((nf, q, p), complex)
+        elif has_real:
+            low, Delta = mixed_lower_bound(arr, blocks, upper, iterations=iterations, rng=rng,
+                                           restarts=restarts)
+        else:
+            low, Delta = complex_lower_bound(arr, blocks, Dl, Dr, upper, iterations=iterations,
+                                             rng=rng, restarts=restarts)
+        if refine is not None:
+            upper = lifted_upper_bound(arr, blocks, upper, low, Dl, Dr, refine)
     # both bounds are exact numbers for their D and Q; when they meet, the
     # lower one can exceed the upper one by rounding only (a larger excess
     # would be a bug, and is left visible)
