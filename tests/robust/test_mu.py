@@ -5,9 +5,11 @@ import numpy as np
 import pytest
 
 from scipy.optimize import minimize_scalar
+from threadpoolctl import threadpool_info, threadpool_limits
 
 from piezolib import paper, robust
 from piezolib.robust.blocks import Block, block_slices, parse_blk
+from piezolib.robust import mu as mu_module
 from piezolib.robust.mu import MuResult, mussv
 
 RP_BLK = [(1, 1), (1, 2)]          # eq. 21: Delta_r 1x1, Delta_f 1x2
@@ -406,3 +408,24 @@ def test_absurd_scales_give_scaled_bounds(blk):
 def test_more_bad_input(M, blk, error, match):
     with pytest.raises(error, match=match):
         mussv(M, blk)
+
+
+def test_mussv_computes_its_bounds_on_one_blas_thread(monkeypatch):
+    # its matrices are small: BLAS threads made the refined bound up to 8x slower on 2 cores
+    seen = []
+
+    def spy(name):
+        real = getattr(mu_module, name)
+
+        def call(*args, **kwargs):
+            seen.append({i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"})
+            return real(*args, **kwargs)
+        monkeypatch.setattr(mu_module, name, call)
+
+    for name in ("complex_upper_bound", "complex_lower_bound", "lifted_upper_bound"):
+        spy(name)
+    with threadpool_limits(limits=2, user_api="blas"):
+        mussv(np.array([[1.0, 2.0], [0.5, 1.0]]), [(1, 1), (1, 1)], refine=0.01)
+        outside = {i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"}
+    assert seen == [{1}, {1}, {1}]
+    assert outside == {2}                   # and the caller's setting is restored
