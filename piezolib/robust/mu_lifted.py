@@ -132,6 +132,14 @@ def _parallel_functionals(M, blocks):
     return np.array(rows).reshape(-1, q * q)
 
 
+def _log_det_sum(matrices):
+    """Sum of log det over Hermitian matrices, or None if one is not positive definite."""
+    try:
+        return sum(2 * np.log(np.linalg.cholesky(X).diagonal().real).sum() for X in matrices)
+    except np.linalg.LinAlgError:
+        return None
+
+
 class _LiftedCertificate:
     """The matrices of the certificate for one M (p x q) and its Newton derivatives.
 
@@ -225,11 +233,7 @@ class _LiftedCertificate:
     def barrier(self, theta, tau):
         """log det F_tau + sum_b log det S_b + sum_b log det T_b, or None outside the domain."""
         S, T, A, B = self._all_forms(theta)
-        try:
-            return sum(2 * np.log(np.linalg.cholesky(X).diagonal().real).sum()
-                       for X in [tau * B - A, *S, *T])
-        except np.linalg.LinAlgError:
-            return None
+        return _log_det_sum([tau * B - A, *S, *T])
 
     def _s_gradient(self, Ud, Yd, tau):
         """tr(X dF) per S unknown, from the diagonal q x q blocks of V X V^H and N X N^H
@@ -342,12 +346,8 @@ class _LiftedCertificate:
 
     def positive(self, theta):
         """Whether every S_b and T_b theta holds is positive definite."""
-        try:
-            for X in [*self.multipliers(theta), *self.tensor_multipliers(theta)]:
-                np.linalg.cholesky(X)
-        except np.linalg.LinAlgError:
-            return False
-        return True
+        return _log_det_sum([*self.multipliers(theta), *self.tensor_multipliers(theta)]) \
+            is not None
 
     def extrapolate(self, previous, centre, lam, steps=(16, 8, 4, 2, 1)):
         """A point beyond ``centre`` on the line from the previous centre, and its bound.

@@ -410,6 +410,11 @@ def test_more_bad_input(M, blk, error, match):
         mussv(M, blk)
 
 
+def blas_threads():
+    """The thread counts of the loaded BLAS libraries."""
+    return {i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"}
+
+
 def test_mussv_computes_its_bounds_on_one_blas_thread(monkeypatch):
     # its matrices are small: BLAS threads made the refined bound up to 8x slower on 2 cores
     seen = []
@@ -418,7 +423,7 @@ def test_mussv_computes_its_bounds_on_one_blas_thread(monkeypatch):
         real = getattr(mu_module, name)
 
         def call(*args, **kwargs):
-            seen.append({i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"})
+            seen.append(blas_threads())
             return real(*args, **kwargs)
         monkeypatch.setattr(mu_module, name, call)
 
@@ -426,6 +431,6 @@ def test_mussv_computes_its_bounds_on_one_blas_thread(monkeypatch):
         spy(name)
     with threadpool_limits(limits=2, user_api="blas"):
         mussv(np.array([[1.0, 2.0], [0.5, 1.0]]), [(1, 1), (1, 1)], refine=0.01)
-        outside = {i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"}
+        outside = blas_threads()
     assert seen == [{1}, {1}, {1}]
     assert outside == {2}                   # and the caller's setting is restored
