@@ -201,10 +201,10 @@ def mussv(M, blk, omega=None, *, lower=True, restarts=3, iterations=60, tol=1e-1
         certificate mostly carries over), about 0.2 s at an isolated frequency; for
         six or seven blocks (repeated scalars, full blocks) on q = 10-13, seconds to
         about a minute more on a 1,000-point grid with 145-450 refined frequencies, and
-        one to two minutes for seven or eight blocks on q = 15-19, and about eight minutes
-        for four repeated scalars and a 3 x 3 block on q = 15 (548 refined frequencies;
-        at 20 of them the certificate's optimum itself is up to 1.34 % above the lower
-        bound, so the gap stays above ``refine`` there).
+        one to two minutes for seven or eight blocks on q = 15-19 (four repeated scalars
+        and a 3 x 3 block on q = 15, 548 refined frequencies: about two minutes, with cuts
+        of the repeated scalars' full weight at the 20 points where S_b and T_b alone stop
+        up to 1.34 % above the lower bound).
         Default None (the D-scaled bound only).
 
     Returns

@@ -29,9 +29,12 @@ certified beta is the square root of the largest generalized eigenvalue of
 centre of {S : F_tau(S) > 0, S_b > 0, sum_b tr S_b = 1} for a level tau that moves down
 towards the eigenvalue at the previous centre, each centre followed by a long step along the
 line through it and the one before (the centres drift slowly along a smooth path, and on
-q = 15 that step cut the centres needed several-fold).  Every returned bound is the eigenvalue of
-the S it came from, recomputed from scratch, so it is a certificate whatever the iteration
-did.  Derivation in ``docs/robust.md``.
+q = 15 that step cut the centres needed several-fold).  Where S and T stall on a repeated
+scalar, a few directions of its full (r q) x (r q) weight are added as cuts (W Sigma W^H,
+k^2 unknowns each, W from the current centre; :meth:`_LiftedCertificate.add_cuts`), which
+closed the gaps S and T leave on the benchmark's q = 15 case.  Every returned bound is the
+eigenvalue of the multipliers it came from, recomputed from scratch, so it is a certificate
+whatever the iteration did.  Derivation in ``docs/robust.md``.
 
 It costs nb q^2 unknowns (512 for 8 scalars, 1,575 for seven blocks on q = 15) and a
 Newton step about 9 ms for 8 scalars, 70 ms on q = 15 and 170 ms for eight blocks on q = 17
@@ -53,6 +56,11 @@ __all__ = ["lifted_upper_bound", "lifted_unknowns", "MAX_LIFTED_UNKNOWNS"]
 #: the Newton system has nb q^2 unknowns; its dense Cholesky factor dominates a step from
 #: about 1,500 on, and a step costs about 0.26 s at 2,900 unknowns and 0.8 s at 3,550
 MAX_LIFTED_UNKNOWNS = 3000
+
+#: cuts of the full repeated-scalar weight (see :meth:`_LiftedCertificate.add_cuts`): the
+#: directions per repeated scalar and cut, the centres before the first cut, and the cuts per
+#: point (each round adds at most CUT_DIRECTIONS^2 unknowns per repeated scalar)
+CUT_DIRECTIONS, CENTRES_BEFORE_CUT, MAX_CUTS = 4, 12, 2
 
 
 def lifted_unknowns(blocks):
@@ -144,7 +152,8 @@ class _LiftedCertificate:
     """The matrices of the certificate for one M (p x q) and its Newton derivatives.
 
     The unknowns theta hold S_b = sum_k theta[b, k] H_k (nb q^2 reals), then the entries of
-    each repeated scalar's T_b in the r x r Hermitian basis (r^2 reals each).
+    each repeated scalar's T_b in the r x r Hermitian basis (r^2 reals each), then those of
+    each cut's Sigma (k^2 reals; :meth:`add_cuts`), in the order the cuts were added.
     """
 
     def __init__(self, M, blocks):
@@ -174,11 +183,15 @@ class _LiftedCertificate:
                                          optimize=True))
                 forms_x.append(np.einsum("jam,kjl,lan->kmn", V4[xs].conj(), H, V4[xs],
                                          optimize=True))
-        self.tensor_forms = (np.concatenate(forms_y) if forms_y else np.zeros((0, m, m)),
-                             np.concatenate(forms_x) if forms_x else np.zeros((0, m, m)))
+        # the forms of every unknown beyond the S_b: the T_b, then those of the cuts
+        self.extra_forms = (np.concatenate(forms_y) if forms_y else np.zeros((0, m, m)),
+                            np.concatenate(forms_x) if forms_x else np.zeros((0, m, m)))
         self.n_s = self.nb * q * q
+        self.n_base = self.n_s + len(self.extra_forms[0])
         self.trace = np.concatenate([np.tile(trace, self.nb)]
                                     + [q * np.einsum("kaa->k", H).real for _, H in self.tensors])
+        # each cut: (block, Hermitian basis of Sigma, W^H V_b, W^H N_b, W)
+        self.cuts = []
 
     def start(self):
         """theta of S_b = I / (nb q) (unit total trace): the D-scaled bound on a balanced M.
@@ -203,25 +216,45 @@ class _LiftedCertificate:
 
     def tensor_multipliers(self, theta):
         """T_b (r_b x r_b) of the repeated scalars, in the order of the structure."""
+        return self._extra_multipliers(theta)[:len(self.tensors)]
+
+    def cut_multipliers(self, theta):
+        """Sigma (k x k) of each cut theta holds coefficients for, in the order of the cuts."""
+        return self._extra_multipliers(theta)[len(self.tensors):]
+
+    def _extra_multipliers(self, theta):
+        """The T_b, then the Sigma of the first cuts (as many as theta has room for)."""
         out, k = [], self.n_s
-        for _, H in self.tensors:
+        for H in [H for _, H in self.tensors] + [cut[1] for cut in self.cuts]:
+            if k + len(H) > len(theta):
+                break
             out.append(np.einsum("k,kab->ab", theta[k:k + len(H)], H))
             k += len(H)
         return out
 
+    def repeated_weights(self, theta):
+        """The whole weight of each repeated scalar b on its (r q) x (r q) entries (row i of
+        the block, any k; index i q + k): T_b (x) I_q plus W Sigma W^H of its cuts, by b."""
+        extra = self._extra_multipliers(theta)
+        out = {b: np.kron(T, np.eye(self.q)) for (b, _), T in zip(self.tensors, extra)}
+        for (b, _, _, _, W), Sigma in zip(self.cuts, extra[len(self.tensors):]):
+            out[b] = out[b] + W @ Sigma @ W.conj().T
+        return out
+
     def _all_forms(self, theta):
-        """(S, T, N^H D_y N, V^H D_x V) for the multipliers theta holds."""
+        """(S, [T_b..., Sigma...], N^H D_y N, V^H D_x V) for the multipliers theta holds."""
         q, m = self.q, self.V.shape[1]
         S = self.multipliers(theta)
         N4 = self.N.reshape(self.p, q, m)
         V4 = self.V.reshape(q, q, m)
         A = np.einsum("iam,iab,ibk->mk", N4.conj(), S[self.by], N4, optimize=True)
         B = np.einsum("iam,iab,ibk->mk", V4.conj(), S[self.bx], V4, optimize=True)
-        # (y_b^H T_b y_b - beta^2 x_b^H T_b x_b) ||x||^2, linear in T's coefficients
+        # (y_b^H T_b y_b - beta^2 x_b^H T_b x_b) ||x||^2 and the cuts' terms, linear in
+        # their coefficients
         t = theta[self.n_s:]
-        A = A + np.tensordot(t, self.tensor_forms[0], 1)
-        B = B + np.tensordot(t, self.tensor_forms[1], 1)
-        return (S, self.tensor_multipliers(theta), (A + A.conj().T) / 2,
+        A = A + np.tensordot(t, self.extra_forms[0][:len(t)], 1)
+        B = B + np.tensordot(t, self.extra_forms[1][:len(t)], 1)
+        return (S, self._extra_multipliers(theta), (A + A.conj().T) / 2,
                 (B + B.conj().T) / 2)
 
     def bound_squared(self, theta):
@@ -231,7 +264,8 @@ class _LiftedCertificate:
         return sla.eigh(A, B, eigvals_only=True, subset_by_index=[m - 1, m - 1])[0]
 
     def barrier(self, theta, tau):
-        """log det F_tau + sum_b log det S_b + sum_b log det T_b, or None outside the domain."""
+        """log det F_tau + sum_b log det S_b + sum_b log det T_b (and the cuts' log det
+        Sigma), or None outside the domain."""
         S, T, A, B = self._all_forms(theta)
         return _log_det_sum([tau * B - A, *S, *T])
 
@@ -286,7 +320,7 @@ class _LiftedCertificate:
 
     def newton_step(self, theta, tau):
         """Gradient of the barrier at theta and its Hessian's negative (positive definite)."""
-        S, Ts, A, B = self._all_forms(theta)
+        S, extra, A, B = self._all_forms(theta)
         R = np.linalg.inv(tau * B - A)
         views = self._product_views(R)
         U4, Y4 = views[:2]
@@ -295,8 +329,8 @@ class _LiftedCertificate:
         grad = (self._s_gradient(U4[x, :, x], Y4[y, :, y], tau)
                 + np.einsum("iab,kba->ik", Si, self.H).real.ravel())
         H = self._s_curvature(views, Si, tau)
-        if self.tensors:
-            grad, H = self._with_tensor_terms(grad, H, R, Ts, tau, views)
+        if len(theta) > self.n_s:
+            grad, H = self._with_extra_terms(grad, H, R, extra, tau, views)
         return grad, (H + H.T) / 2
 
     def _tensor_sandwiches(self, views, tau):
@@ -323,30 +357,121 @@ class _LiftedCertificate:
                                    ([1], [1])))
         return np.concatenate(Ud), np.concatenate(Yd)
 
-    def _with_tensor_terms(self, grad, H, R, Ts, tau, views):
-        """Gradient and curvature extended by the T_b unknowns (few: r_b^2 per scalar)."""
-        # dF = tau V^H dD_x V - N^H dD_y N for each basis matrix of every T_b
-        F = tau * self.tensor_forms[1] - self.tensor_forms[0]
+    def _cut_sandwiches(self, R, tau, n):
+        """Diagonal q x q blocks of V X_k V^H and N X_k N^H for X_k = R F_k R, each basis
+        matrix k of the first n cuts' Sigma.  F_k = tau P^H E_k P - Q^H E_k Q (P = W^H V_b,
+        Q = W^H N_b) has rank 2 k at most, so V X_k V^H = tau (V R P^H) E_k (P R V^H) -
+        (V R Q^H) E_k (Q R V^H): a few columns per cut instead of q^2 x q^2 products."""
+        q, p = self.q, self.p
+        Ud, Yd = [], []
+        for _, H, P, Q, _ in self.cuts[:n]:
+            k = len(P)
+            halves = []
+            for L in (self.V, self.N):
+                a = (L @ (R @ P.conj().T)).reshape(-1, q, k)     # (c, i, a)
+                b = (L @ (R @ Q.conj().T)).reshape(-1, q, k)
+                # sum_ab E[a, b] a[c, i, a] conj(a[c, j, b]) for each basis matrix E
+                halves.append(tau * np.einsum("cia,kab,cjb->kcij", a, H, a.conj(), optimize=True)
+                              - np.einsum("cia,kab,cjb->kcij", b, H, b.conj(), optimize=True))
+            Ud.append(halves[0])
+            Yd.append(halves[1].reshape(len(H), p, q, q))
+        return np.concatenate(Ud), np.concatenate(Yd)
+
+    def _with_extra_terms(self, grad, H, R, extra, tau, views):
+        """Gradient and curvature extended by the T_b and the cuts' unknowns (few: r_b^2 per
+        repeated scalar, k^2 per cut)."""
+        # dF = tau V^H dD_x V - N^H dD_y N for each basis matrix of every T_b and Sigma
+        n = sum(len(X) ** 2 for X in extra)
+        F = tau * self.extra_forms[1][:n] - self.extra_forms[0][:n]
         G = R @ F
-        n = len(F)
         g_t = np.einsum("kaa->k", G).real
         h_tt = (G.reshape(n, -1) @ np.swapaxes(G, 1, 2).reshape(n, -1).T).real
         k = 0
-        for (_, Hb), Tb in zip(self.tensors, Ts):
-            Ti = np.linalg.inv(Tb)
-            TH = Ti @ Hb
+        bases = [Hb for _, Hb in self.tensors] + [cut[1] for cut in self.cuts]
+        for Hb, X in zip(bases, extra):
+            XH = np.linalg.inv(X) @ Hb
             sl = slice(k, k + len(Hb))
-            g_t[sl] += np.einsum("kaa->k", TH).real
-            h_tt[sl, sl] += np.einsum("kab,lba->kl", TH, TH).real
+            g_t[sl] += np.einsum("kaa->k", XH).real
+            h_tt[sl, sl] += np.einsum("kab,lba->kl", XH, XH).real
             k += len(Hb)
         # tr(R dF_S R F_k): the S gradient with R replaced by R F_k R
-        h_st = self._s_gradient(*self._tensor_sandwiches(views, tau), tau).T
+        h_st = []
+        if self.tensors:
+            h_st.append(self._s_gradient(*self._tensor_sandwiches(views, tau), tau))
+        if len(extra) > len(self.tensors):
+            h_st.append(self._s_gradient(
+                *self._cut_sandwiches(R, tau, len(extra) - len(self.tensors)), tau))
+        h_st = np.concatenate(h_st).T
         return (np.concatenate([grad, g_t]),
                 np.block([[H, h_st], [h_st.T, h_tt]]))
 
+    def add_cuts(self, theta, tau, directions=CUT_DIRECTIONS):
+        """Add to every repeated scalar a weight W Sigma W^H that the current one lacks.
+
+        The full weight of a repeated scalar b is any Hermitian Shat >= 0 on its (r q) x (r q)
+        entries (row i of the block, any k): sum Shat (y_b (x) x)(y_b (x) x)^H - beta^2 (the
+        same with x_b) is >= 0 whenever x_b = delta y_b with |delta| <= 1/beta.  The library's
+        T_b (x) I and I (x) S_b are special cases; the whole Shat costs (r q)^2 unknowns.  At
+        a centre, R = F_tau^-1 estimates the relaxed tensor, and a direction w with
+        w^H (Y_b - tau U_b) w < 0 (Y = N R N^H, U = V R V^H on the block's entries) is one
+        along which adding to Shat relaxes F_tau: the ``directions`` most negative such
+        eigenvectors form W, and Sigma (k x k, k^2 unknowns) starts small.
+
+        Returns theta extended by the cuts' Sigma (theta itself if no block has such a
+        direction).  F_tau may lose its definiteness; a level above the new eigenvalue
+        restores it.
+        """
+        S, extra, A, B = self._all_forms(theta)
+        R = np.linalg.inv(tau * B - A)
+        q, m = self.q, self.V.shape[1]
+        V4, N4 = self.V.reshape(q, q, m), self.N.reshape(self.p, q, m)
+        eps = self._small_sigma(S)
+        identities = []
+        for b, _ in self.tensors:
+            xs, ys = self.slices[b]
+            Vb, Nb = V4[xs].reshape(-1, m), N4[ys].reshape(-1, m)
+            L = Nb @ R @ Nb.conj().T - tau * (Vb @ R @ Vb.conj().T)
+            w, v = np.linalg.eigh((L + L.conj().T) / 2)
+            W = v[:, :directions][:, w[:directions] < -1e-9 * np.abs(w).max()]
+            if W.shape[1]:
+                self._append_cut(b, W)
+                identities.append(_identity_coefficients(W.shape[1]))
+        return np.concatenate([theta] + [eps * t for t in identities])
+
+    def _small_sigma(self, S):
+        """The scale a new cut's Sigma starts at: 1e-3 of the mean diagonal entry of S_b."""
+        return 1e-3 * np.trace(S, axis1=1, axis2=2).real.mean() / self.q
+
+    def reuse_cuts(self, cuts, theta=None):
+        """Add cuts (block, W) found at another matrix (a neighbouring frequency: any W
+        gives a valid weight) and return theta, or the start if None, extended by a small
+        Sigma for each cut theta lacks."""
+        theta = self.start() if theta is None else theta
+        for b, W in cuts:
+            self._append_cut(b, W)
+        eps = self._small_sigma(self.multipliers(theta))
+        covered = len(self._extra_multipliers(theta)) - len(self.tensors)
+        tails = [eps * _identity_coefficients(W.shape[1]) for _, W in cuts[covered:]]
+        return np.concatenate([theta] + tails)
+
+    def _append_cut(self, b, W):
+        """Record a cut W Sigma W^H on repeated scalar b and the forms of its Sigma's basis
+        matrices."""
+        q, m = self.q, self.V.shape[1]
+        xs, ys = self.slices[b]
+        P = W.conj().T @ self.V.reshape(q, q, m)[xs].reshape(-1, m)
+        Q = W.conj().T @ self.N.reshape(self.p, q, m)[ys].reshape(-1, m)
+        H = _lift_constants(W.shape[1])[1]
+        self.cuts.append((b, H, P, Q, W))
+        fy = np.einsum("am,kab,bn->kmn", Q.conj(), H, Q, optimize=True)
+        fx = np.einsum("am,kab,bn->kmn", P.conj(), H, P, optimize=True)
+        self.extra_forms = (np.concatenate([self.extra_forms[0], fy]),
+                            np.concatenate([self.extra_forms[1], fx]))
+        self.trace = np.concatenate([self.trace, np.einsum("kaa->k", H).real])
+
     def positive(self, theta):
         """Whether every S_b and T_b theta holds is positive definite."""
-        return _log_det_sum([*self.multipliers(theta), *self.tensor_multipliers(theta)]) \
+        return _log_det_sum([*self.multipliers(theta), *self._extra_multipliers(theta)]) \
             is not None
 
     def extrapolate(self, previous, centre, lam, steps=(16, 8, 4, 2, 1)):
@@ -375,8 +500,9 @@ class _LiftedCertificate:
             except np.linalg.LinAlgError:
                 break
             # Newton step on the plane trace . step = 0
-            a, b = sla.cho_solve(factor, np.column_stack([grad, self.trace])).T
-            step = a - b * (self.trace @ a) / (self.trace @ b)
+            trace = self.trace[:len(theta)]
+            a, b = sla.cho_solve(factor, np.column_stack([grad, trace])).T
+            step = a - b * (trace @ a) / (trace @ b)
             decrement = grad @ step
             if not decrement > 0.1:             # an approximate centre is enough
                 break
@@ -392,24 +518,41 @@ class _LiftedCertificate:
         return theta
 
 
-def _refine_point(M, blocks, theta0, accept, target, max_centres):
-    """Method of centres on a D-balanced M, from the better of S_b = I and theta0, with an
-    extrapolation after each centre (:meth:`_LiftedCertificate.extrapolate`).
+def _identity_coefficients(k):
+    """Coefficients of I_k in the Hermitian basis of :func:`_hermitian_basis`."""
+    return np.r_[np.ones(k), np.zeros(k * k - k)]
 
-    Returns (certified bound, theta).  A start whose bound is <= accept is kept as it
-    is; otherwise the centres go on until the bound is <= target (< accept, so that
-    the next frequency's start has room).
+
+def _refine_point(M, blocks, start, accept, target, max_centres):
+    """Method of centres on a D-balanced M, with an extrapolation after each centre
+    (:meth:`_LiftedCertificate.extrapolate`) and, for repeated scalars, cuts of their full
+    weight (:meth:`_LiftedCertificate.add_cuts`) after :data:`CENTRES_BEFORE_CUT` centres
+    or at convergence, :data:`MAX_CUTS` rounds at most.
+
+    ``start`` is None or (theta, cuts) of a neighbouring point, cuts a list of (block, W):
+    the centres start from the better of it (its newest cuts, at most MAX_CUTS rounds'
+    worth) and S_b = I.  Returns (certified bound, theta, certificate); theta may hold
+    fewer cuts than the certificate has (those added after it).  A start whose bound is
+    <= accept is kept as it is; otherwise the centres go on until the bound is <= target
+    (< accept, so that the next frequency's start has room).
     """
     cert = _LiftedCertificate(M, blocks)
-    starts = [cert.start()] + ([theta0] if theta0 is not None else [])
+    starts = [cert.start()]
+    if start is not None:
+        theta0, cuts = start
+        drop = max(0, len(cuts) - MAX_CUTS * len(cert.tensors))
+        skip = sum(W.shape[1] ** 2 for _, W in cuts[:drop])
+        theta0 = np.r_[theta0[:cert.n_base], theta0[cert.n_base + skip:]]
+        starts = [cert.reuse_cuts(cuts[drop:]), cert.reuse_cuts([], theta0)]
     values = [cert.bound_squared(t) for t in starts]
     k = int(np.argmin(values))
     theta, lam = starts[k], values[k]
     best, best_theta = lam, theta
     if best <= accept ** 2:
-        return np.sqrt(best), best_theta
+        return np.sqrt(best), best_theta, cert
     tau = lam * 1.01
     last_centre = None
+    since_cut = rounds = 0
     for _ in range(max_centres):
         if best <= target ** 2:
             break
@@ -423,9 +566,19 @@ def _refine_point(M, blocks, theta0, accept, target, max_centres):
         last_centre = centre
         if lam < best:
             best, best_theta = lam, theta
+        since_cut += 1
+        if (best > target ** 2 and rounds < MAX_CUTS and cert.tensors
+                and (converged or since_cut >= CENTRES_BEFORE_CUT)):
+            rounds += 1
+            grown = cert.add_cuts(theta, tau)
+            if len(grown) > len(theta):
+                # a new, larger problem: restart the level a little above its eigenvalue
+                theta, lam = grown, cert.bound_squared(grown)
+                tau, last_centre, since_cut = lam * 1.01, None, 0
+                continue
         if converged:
             break
-    return np.sqrt(best), best_theta
+    return np.sqrt(best), best_theta, cert
 
 
 def lifted_upper_bound(M, blocks, upper, lower, Dl, Dr, gap, *, max_centres=60):
@@ -462,15 +615,18 @@ def lifted_upper_bound(M, blocks, upper, lower, Dl, Dr, gap, *, max_centres=60):
     refined point's multipliers where they certify a smaller bound than S_b = I.
     """
     upper = np.array(upper, float)
-    theta = None
+    start = None
     previous = -2
     wide = np.nonzero(upper - lower > gap * upper)[0]
     # on the D-balanced matrix (same mu) the certificate starts at the D-scaled bound
     # and its eigenproblem stays well conditioned however M is scaled
     for k, balanced in zip(wide, scaled_matrix(M[wide], Dl[wide], Dr[wide])):
-        bound, th = _refine_point(balanced, blocks, theta if previous == k - 1 else None,
-                                  lower[k] / (1 - gap), lower[k] / (1 - 0.9 * gap), max_centres)
+        bound, th, cert = _refine_point(balanced, blocks, start if previous == k - 1 else None,
+                                        lower[k] / (1 - gap), lower[k] / (1 - 0.9 * gap),
+                                        max_centres)
         if bound < upper[k]:
             upper[k] = bound
-        theta, previous = th, k
+        # the next frequency may reuse this one's multipliers and the cuts they weigh
+        used = len(cert.cut_multipliers(th))
+        start, previous = (th, [(cut[0], cut[4]) for cut in cert.cuts[:used]]), k
     return upper

@@ -6,6 +6,7 @@ import scipy.linalg as sla
 from hypothesis import given, settings, strategies as st
 
 from piezolib.robust.blocks import parse_blk
+from piezolib.robust import mu_lifted
 from piezolib.robust.mu import mussv
 from piezolib.robust.mu_lifted import (MAX_LIFTED_UNKNOWNS, _LiftedCertificate, _refine_point,
                                       lifted_unknowns)
@@ -43,14 +44,11 @@ def balanced(M, res):
 
 def converged_certificate(M, blk, res):
     """(balanced M, bound, multipliers) of the certificate centred to convergence; the
-    multipliers are (S, T): S_b for every block, T_b by block index for repeated scalars."""
+    multipliers are (S, W): S_b for every block, and by block index each repeated scalar's
+    whole (r q) x (r q) weight (its T_b (x) I and its cuts)."""
     Mb = balanced(M, res)
-    blocks = parse_blk(blk, *M.shape)
-    bound, theta = _refine_point(Mb, blocks, None, 0.0, 0.0, 60)
-    cert = _LiftedCertificate(Mb, blocks)
-    repeated = [k for k, b in enumerate(blocks) if b.repeated]
-    return Mb, bound, (cert.multipliers(theta), dict(zip(repeated,
-                                                           cert.tensor_multipliers(theta))))
+    bound, theta, cert = _refine_point(Mb, parse_blk(blk, *M.shape), None, 0.0, 0.0, 60)
+    return Mb, bound, (cert.multipliers(theta), cert.repeated_weights(theta))
 
 
 def parallel_symmetric_tensors(M, blk):
@@ -77,30 +75,32 @@ def parallel_symmetric_tensors(M, blk):
 
 
 def certificate_holds(M, blk, multipliers, beta):
-    """Check mu(M) < beta from multipliers (S, T), built here from the definition.
+    """Check mu(M) < beta from multipliers (S, W), built here from the definition.
 
     For every x with parallel repeated-scalar parts: sum_b (||y_b||^2 - beta^2 ||x_b||^2)
-    x^H S_b x + sum_b (y_b^H T_b y_b - beta^2 x_b^H T_b x_b) ||x||^2 < 0 (y = M x; T_b for
-    the blocks T names); on z = x (x) x the form is z^H (K^H D_y K - beta^2 D_x) z with
-    K = M (x) I, D_x = blockdiag(S_b(a)) over the entries a of x (index a q + k) plus
-    T_x (x) I, T_x holding each T_b on its block's entries of x, and D_y likewise over the
-    entries of y; it must be negative on all those tensors.
+    x^H S_b x + sum_b [(y_b (x) x)^H W_b (y_b (x) x) - beta^2 (x_b (x) x)^H W_b (x_b (x) x)]
+    < 0 (y = M x; W_b for the blocks W names, each >= 0 on its (r q) x (r q) entries); on
+    z = x (x) x the form is z^H (K^H D_y K - beta^2 D_x) z with K = M (x) I,
+    D_x = blockdiag(S_b(a)) over the entries a of x (index a q + k) plus each W_b on its
+    block's entries of x, and D_y likewise over the entries of y; it must be negative on
+    all those tensors.
     """
-    S, T = multipliers
+    S, W = multipliers
     p, q = M.shape
     bx = [b for b, (r, c) in enumerate(blk) for _ in range(abs(r))]
     by = [b for b, (r, c) in enumerate(blk) for _ in range(c if c else abs(r))]
-    Tx, Ty = np.zeros((q, q), complex), np.zeros((p, p), complex)
-    for b, Tb in T.items():
-        rows, cols = np.flatnonzero(np.equal(bx, b)), np.flatnonzero(np.equal(by, b))
-        Tx[np.ix_(rows, rows)] = Tb
-        Ty[np.ix_(cols, cols)] = Tb
-    Dx = sla.block_diag(*[S[b] for b in bx]) + np.kron(Tx, np.eye(q))
-    Dy = sla.block_diag(*[S[b] for b in by]) + np.kron(Ty, np.eye(q))
+    Dx = sla.block_diag(*[S[b] for b in bx]).astype(complex)
+    Dy = sla.block_diag(*[S[b] for b in by]).astype(complex)
+    for b, Wb in W.items():
+        for D, owner in ((Dx, bx), (Dy, by)):
+            rows = np.flatnonzero(np.equal(owner, b))
+            entries = (rows[:, None] * q + np.arange(q)).ravel()
+            D[np.ix_(entries, entries)] += Wb
     K = np.kron(M, np.eye(q))
     form = K.conj().T @ Dy @ K - beta ** 2 * Dx
     Z = parallel_symmetric_tensors(M, blk)
-    psd = all(np.linalg.eigvalsh(s).min() > 0 for s in [*S, *T.values()])
+    psd = all(np.linalg.eigvalsh(s).min() > 0 for s in S) and \
+        all(np.linalg.eigvalsh(w).min() >= 0 for w in W.values())
     return psd and np.linalg.eigvalsh(Z.conj().T @ form @ Z).max() < 0
 
 
@@ -162,14 +162,24 @@ def test_identity_multipliers_start_at_or_below_the_d_scaled_bound(blk, exact):
         assert start == pytest.approx(res.upper[0], rel=1e-9)
 
 
-@pytest.mark.parametrize("blk", [[(1, 1)] * 3, [(2, 0), (1, 2), (1, 1)]])
-def test_barrier_derivatives_match_finite_differences(blk):
+@pytest.mark.parametrize("blk, cut", [([(1, 1)] * 3, False), ([(2, 0), (1, 2), (1, 1)], False),
+                                      ([(2, 0), (1, 2), (1, 1)], True), (MIXED, True)])
+def test_barrier_derivatives_match_finite_differences(blk, cut):
     g = np.random.default_rng(1)
     p, q = blk_dims(blk)
     M = g.standard_normal((p, q)) + 1j * g.standard_normal((p, q))
     cert = _LiftedCertificate(M, parse_blk(blk, p, q))
     start = cert.start()
-    theta = start + 0.1 * start.max() * g.standard_normal(start.size)
+    # 10 % of each diagonal entry (the small T_b's too), 1 % of the largest off the diagonal
+    theta = start + 0.1 * g.standard_normal(start.size) * np.where(start > 0, start,
+                                                                   start.max() / 10)
+    if cut:
+        theta = cert.add_cuts(theta, 1.2 * cert.bound_squared(theta))
+        assert cert.cuts and len(cert.cut_multipliers(theta)) == len(cert.cuts)
+        # Sigma well inside its cone, with off-diagonal entries
+        tail = theta[start.size:]
+        theta[start.size:] = 0.05 * start.max() * (tail / tail.max()
+                                                   + 0.1 * g.standard_normal(tail.size))
     tau = 1.2 * cert.bound_squared(theta)
     grad, curvature = cert.newton_step(theta, tau)
     hess = -curvature
@@ -198,8 +208,23 @@ def test_extrapolating_beyond_two_centres_lowers_a_certified_bound(seed):
     assert cert.positive(theta)
     assert value == cert.bound_squared(theta)
     assert value < 0.995 * lam              # on these cases the long step pays
-    mult = (cert.multipliers(theta), dict(zip([0, 2], cert.tensor_multipliers(theta))))
+    mult = (cert.multipliers(theta), cert.repeated_weights(theta))
     assert certificate_holds(Mb, MIXED, mult, np.sqrt(value) * (1 + 1e-9))
+
+
+def test_cuts_of_the_full_repeated_scalar_weight_close_a_gap_the_relaxation_leaves(
+        monkeypatch):
+    M = mixed_matrix(52)
+    plain = mussv(M, MIXED)
+    Mb = balanced(M, plain)
+    monkeypatch.setattr(mu_lifted, "MAX_CUTS", 0)
+    without = _refine_point(Mb, parse_blk(MIXED, 7, 6), None, 0.0, 0.0, 60)[0]
+    monkeypatch.undo()
+    assert without > 1.002 * plain.lower[0]      # S_b and T_b alone stop 0.22 % above
+    _, bound, mult = converged_certificate(M, MIXED, plain)
+    assert plain.lower[0] <= bound <= plain.lower[0] * (1 + 1e-6)
+    assert certificate_holds(Mb, MIXED, mult, bound * (1 + 1e-9))
+    assert not certificate_holds(Mb, MIXED, mult, bound * (1 - 1e-4))
 
 
 def random_structured_delta(g, blk, count):
