@@ -276,7 +276,10 @@ class _LiftedCertificate:
         lead = Ud.shape[:-3]
         G = np.stack([tau * Ud[..., xs, :, :].sum(-3) - Yd[..., ys, :, :].sum(-3)
                       for xs, ys in self.slices], axis=-3)
-        return np.einsum("...iab,kba->...ik", G, self.H).real.reshape(lead + (-1,))
+        # tr(G E_k) = sum_ab E_k[a, b] G[b, a]: two gathers from G^T (:func:`_basis_gather`)
+        i1, i2, c1, c2 = self.gather
+        Gt = np.swapaxes(G, -1, -2).reshape(G.shape[:-2] + (-1,))
+        return (c1 * Gt[..., i1] + c2 * Gt[..., i2]).real.reshape(lead + (-1,))
 
     def _to_basis(self, E):
         """Re(T E T^T) for the map T from entries to basis coefficients (real (q^2, q^2))."""
@@ -380,14 +383,21 @@ class _LiftedCertificate:
     def _with_extra_terms(self, grad, H, R, extra, tau, views):
         """Gradient and curvature extended by the T_b and the cuts' unknowns (few: r_b^2 per
         repeated scalar, k^2 per cut)."""
-        # dF = tau V^H dD_x V - N^H dD_y N for each basis matrix of every T_b and Sigma
-        n = sum(len(X) ** 2 for X in extra)
-        F = tau * self.extra_forms[1][:n] - self.extra_forms[0][:n]
+        # dF = tau V^H dD_x V - N^H dD_y N for each basis matrix of every T_b
+        n_t = sum(len(Hb) for _, Hb in self.tensors)
+        F = tau * self.extra_forms[1][:n_t] - self.extra_forms[0][:n_t]
         G = R @ F
-        g_t = np.einsum("kaa->k", G).real
-        h_tt = (G.reshape(n, -1) @ np.swapaxes(G, 1, 2).reshape(n, -1).T).real
+        g_t = [np.einsum("kaa->k", G).real]
+        h_tt = (G.reshape(n_t, -1) @ np.swapaxes(G, 1, 2).reshape(n_t, -1).T).real
+        cuts = self.cuts[:len(extra) - len(self.tensors)]
+        if cuts:
+            g_c, h_tc, h_cc = self._cut_terms(cuts, R, G, tau)
+            g_t.append(g_c)
+            h_tt = np.block([[h_tt, h_tc], [h_tc.T, h_cc]])
+        g_t = np.concatenate(g_t)
+        # log det of each T_b and Sigma
         k = 0
-        bases = [Hb for _, Hb in self.tensors] + [cut[1] for cut in self.cuts]
+        bases = [Hb for _, Hb in self.tensors] + [cut[1] for cut in cuts]
         for Hb, X in zip(bases, extra):
             XH = np.linalg.inv(X) @ Hb
             sl = slice(k, k + len(Hb))
@@ -398,12 +408,42 @@ class _LiftedCertificate:
         h_st = []
         if self.tensors:
             h_st.append(self._s_gradient(*self._tensor_sandwiches(views, tau), tau))
-        if len(extra) > len(self.tensors):
-            h_st.append(self._s_gradient(
-                *self._cut_sandwiches(R, tau, len(extra) - len(self.tensors)), tau))
+        if cuts:
+            h_st.append(self._s_gradient(*self._cut_sandwiches(R, tau, len(cuts)), tau))
         h_st = np.concatenate(h_st).T
         return (np.concatenate([grad, g_t]),
                 np.block([[H, h_st], [h_st.T, h_tt]]))
+
+    def _cut_terms(self, cuts, R, G, tau):
+        """tr(R F_a), tr(R F_T R F_a) and tr(R F_a R F_b) for the cuts' basis matrices a, b
+        (F_a = tau P^H E_a P - Q^H E_a Q) and the T_b's (G = R F_T), from the small
+        matrices X R X^H and X R F_T R X^H, X stacking every cut's P and Q."""
+        X = np.concatenate([np.concatenate([P, Q]) for _, _, P, Q, _ in cuts])
+        RX = R @ X.conj().T
+        Z = X @ RX
+        ZT = (X @ G) @ RX
+        rows, k0 = [], 0
+        for _, H, P, _, _ in cuts:
+            k = len(P)
+            rows.append((H, ((slice(k0, k0 + k), tau), (slice(k0 + k, k0 + 2 * k), -1.0))))
+            k0 += 2 * k
+
+        def traces(Y, H, parts):
+            # tau tr(E Y[P, P]) - tr(E Y[Q, Q]) for each basis matrix E
+            return sum(w * np.einsum("kab,...ba->...k", H, Y[..., sl, sl]) for sl, w in parts)
+
+        g = np.concatenate([traces(Z, H, parts).real for H, parts in rows])
+        h_tc = np.concatenate([traces(ZT, H, parts).real for H, parts in rows], axis=-1)
+
+        def pair(Ha, Y1, Hb, Y2):
+            # tr(E_a Y1 E_b Y2) for every pair of basis matrices
+            A, B = Ha @ Y1, Hb @ Y2
+            return A.reshape(len(Ha), -1) @ np.swapaxes(B, 1, 2).reshape(len(Hb), -1).T
+
+        h_cc = np.block([[sum(wa * wb * pair(Ha, Z[sa, sb], Hb, Z[sb, sa])
+                              for sa, wa in pa for sb, wb in pb).real
+                          for Hb, pb in rows] for Ha, pa in rows])
+        return g, h_tc, h_cc
 
     def add_cuts(self, theta, tau, directions=CUT_DIRECTIONS):
         """Add to every repeated scalar a weight W Sigma W^H that the current one lacks.
