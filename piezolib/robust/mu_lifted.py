@@ -570,20 +570,28 @@ def _refine_point(M, blocks, start, accept, target, max_centres):
     or at convergence, :data:`MAX_CUTS` rounds at most.
 
     ``start`` is None or (theta, cuts) of a neighbouring point, cuts a list of (block, W):
-    the centres start from the better of it (its newest cuts, at most MAX_CUTS rounds'
-    worth) and S_b = I.  Returns (certified bound, theta, certificate); theta may hold
+    with its newest cuts (at most MAX_CUTS rounds' worth) it is kept if its bound is <=
+    accept; otherwise the centres start, without those cuts, from the better of its S_b
+    and T_b and S_b = I.  Returns (certified bound, theta, certificate); theta may hold
     fewer cuts than the certificate has (those added after it).  A start whose bound is
     <= accept is kept as it is; otherwise the centres go on until the bound is <= target
     (< accept, so that the next frequency's start has room).
     """
     cert = _LiftedCertificate(M, blocks)
-    starts = [cert.start()]
-    if start is not None:
+    if start is not None and start[1]:
+        # the neighbour's multipliers with its cuts, kept if they are good enough here
         theta0, cuts = start
         drop = max(0, len(cuts) - MAX_CUTS * len(cert.tensors))
         skip = sum(W.shape[1] ** 2 for _, W in cuts[:drop])
         theta0 = np.r_[theta0[:cert.n_base], theta0[cert.n_base + skip:]]
-        starts = [cert.reuse_cuts(cuts[drop:]), cert.reuse_cuts([], theta0)]
+        theta0 = cert.reuse_cuts(cuts[drop:], theta0)
+        value = cert.bound_squared(theta0)
+        if value <= accept ** 2:
+            return np.sqrt(value), theta0, cert
+        # otherwise centre without them: stale cuts slow the centres down several-fold
+        cert = _LiftedCertificate(M, blocks)
+        start = (theta0[:cert.n_base], [])
+    starts = [cert.start()] + ([start[0]] if start is not None else [])
     values = [cert.bound_squared(t) for t in starts]
     k = int(np.argmin(values))
     theta, lam = starts[k], values[k]
