@@ -214,10 +214,6 @@ class _LiftedCertificate:
         """S_b, shape (nb, q, q)."""
         return np.einsum("ik,kab->iab", theta[:self.n_s].reshape(self.nb, -1), self.H)
 
-    def tensor_multipliers(self, theta):
-        """T_b (r_b x r_b) of the repeated scalars, in the order of the structure."""
-        return self._extra_multipliers(theta)[:len(self.tensors)]
-
     def cut_multipliers(self, theta):
         """Sigma (k x k) of each cut theta holds coefficients for, in the order of the cuts."""
         return self._extra_multipliers(theta)[len(self.tensors):]
@@ -384,7 +380,7 @@ class _LiftedCertificate:
         """Gradient and curvature extended by the T_b and the cuts' unknowns (few: r_b^2 per
         repeated scalar, k^2 per cut)."""
         # dF = tau V^H dD_x V - N^H dD_y N for each basis matrix of every T_b
-        n_t = sum(len(Hb) for _, Hb in self.tensors)
+        n_t = self.n_base - self.n_s
         F = tau * self.extra_forms[1][:n_t] - self.extra_forms[0][:n_t]
         G = R @ F
         g_t = [np.einsum("kaa->k", G).real]
@@ -465,7 +461,7 @@ class _LiftedCertificate:
         R = np.linalg.inv(tau * B - A)
         q, m = self.q, self.V.shape[1]
         V4, N4 = self.V.reshape(q, q, m), self.N.reshape(self.p, q, m)
-        eps = self._small_sigma(S)
+        eps = 1e-3 * np.trace(S, axis1=1, axis2=2).real.mean() / q   # Sigma's start, eps I
         identities = []
         for b, _ in self.tensors:
             xs, ys = self.slices[b]
@@ -477,22 +473,6 @@ class _LiftedCertificate:
                 self._append_cut(b, W)
                 identities.append(_identity_coefficients(W.shape[1]))
         return np.concatenate([theta] + [eps * t for t in identities])
-
-    def _small_sigma(self, S):
-        """The scale a new cut's Sigma starts at: 1e-3 of the mean diagonal entry of S_b."""
-        return 1e-3 * np.trace(S, axis1=1, axis2=2).real.mean() / self.q
-
-    def reuse_cuts(self, cuts, theta=None):
-        """Add cuts (block, W) found at another matrix (a neighbouring frequency: any W
-        gives a valid weight) and return theta, or the start if None, extended by a small
-        Sigma for each cut theta lacks."""
-        theta = self.start() if theta is None else theta
-        for b, W in cuts:
-            self._append_cut(b, W)
-        eps = self._small_sigma(self.multipliers(theta))
-        covered = len(self._extra_multipliers(theta)) - len(self.tensors)
-        tails = [eps * _identity_coefficients(W.shape[1]) for _, W in cuts[covered:]]
-        return np.concatenate([theta] + tails)
 
     def _append_cut(self, b, W):
         """Record a cut W Sigma W^H on repeated scalar b and the forms of its Sigma's basis
@@ -584,7 +564,8 @@ def _refine_point(M, blocks, start, accept, target, max_centres):
         drop = max(0, len(cuts) - MAX_CUTS * len(cert.tensors))
         skip = sum(W.shape[1] ** 2 for _, W in cuts[:drop])
         theta0 = np.r_[theta0[:cert.n_base], theta0[cert.n_base + skip:]]
-        theta0 = cert.reuse_cuts(cuts[drop:], theta0)
+        for b, W in cuts[drop:]:            # any W gives a valid weight at this matrix too
+            cert._append_cut(b, W)
         value = cert.bound_squared(theta0)
         if value <= accept ** 2:
             return np.sqrt(value), theta0, cert
