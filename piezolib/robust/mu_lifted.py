@@ -58,9 +58,11 @@ __all__ = ["lifted_upper_bound", "lifted_unknowns", "MAX_LIFTED_UNKNOWNS"]
 MAX_LIFTED_UNKNOWNS = 3000
 
 #: cuts of the full repeated-scalar weight (see :meth:`_LiftedCertificate.add_cuts`): the
-#: directions per repeated scalar and cut, the centres before the first cut, and the cuts per
+#: directions per repeated scalar and cut, the centres before a cut, and the rounds of cuts per
 #: point (each round adds at most CUT_DIRECTIONS^2 unknowns per repeated scalar)
-CUT_DIRECTIONS, CENTRES_BEFORE_CUT, MAX_CUTS = 4, 12, 2
+CUT_DIRECTIONS, CENTRES_BEFORE_CUT, MAX_CUTS = 4, 12, 4
+#: a point also cuts once a centre closes less than this fraction of its distance to target
+STALL = 0.02
 
 
 def lifted_unknowns(blocks):
@@ -546,8 +548,9 @@ def _identity_coefficients(k):
 def _refine_point(M, blocks, start, accept, target, max_centres):
     """Method of centres on a D-balanced M, with an extrapolation after each centre
     (:meth:`_LiftedCertificate.extrapolate`) and, for repeated scalars, cuts of their full
-    weight (:meth:`_LiftedCertificate.add_cuts`) after :data:`CENTRES_BEFORE_CUT` centres
-    or at convergence, :data:`MAX_CUTS` rounds at most.
+    weight (:meth:`_LiftedCertificate.add_cuts`) after :data:`CENTRES_BEFORE_CUT` centres,
+    when a centre closes less than :data:`STALL` of the distance still to the target, or at
+    convergence, :data:`MAX_CUTS` rounds at most.
 
     ``start`` is None or (theta, cuts) of a neighbouring point, cuts a list of (block, W):
     with its newest cuts (at most MAX_CUTS rounds' worth) it is kept if its bound is <=
@@ -580,7 +583,7 @@ def _refine_point(M, blocks, start, accept, target, max_centres):
     if best <= accept ** 2:
         return np.sqrt(best), best_theta, cert
     tau = lam * 1.01
-    last_centre = None
+    last_centre = last_lam = None
     since_cut = rounds = 0
     for _ in range(max_centres):
         if best <= target ** 2:
@@ -592,18 +595,20 @@ def _refine_point(M, blocks, start, accept, target, max_centres):
         if last_centre is not None and not converged:
             theta, beyond = cert.extrapolate(last_centre, centre, lam)
             tau, lam = tau + beyond - lam, beyond   # the same margin above the new eigenvalue
-        last_centre = centre
+        # stalled: the last centre closed little of the distance still to go
+        stalled = last_lam is not None and last_lam - lam < STALL * (lam - target ** 2)
+        last_centre, last_lam = centre, lam
         if lam < best:
             best, best_theta = lam, theta
         since_cut += 1
         if (best > target ** 2 and rounds < MAX_CUTS and cert.tensors
-                and (converged or since_cut >= CENTRES_BEFORE_CUT)):
+                and (converged or stalled or since_cut >= CENTRES_BEFORE_CUT)):
             rounds += 1
             grown = cert.add_cuts(theta, tau)
             if len(grown) > len(theta):
                 # a new, larger problem: restart the level a little above its eigenvalue
                 theta, lam = grown, cert.bound_squared(grown)
-                tau, last_centre, since_cut = lam * 1.01, None, 0
+                tau, last_centre, last_lam, since_cut = lam * 1.01, None, None, 0
                 continue
         if converged:
             break

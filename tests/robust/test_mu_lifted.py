@@ -1,5 +1,7 @@
 """The symmetric-lift upper bound of mu for complex structures (mussv(..., refine=...))."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import scipy.linalg as sla
@@ -225,6 +227,21 @@ def test_cuts_of_the_full_repeated_scalar_weight_close_a_gap_the_relaxation_leav
     assert plain.lower[0] <= bound <= plain.lower[0] * (1 + 1e-6)
     assert certificate_holds(Mb, MIXED, mult, bound * (1 + 1e-9))
     assert not certificate_holds(Mb, MIXED, mult, bound * (1 - 1e-4))
+
+
+def test_a_point_whose_centres_stall_gets_more_rounds_of_cuts():
+    # a D-balanced 15 x 15 matrix of the benchmark's seed-1 ``complex <= 8`` case 13 (five
+    # repeated scalars, two scalars) and the lower bound mussv found there along frequency;
+    # with two rounds of cuts, each after 12 centres, the certificate converged 1.41 % above
+    data = np.load(Path(__file__).parent / "data" / "stalled_cuts_point.npz")
+    Mb, lower = data["M"], float(data["lower"])
+    blk = [(3, 0), (3, 0), (2, 0), (3, 0), (2, 0), (1, 1), (1, 1)]
+    bound, theta, cert = _refine_point(Mb, parse_blk(blk, 15, 15), None, lower / 0.99,
+                                       lower / 0.991, 60)
+    assert lower <= bound <= lower / 0.99
+    mult = (cert.multipliers(theta), cert.repeated_weights(theta))
+    assert certificate_holds(Mb, blk, mult, bound * (1 + 1e-9))
+    assert not certificate_holds(Mb, blk, mult, bound * (1 - 1e-3))
 
 
 def random_structured_delta(g, blk, count):
