@@ -204,7 +204,8 @@ def mussv(M, blk, omega=None, *, lower=True, restarts=3, iterations=60, tol=1e-1
         one to two minutes for seven or eight blocks on q = 15-19 (four repeated scalars
         and a 3 x 3 block on q = 15, 548 refined frequencies: about two minutes, with cuts
         of the repeated scalars' full weight at the 20 points where S_b and T_b alone stop
-        up to 1.34 % above the lower bound).
+        up to 1.34 % above the lower bound; five repeated scalars and two scalars on
+        q = 15, 682 refined frequencies: about ten minutes).
         Default None (the D-scaled bound only).
 
     Returns
