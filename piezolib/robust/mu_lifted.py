@@ -202,14 +202,11 @@ class _LiftedCertificate:
         weighs its constraint as S_b = t I does), which leaves the bound as it is.
         """
         q, nb = self.q, self.nb
-        theta = np.zeros((nb, q * q))
-        theta[:, :q] = 1.0 / (nb * q)
+        theta = np.tile(_identity_coefficients(q), (nb, 1)) / (nb * q)
         parts = [theta]
         for b, H in self.tensors:
-            theta[b, :q] *= 0.9
-            t = np.zeros(len(H))
-            t[:H.shape[1]] = 0.1 / (nb * q)
-            parts.append(t)
+            theta[b] *= 0.9
+            parts.append(_identity_coefficients(H.shape[1]) * 0.1 / (nb * q))
         return np.concatenate([p.ravel() for p in parts])
 
     def multipliers(self, theta):
@@ -492,7 +489,7 @@ class _LiftedCertificate:
         self.trace = np.concatenate([self.trace, np.einsum("kaa->k", H).real])
 
     def positive(self, theta):
-        """Whether every S_b and T_b theta holds is positive definite."""
+        """Whether every S_b, T_b and cut's Sigma theta holds is positive definite."""
         return _log_det_sum([*self.multipliers(theta), *self._extra_multipliers(theta)]) \
             is not None
 
@@ -552,10 +549,10 @@ def _refine_point(M, blocks, start, accept, target, max_centres):
     when a centre closes less than :data:`STALL` of the distance still to the target, or at
     convergence, :data:`MAX_CUTS` rounds at most.
 
-    ``start`` is None or (theta, cuts) of a neighbouring point, cuts a list of (block, W):
-    with its newest cuts (at most MAX_CUTS rounds' worth) it is kept if its bound is <=
-    accept; otherwise the centres start, without those cuts, from the better of its S_b
-    and T_b and S_b = I.  Returns (certified bound, theta, certificate); theta may hold
+    ``start`` is None or (theta, cuts) of a neighbouring point, cuts a list of (block, W)
+    that theta weighs: with those cuts it is kept if its bound is <= accept; otherwise the
+    centres start, without those cuts, from the better of its S_b and T_b and S_b = I.
+    Returns (certified bound, theta, certificate); theta may hold
     fewer cuts than the certificate has (those added after it).  A start whose bound is
     <= accept is kept as it is; otherwise the centres go on until the bound is <= target
     (< accept, so that the next frequency's start has room).
@@ -564,10 +561,7 @@ def _refine_point(M, blocks, start, accept, target, max_centres):
     if start is not None and start[1]:
         # the neighbour's multipliers with its cuts, kept if they are good enough here
         theta0, cuts = start
-        drop = max(0, len(cuts) - MAX_CUTS * len(cert.tensors))
-        skip = sum(W.shape[1] ** 2 for _, W in cuts[:drop])
-        theta0 = np.r_[theta0[:cert.n_base], theta0[cert.n_base + skip:]]
-        for b, W in cuts[drop:]:            # any W gives a valid weight at this matrix too
+        for b, W in cuts:                   # any W gives a valid weight at this matrix too
             cert._append_cut(b, W)
         value = cert.bound_squared(theta0)
         if value <= accept ** 2:
