@@ -30,6 +30,8 @@ _OSBORNE_REG = 2 * np.log(1e-30)  # log of the relative floor on block norms (ra
 # balanced matrix: the triangular parametrisation travels slowly towards far, rotated optima
 _SKEWED_SCALE = 30.0
 _RECENTRE_ROUNDS = 3
+# eigenvalue ratios mu with mu^(m-1) below this drop out of the diagonal Newton model
+_NEGLIGIBLE_WEIGHT = 1e-16
 
 
 
@@ -358,13 +360,29 @@ def _absolute_hessian(H, free, rows=None):
     Hf = H[:, idx[:, None], idx[None, :]]
     Hf = 0.5 * (Hf + np.swapaxes(Hf, 1, 2))
     rows = np.ones(len(H), bool) if rows is None else rows
-    if np.any(rows):
+    if np.any(rows) and not _above_floor(Hf[rows]):
         lam, Q = np.linalg.eigh(Hf[rows])
         floor = 1e-9 * np.maximum(np.abs(lam).max(1, keepdims=True), 1.0)
         Hf[rows] = (Q * np.maximum(np.abs(lam), floor)[:, None, :]) @ np.swapaxes(Q, 1, 2)
     out = np.zeros_like(H)
     out[:, idx[:, None], idx[None, :]] = Hf
     return out
+
+
+def _above_floor(H):
+    """Whether every matrix of the stack H has its eigenvalues above _absolute_hessian's floor.
+
+    By a Cholesky factorisation of H - 1e-9 max(|H|_F, 1) I (cheaper than the
+    eigenvalues; the Frobenius norm bounds the largest |lambda|): where it
+    succeeds, the floored |lambda| would return H unchanged.  The diagonal
+    scalings' convex surrogate mostly passes.
+    """
+    shift = 1e-9 * np.maximum(np.linalg.norm(H, axis=(1, 2)), 1.0)
+    try:
+        np.linalg.cholesky(H - shift[:, None, None] * np.eye(H.shape[1]))
+    except np.linalg.LinAlgError:
+        return False
+    return True
 
 
 def _newton_direction(H, g, free, max_step=None, positive=False):
@@ -385,13 +403,14 @@ def _newton_direction(H, g, free, max_step=None, positive=False):
     return step, decrement
 
 
-def _power_divided_differences(mu, m):
-    """(mu_k^m - mu_l^m) / (mu_k - mu_l) for mu in [0, 1], m * mu^(m-1) on the diagonal.
+def _power_divided_differences(mu, m, rows):
+    """(mu_k^m - mu_l^m) / (mu_k - mu_l) for mu in [0, 1], m * mu^(m-1) where they are equal.
 
-    Written as hi^(m-1) (1 - rho^m) / (1 - rho), rho = lo / hi, with expm1 and
-    log1p so that nearly equal eigenvalues do not cancel.
+    For the first ``rows`` k and every l: shape (N, rows, len(mu)).  Written as
+    hi^(m-1) (1 - rho^m) / (1 - rho), rho = lo / hi, with expm1 and log1p so
+    that nearly equal eigenvalues do not cancel.
     """
-    a, b = mu[:, :, None], mu[:, None, :]
+    a, b = mu[:, :rows, None], mu[:, None, :]
     hi, lo = np.maximum(a, b), np.minimum(a, b)
     if m == 0:
         return np.zeros(hi.shape)
@@ -403,21 +422,33 @@ def _power_divided_differences(mu, m):
     return dd
 
 
-def _block_gram(X, index_map, n):
-    """X_j^H X_j over the rows of X (N, r, k) in block j, for j = 1 ... n: (N, n, k, k).
+def _leading_count(mu, m):
+    """How many of the descending eigenvalue ratios mu the Newton model keeps.
 
-    ``index_map`` gives each row of X its block's number (0: no block).
+    Every term of the surrogate's gradient and Hessian carries a weight mu_k^m
+    or a divided difference below m max(mu_k, mu_l)^(m-1); past the first
+    eigenvalues with m mu^(m-1) > 1e-16 m they are negligible (at large t
+    only the one to three eigenvalues near the top remain).
     """
-    N, _, k = X.shape
-    out = np.empty((N, n, k, k), complex)
-    for j in range(n):
-        Xj = X[:, index_map == j + 1]
-        out[:, j] = np.swapaxes(Xj, 1, 2).conj() @ Xj
-    return out
+    if m < 1:
+        return mu.shape[1]
+    keep = mu ** (m - 1) > _NEGLIGIBLE_WEIGHT
+    return max(1, int(keep.sum(1).max()))
+
+
+def _block_rows(X, indicator, r):
+    """Rows 1 ... r of X_j^H X_j over the rows of X (N, p, k) in block j: (N, n, r, k).
+
+    ``indicator`` (n, p) is 1 where row a of X belongs to block j.
+    """
+    N, p, k = X.shape
+    T = X[:, :, :r].conj()[:, :, :, None] * X[:, :, None, :]
+    T = np.ascontiguousarray(T).view(float).reshape(N, p, -1)
+    return (indicator @ T).view(complex).reshape(N, len(indicator), r, k)
 
 
 def _real_pairing(X, Y):
-    """Re sum_kl X_i,kl conj(Y_j,kl) for stacks X, Y of shape (N, n, k, k): (N, n, n).
+    """Re sum_kl X_i,kl conj(Y_j,kl) for stacks X, Y of shape (N, n, r, k): (N, n, n).
 
     As a real matrix product over the interleaved real and imaginary parts
     (Re(x conj y) = Re x Re y + Im x Im y), with no conjugated copies.
@@ -437,7 +468,10 @@ def _diagonal_newton_model(M, theta, scaling, t):
     input indicators); the Hessian of the spectral function Phi follows from
     first-order eigenvalue perturbation plus the divided differences of its
     derivative (the Daleckii-Krein formula).  One eigen-decomposition per
-    matrix instead of 2n + 1 gradients for a Hessian by differences.
+    matrix instead of 2n + 1 gradients for a Hessian by differences.  In G's
+    eigenbasis only the rows of the leading eigenvalues carry weight
+    (:func:`_leading_count`); the pairings run over those rows alone, with the
+    mirrored entries (k leading, l not) counted twice.
 
     Returns F (N,), gradient (N, n), Hessian (N, n, n), sigma_max (N,).
     """
@@ -450,19 +484,23 @@ def _diagonal_newton_model(M, theta, scaling, t):
     lam, V = np.maximum(lam[:, ::-1], 0.0), V[:, :, ::-1]
     lam1 = np.maximum(lam[:, :1], np.finfo(float).tiny)
     mu = lam / lam1
-    W = (A @ V) / np.sqrt(lam1)[:, :, None]
-    # P_j = W_j^H W_j and Q_j = V_j^H V_j over block j's rows (outputs of W, inputs of V)
-    P = _block_gram(W, scaling.out_map, n)
-    Q = _block_gram(V, scaling.in_map, n)
-    dG = 2 * P - Q * mu[:, None, None, :] - mu[:, None, :, None] * Q
     m = t / 2 - 1
-    pw = mu ** m                                   # f'(lambda) = (t/2) mu^m / lambda_1
+    r = _leading_count(mu, m)
+    W = (A @ V) / np.sqrt(lam1)[:, :, None]
+    blocks = np.arange(1, n + 1)[:, None]
+    # rows 1 ... r of P_j = W_j^H W_j and Q_j = V_j^H V_j over block j's rows
+    P = _block_rows(W, (scaling.out_map == blocks).astype(float), r)
+    Q = _block_rows(V, (scaling.in_map == blocks).astype(float), r)
+    dG = 2 * P - Q * mu[:, None, None, :] - mu[:, None, :r, None] * Q
+    pw = mu[:, :r] ** m                            # f'(lambda) = (t/2) mu^m / lambda_1
     phi = np.sum(mu ** (t / 2), axis=1)
-    g_phi = (t / 2) * np.einsum("nk,njkk->nj", pw, dG).real
+    g_phi = (t / 2) * np.einsum("nk,njkk->nj", pw, dG[..., :r]).real
     B = _real_pairing(Q * pw[:, None, :, None], P)
-    C = _real_pairing(Q * (pw[:, :, None] * (mu[:, :, None] + mu[:, None, :]))[:, None], Q)
-    D = _real_pairing(dG * _power_divided_differences(mu, m)[:, None], dG)
-    Pdiag = np.einsum("nk,njkk->nj", pw, P).real
+    C = _real_pairing(Q * (pw[:, :, None] * (mu[:, :r, None] + mu[:, None, :]))[:, None], Q)
+    weights = _power_divided_differences(mu, m, r)
+    weights[:, :, r:] *= 2
+    D = _real_pairing(dG * weights[:, None], dG)
+    Pdiag = np.einsum("nk,njkk->nj", pw, P[..., :r]).real
     H_phi = (t / 2) * (4 * (np.eye(n) * Pdiag[:, :, None]) - 4 * (B + np.swapaxes(B, 1, 2))
                        + 2 * C + D)
     grad = g_phi / (t * phi[:, None])

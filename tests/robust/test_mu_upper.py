@@ -145,6 +145,31 @@ def test_analytic_hessian_matches_differences_of_the_gradient(blk, p, q, t):
     np.testing.assert_allclose(hess, fd, atol=1e-6 * np.abs(fd).max())
 
 
+@pytest.mark.parametrize("t", [64.0, 4096.0, 2.0 ** 22])
+def test_newton_model_keeps_every_eigenvalue_that_carries_weight(t, monkeypatch):
+    """At large t the diagonal Newton model runs over the leading eigenvalues of
+    G = A^H A only; near a kink (top singular values 1e-7 apart) it keeps at least
+    two of them, and agrees with the model over all eigenvalues."""
+    from piezolib.robust import mu_upper
+
+    rng = np.random.default_rng(11)
+    scaling = mu_upper._Scaling(parse_blk([(1, 1)] * 6, 6, 6), 6, 6)
+    U = np.linalg.qr(crandn(rng, 2, 6, 6))[0]
+    V = np.linalg.qr(crandn(rng, 2, 6, 6))[0]
+    s = np.array([1.0, 1 - 1e-7, 0.9, 0.5, 0.2, 0.1])
+    M = U * s @ np.swapaxes(V, 1, 2).conj()
+    theta = np.zeros((2, scaling.n))
+    lam = np.linalg.eigvalsh(np.swapaxes(M, 1, 2).conj() @ M)[:, ::-1]
+    kept = mu_upper._leading_count(lam / lam[:, :1], t / 2 - 1)
+    assert 2 <= kept < 6
+    truncated = mu_upper._diagonal_newton_model(M, theta, scaling, t)
+    monkeypatch.setattr(mu_upper, "_NEGLIGIBLE_WEIGHT", -1.0)
+    assert mu_upper._leading_count(lam / lam[:, :1], t / 2 - 1) == 6
+    full = mu_upper._diagonal_newton_model(M, theta, scaling, t)
+    for a, b in zip(truncated, full):
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12 * np.abs(b).max())
+
+
 def test_repeated_scalar_scalings_are_locally_optimal():
     # the repeated scalars' Newton steps run on BFGS-updated Hessians between
     # recomputations: no structured change of the returned D may lower the bound
