@@ -8,7 +8,8 @@ lft         lower linear fractional transformation and its frequency response
 blocks      uncertainty-block type ``Block`` and the MATLAB ``blk`` parser
 mu          structured singular value bounds (``mussv``); mu_upper, mu_mixed and
             mu_lower hold its upper-bound (D, D-G) and lower-bound algorithms, mu_lifted
-            the tighter symmetric-lift bound for complex structures (``refine``)
+            the tighter symmetric-lift bound for complex structures (``refine``),
+            mu_branch branch and bound over real parameters (``refine`` with real blocks)
 hinf        verified H-infinity synthesis by gamma-iteration (``hinfsyn``)
 sos         second-order-section magnitude model (shared by dfit and uncertainty)
 dfit        stable minimum-phase fits of magnitude data (D-scalings)

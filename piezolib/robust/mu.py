@@ -16,6 +16,7 @@ from threadpoolctl import ThreadpoolController
 
 from piezolib._checks import check_finite_array, check_integer
 from piezolib.robust.blocks import parse_blk
+from piezolib.robust.mu_branch import branch_and_bound_upper
 from piezolib.robust.mu_lifted import MAX_LIFTED_UNKNOWNS, lifted_unknowns, lifted_upper_bound
 from piezolib.robust.mu_lower import complex_lower_bound, mixed_lower_bound
 from piezolib.robust.mu_mixed import mixed_upper_bound
@@ -146,10 +147,12 @@ def _check_refine(refine, blocks, lower):
     if isinstance(refine, bool) or not isinstance(refine, (int, float, np.floating)) \
             or not 0 < refine < 1:
         raise ValueError(f"refine must be None or a relative gap in (0, 1), got {refine!r}")
-    if any(b.is_real for b in blocks):
-        raise ValueError("refine applies to complex structures (full blocks and complex "
-                         f"scalars) only, got blk {[b.blk_row for b in blocks]}")
-    if lifted_unknowns(blocks) > MAX_LIFTED_UNKNOWNS:
+    if any(b.is_real and b.size > 1 for b in blocks):
+        raise ValueError("refine with real blocks splits 1 x 1 real scalars only (the D,G "
+                         "bound relaxes a repeated real scalar to independent ones, so "
+                         "splitting could not approach mu), got blk "
+                         f"{[b.blk_row for b in blocks]}")
+    if not any(b.is_real for b in blocks) and lifted_unknowns(blocks) > MAX_LIFTED_UNKNOWNS:
         raise ValueError(f"refine handles structures of at most {MAX_LIFTED_UNKNOWNS} "
                          "unknowns (blocks x q^2, q = columns of M), got "
                          f"{len(blocks)} x {sum(b.rows for b in blocks)}^2 = "
@@ -206,7 +209,17 @@ def mussv(M, blk, omega=None, *, lower=True, restarts=3, iterations=60, tol=1e-1
         of the repeated scalars' full weight at the 20 points where S_b and T_b alone stop
         up to 1.34 % above the lower bound; five repeated scalars and two scalars on
         q = 15, 682 refined frequencies: about ten minutes).
-        Default None (the D-scaled bound only).
+        With real blocks (1 x 1 real scalars; repeated real scalars are
+        rejected): branch and bound over the real parameters
+        (:mod:`piezolib.robust.mu_branch`) tries to certify lower / (1 - 0.9 refine)
+        at each frequency whose gap exceeds ``refine``, with a budget of
+        :data:`~piezolib.robust.mu_branch.MAX_BOXES` D,G bounds there (about 1-3 ms
+        each); where that runs out the D,G bound stays.  On the benchmark's six
+        purely real cases (1,000 frequencies; five refined, two to four real
+        scalars, the sixth has a repeated one) with ``refine=0.05``: 22 s per case
+        instead of 3 s, median gap 11 % -> 4.5 %; with four real scalars a third of
+        the points stay above 5 %.
+        Default None (the D-scaled or D,G bound only).
 
     Returns
     -------
@@ -265,7 +278,9 @@ def mussv(M, blk, omega=None, *, lower=True, restarts=3, iterations=60, tol=1e-1
         else:
             low, Delta = complex_lower_bound(arr, blocks, Dl, Dr, upper, iterations=iterations,
                                              rng=rng, restarts=restarts)
-        if refine is not None:
+        if refine is not None and has_real:
+            upper = branch_and_bound_upper(arr, blocks, upper, low, refine)
+        elif refine is not None:
             upper = lifted_upper_bound(arr, blocks, upper, low, Dl, Dr, refine)
     # both bounds are exact numbers for their D and Q; when they meet, the
     # lower one can exceed the upper one by rounding only (a larger excess
