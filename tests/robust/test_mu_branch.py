@@ -92,10 +92,23 @@ def test_inherited_scalings_are_checked_by_the_d_g_inequality(blk, p, q):
     assert np.all(value[~positive] <= 1e-9)
 
 
-@pytest.mark.parametrize("beta, match", [(0.0, "beta must be"), (np.nan, "beta must be")])
-def test_certifies_below_rejects_bad_levels(beta, match):
+def with_nan():
+    M = real_point()[None].copy()
+    M[0, 1, 1] = np.nan
+    return M
+
+
+@pytest.mark.parametrize("make_M, blk, beta, match", [
+    (lambda: real_point()[None], THREE_REAL, 0.0, "beta must be"),
+    (lambda: real_point()[None], THREE_REAL, np.nan, "beta must be"),
+    (lambda: real_point()[None], THREE_REAL, [1.0, 2.0], "beta must be one level or one per"),
+    (real_point, THREE_REAL, 1.0, "M must be 3-dimensional"),
+    (with_nan, THREE_REAL, 1.0, "M contains 1 non-finite"),
+    (lambda: real_point()[None], [(-1, 0)] * 2, 1.0, "blk"),
+])
+def test_certifies_below_rejects_bad_input(make_M, blk, beta, match):
     with pytest.raises(ValueError, match=match):
-        certifies_below(real_point()[None], parse_blk(THREE_REAL, 3, 3), beta)
+        certifies_below(make_M(), blk, beta)
 
 
 def test_certifies_below_needs_a_real_block():
