@@ -22,13 +22,14 @@ lower one.
 
 import numpy as np
 
-from piezolib._checks import check_finite_array
+from piezolib._checks import check_finite_array, check_integer
 from piezolib.robust.blocks import block_slices, parse_blk
 from piezolib.robust.mu_mixed import mixed_upper_bound
 
 __all__ = ["branch_and_bound_upper", "certifies_below"]
 
-#: sub-boxes evaluated per frequency before the proof there is abandoned
+#: D,G bounds of sub-boxes per frequency (counted after each round of splits) before the
+#: proof there is abandoned
 MAX_BOXES = 128
 # the level tried: the lower bound over (1 - _TARGET_SHARE refine), inside the wanted gap
 _TARGET_SHARE = 0.9
@@ -198,7 +199,8 @@ def certifies_below(M, blocks, beta, max_boxes=MAX_BOXES):
     beta : float or array_like, shape (nf,)
         Positive levels, one for all matrices or one each.
     max_boxes : int, optional
-        Sub-boxes evaluated per frequency before giving up there.
+        D,G bounds of sub-boxes per frequency before giving up there (counted after
+        each round of splits).
 
     Returns
     -------
@@ -209,6 +211,7 @@ def certifies_below(M, blocks, beta, max_boxes=MAX_BOXES):
     """
     M = check_finite_array("M", M, ndim=3)
     blocks = parse_blk(blocks, M.shape[1], M.shape[2])
+    max_boxes = check_integer("max_boxes", max_boxes, minimum=1)
     beta = np.asarray(beta, float)
     if beta.ndim > 1 or beta.size not in (1, M.shape[0]):
         raise ValueError(f"beta must be one level or one per matrix ({M.shape[0]}), "
@@ -238,7 +241,7 @@ def branch_and_bound_upper(M, blocks, upper, lower, refine, max_boxes=MAX_BOXES)
     refine : float
         Relative gap (upper - lower) / upper wanted, in (0, 1).
     max_boxes : int, optional
-        Sub-boxes per frequency.
+        D,G bounds of sub-boxes per frequency (see :func:`certifies_below`).
 
     Returns
     -------

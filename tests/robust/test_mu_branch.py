@@ -111,6 +111,11 @@ def test_certifies_below_rejects_bad_input(make_M, blk, beta, match):
         certifies_below(make_M(), blk, beta)
 
 
+def test_certifies_below_needs_a_positive_budget():
+    with pytest.raises(ValueError, match="max_boxes"):
+        certifies_below(real_point()[None], THREE_REAL, 1.0, max_boxes=0)
+
+
 def test_certifies_below_needs_a_real_block():
     with pytest.raises(ValueError, match="real blocks"):
         certifies_below(real_point()[None], parse_blk([(1, 1)] * 3, 3, 3), 1.0)
