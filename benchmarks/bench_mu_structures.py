@@ -39,8 +39,7 @@ import warnings
 import numpy as np
 
 from piezolib.robust.blocks import parse_blk
-from piezolib.robust.mu import mussv
-from piezolib.robust.mu_lifted import MAX_LIFTED_UNKNOWNS, lifted_unknowns
+from piezolib.robust.mu import _check_refine, mussv
 
 
 def random_response(rng, p, q, n, order=4):
@@ -127,11 +126,12 @@ REFINED = {"5 scalars", "8 scalars", "complex <= 8", "mixed real/cplx", "real"}
 
 def refinable(blk):
     """Whether ``mussv(..., refine=...)`` takes the structure (the lift's size cap; with
-    real blocks, 1 x 1 real scalars only)."""
-    p, q = blk_dims(blk)
-    if any(r < 0 for r, _ in blk):
-        return all(r == -1 for r, _ in blk if r < 0)
-    return lifted_unknowns(parse_blk(blk, p, q)) <= MAX_LIFTED_UNKNOWNS
+    real blocks, 1 x 1 real scalars only): mussv's own check."""
+    try:
+        _check_refine(0.01, parse_blk(blk, *blk_dims(blk)), True)
+    except ValueError:
+        return False
+    return True
 
 
 def print_row(name, tol, t_dk, times, case_ok, gaps, nonzero, t_ours, refined=None):

@@ -24,7 +24,7 @@ import numpy as np
 
 from piezolib._checks import check_finite_array, check_integer
 from piezolib.robust.blocks import block_slices, parse_blk
-from piezolib.robust.mu_mixed import mixed_upper_bound
+from piezolib.robust.mu_mixed import certified_lmi_top, mixed_upper_bound
 
 __all__ = ["branch_and_bound_upper", "certifies_below"]
 
@@ -82,19 +82,16 @@ def _column_weights(Mc, real):
 
 
 def _certificate_value(Mc, Dl, Dr, G):
-    """lambda_max of Dr^-1 (Mc^H Dl^2 Mc + j (G Mc - Mc^H G^T)) Dr^-1, plus its rounding.
+    """Certified lambda_max of Dr^-1 (Mc^H Dl^2 Mc + j (G Mc - Mc^H G^T)) Dr^-1.
 
     Below 1, the scalings (Dl, Dr, G) certify mu(Mc) < 1 (the D,G LMI of
-    :func:`mixed_upper_bound` at beta = 1).  As there, 8 n eps times the size of the
-    two terms is added, so that rounding cannot certify a sub-box (G can be large).
+    :func:`mixed_upper_bound` at beta = 1), rounding included
+    (:func:`~piezolib.robust.mu_mixed.certified_lmi_top`).
     """
     dl, dr = np.diagonal(Dl, axis1=1, axis2=2), np.diagonal(Dr, axis1=1, axis2=2)
     A = dl[:, :, None] * Mc / dr[:, None, :]                 # Dl Mc Dr^-1
     GA = (G / dr[:, :, None] / dl[:, None, :]) @ A           # Dr^-1 G Mc Dr^-1
-    H = np.swapaxes(A, 1, 2).conj() @ A + 1j * (GA - np.swapaxes(GA, 1, 2).conj())
-    size = np.linalg.norm(A, axis=(1, 2)) ** 2 + 2 * np.linalg.norm(GA, axis=(1, 2))
-    lam = np.linalg.eigvalsh(0.5 * (H + np.swapaxes(H, 1, 2).conj()))[:, -1]
-    return lam + 8 * Mc.shape[2] * np.finfo(float).eps * size
+    return certified_lmi_top(A, GA)
 
 
 def _root_boxes(beta, k):
@@ -131,7 +128,6 @@ def _prove(M, blocks, beta, max_boxes, boxes=None):
         if scalings is None:
             scalings = (np.zeros((owner.size, p, p)), np.zeros((owner.size, q, q)),
                         np.zeros((owner.size, q, p)))
-            tried = cleared
         else:
             tried = np.all(np.diagonal(scalings[1], axis1=1, axis2=2) > 0, axis=1)
             with np.errstate(all="ignore"):

@@ -306,16 +306,23 @@ def _lambda_max(prob, M, x):
 
 
 def _certified_lambda_max(prob, M, x):
-    """lambda_max of the LMI matrix plus a bound on its rounding errors.
+    """lambda_max of the LMI matrix at parameters x plus a bound on its rounding errors."""
+    _, A, g = prob.hermitian(M, x)
+    return certified_lmi_top(A, g[:, :, None] * A)
 
-    Forming H and its eigenvalues in floating point errs by a few n eps
-    times the size of its terms; added, so that sqrt of the result bounds
-    mu also when g is large (the bound must not fall below mu by rounding).
+
+def certified_lmi_top(A, GA):
+    """lambda_max of A^H A + j (GA - GA^H) plus a bound on its rounding errors.
+
+    A = D M D^-1 and GA = D^-1 G M D^-1 (the D,G LMI after the congruence with
+    D^-1).  Forming H and its eigenvalues in floating point errs by a few n eps
+    times the size of its terms; added, so that sqrt of the result bounds mu
+    also when G is large (the bound must not fall below mu by rounding).
     """
-    H, A, g = prob.hermitian(M, x)
-    size = (np.linalg.norm(A, axis=(1, 2)) ** 2
-            + 2 * np.linalg.norm(g[:, :, None] * A, axis=(1, 2)))
-    return np.linalg.eigvalsh(H)[:, -1] + 8 * prob.n * np.finfo(float).eps * size
+    H = np.swapaxes(A, 1, 2).conj() @ A + 1j * (GA - np.swapaxes(GA, 1, 2).conj())
+    H = 0.5 * (H + np.swapaxes(H, 1, 2).conj())
+    size = np.linalg.norm(A, axis=(1, 2)) ** 2 + 2 * np.linalg.norm(GA, axis=(1, 2))
+    return np.linalg.eigvalsh(H)[:, -1] + 8 * A.shape[2] * np.finfo(float).eps * size
 
 
 def _dg_newton_model(prob, M, x, scale, t):

@@ -166,6 +166,10 @@ class _Scaling:
             inputs, outputs = self.slots[i]
             self.out_map[outputs] = j + 1       # 0 is the fixed zero column
             self.in_map[inputs] = j + 1
+        # (n, p) and (n, q): 1 where an output / input belongs to scalar-scaled parameter j
+        parameters = np.arange(1, n + 1)[:, None]
+        self.out_indicator = (self.out_map == parameters).astype(float)
+        self.in_indicator = (self.in_map == parameters).astype(float)
 
     def free(self):
         mask = np.ones(self.n, bool)
@@ -487,10 +491,9 @@ def _diagonal_newton_model(M, theta, scaling, t):
     m = t / 2 - 1
     r = _leading_count(mu, m)
     W = (A @ V) / np.sqrt(lam1)[:, :, None]
-    blocks = np.arange(1, n + 1)[:, None]
     # rows 1 ... r of P_j = W_j^H W_j and Q_j = V_j^H V_j over block j's rows
-    P = _block_rows(W, (scaling.out_map == blocks).astype(float), r)
-    Q = _block_rows(V, (scaling.in_map == blocks).astype(float), r)
+    P = _block_rows(W, scaling.out_indicator, r)
+    Q = _block_rows(V, scaling.in_indicator, r)
     dG = 2 * P - Q * mu[:, None, None, :] - mu[:, None, :r, None] * Q
     pw = mu[:, :r] ** m                            # f'(lambda) = (t/2) mu^m / lambda_1
     phi = np.sum(mu ** (t / 2), axis=1)
