@@ -21,12 +21,25 @@ def test_rls_recovers_exact_arx_coefficients(arx_system):
     assert np.max(np.abs(model.rls.a_priori_errors[-100:])) < 1e-8
 
 
-def test_rls_equations_on_a_generic_regressor():
+@pytest.mark.parametrize("gain", [1e4, 1e8, 1e12])
+def test_rls_equations_on_a_generic_regressor(gain):
     rng = np.random.default_rng(1)
     phi = rng.standard_normal((50, 3))
     psi = np.array([2.0, -1.0, 0.5])
-    result = I.rls(phi, phi @ psi, initial_gain=1e12)
-    assert np.allclose(result.parameters, psi, atol=1e-8)
+    result = I.rls(phi, phi @ psi, initial_gain=gain)
+    # in exact arithmetic eqs. 1-3 from Psi(0) = 0 give the regularised least-squares
+    # estimate (W(0)^-1 + Phi' Phi)^-1 Phi' y, whose bias vanishes as the gain grows
+    n = len(phi)
+    W0_inv = np.diag(np.mean(phi ** 2, axis=0) / gain)
+    regularised = np.linalg.solve(W0_inv + phi.T @ phi, phi.T @ (phi @ psi))
+    bias = np.abs(np.linalg.solve(W0_inv + phi.T @ phi, W0_inv @ psi)).max()
+    assert np.abs(regularised - psi).max() <= bias * (1 + 1e-6)
+    # the covariance form cancels W(0) ~ gain down to ~1/N: each of the N updates leaves
+    # a rounding error of order eps * gain in W, so Psi carries at most about
+    # N eps gain |psi| (whichever BLAS kernel does the arithmetic)
+    rounding = n * np.finfo(float).eps * gain * np.abs(psi).max()
+    np.testing.assert_allclose(result.parameters, regularised, rtol=0, atol=rounding)
+    np.testing.assert_allclose(result.parameters, psi, rtol=0, atol=bias + rounding)
     # one step by hand: eq. 1, 3, 2 with W(0) = g diag(1/theta^2) (the data
     # power of a one-sample record) and Psi(0) = 0
     g, theta, y0 = 10.0, phi[0], float(phi[0] @ psi)

@@ -61,10 +61,28 @@ def test_after_a_failure_no_further_notebook_starts_in_parallel_runs(workbook):
     import io
 
     nbs = workbook / "notebooks"
-    write_notebook(nbs / "00_slow.ipynb", STAMP.format(name="slow"))
+
+    class Reporter(io.StringIO):
+        """The runner's output; marks the moment it reports the failure."""
+
+        def write(self, text):
+            if "FAILED" in text:
+                (nbs / "failure.reported").touch()
+            return super().write(text)
+
+    # the slow notebook ends only after the runner has reported the other one's failure
+    # (an event, not a sleep: on a loaded machine a kernel can take seconds to start), so
+    # its free slot is the moment a broken scheduler would start the third notebook
+    write_notebook(nbs / "00_slow.ipynb",
+                   "import pathlib, time\n"
+                   "deadline = time.time() + 120\n"
+                   "while not pathlib.Path('failure.reported').exists():\n"
+                   "    assert time.time() < deadline, 'the failure was never reported'\n"
+                   "    time.sleep(0.02)\n"
+                   "pathlib.Path('slow.done').touch()")
     write_notebook(nbs / "01_bad.ipynb", "assert False, 'bad'")
     write_notebook(nbs / "02_never.ipynb", "open('never.done', 'w').close()")
-    out = io.StringIO()
+    out = Reporter()
     assert reproduce.run(data=False, stream=out, jobs=2) == 1
     text = out.getvalue()
     assert "FAILED at cell 0: AssertionError: bad" in text
