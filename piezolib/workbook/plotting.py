@@ -19,16 +19,19 @@ Figure functions write plain ASCII (``"x [um]"``, ``"mu_RP"``, ``"omega_e"``,
 boxes and wires of a diagram, or legends drawn over curves.
 """
 
+import io
 import re
 
 import matplotlib as mpl
+import matplotlib.image as mpimg
 import matplotlib.pyplot as plt
 import numpy as np
 
+from piezolib.records import atomic_write
 from piezolib.workbook.paths import figures_dir
 
-__all__ = ["STYLE", "use_style", "new_figure", "save_figure", "figure_path", "unit_text",
-           "apply_unit_text", "db", "plot_magnitude", "block_diagram", "text_overlaps"]
+__all__ = ["STYLE", "use_style", "new_figure", "save_figure", "same_picture", "PIXEL_TOLERANCE",
+           "figure_path", "unit_text", "apply_unit_text", "db", "plot_magnitude", "block_diagram", "text_overlaps"]
 
 #: rcParams of the workbook's figures (print-sized, readable at 100 %).
 STYLE = {
@@ -147,8 +150,29 @@ def save_figure(fig, number, what):
         raise TypeError(f"fig must be a matplotlib Figure, got {type(fig).__name__}")
     path = figure_path(number, what)
     apply_unit_text(fig)
-    fig.savefig(path, metadata={"Software": None})
-    return path
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", metadata={"Software": None})
+    png = buffer.getvalue()
+    if path.is_file() and same_picture(path.read_bytes(), png):
+        return path         # the same figure up to antialiasing: leave the file as it is
+    return atomic_write(path, png)
+
+
+#: Largest change of any colour channel (0 ... 1) that :func:`same_picture` ignores.
+PIXEL_TOLERANCE = 0.25
+
+
+def same_picture(first, second, tolerance=PIXEL_TOLERANCE):
+    """True when two PNG images (bytes) show the same figure.
+
+    Same size, and no pixel differs by more than ``tolerance`` in any
+    channel.  A curve that another machine's rounding moves by a small
+    fraction of a pixel only changes the shades of its antialiased edge
+    (seen: at most 0.19); a curve, a marker or a text that moved by a
+    visible amount changes some pixel by more than a quarter.
+    """
+    a, b = (mpimg.imread(io.BytesIO(x), format="png") for x in (first, second))
+    return a.shape == b.shape and float(np.max(np.abs(a - b), initial=0.0)) <= tolerance
 
 
 def db(x):

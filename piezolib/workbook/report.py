@@ -4,10 +4,21 @@ Every notebook states the paper's claims it checks as rows of a
 :class:`ClaimTable` and writes them to ``data/results/<name>.csv`` (for a
 study other than the reference: ``runs/<study>/results/<name>.csv``).  A row
 holds the section, the quantity, its unit, the paper's value, the workbook's
-value, the tolerance of the comparison, the verdict and a note.  A numeric
-claim *agrees* when ``|ours - paper| <= max(atol, rtol * |paper|)``.
+value (and, for a statistic over noise seeds, its 95 % interval ``low`` ...
+``high``), the precision of that value, the tolerance of the comparison, the
+verdict and a note.  A numeric claim *agrees* when
+``|ours - paper| <= max(atol, rtol * |paper|)``; a statistic agrees when its
+interval meets that band (the noise cannot tell it from agreement).
+
+Reproducibility rule: two values of a row are the same result when they
+differ by less than the row's ``precision`` (default: one unit of the 4th
+significant digit, the digits the file keeps).  A rerun rewrites a table only
+when a row changed beyond that, or its verdict or text changed
+(:func:`save_results`), and :func:`compare_studies` reports only such rows.
 """
 
+import functools
+import io
 import numbers
 
 import numpy as np
@@ -20,10 +31,11 @@ from piezolib.workbook.paths import REFERENCE_STUDY, results_dir
 
 __all__ = ["COLUMNS", "REASONS", "NOTEBOOK_TABLES", "OTHER_TABLES", "SIGNIFICANT_DIGITS",
            "verdict", "ClaimTable", "save_results", "load_claims", "compare_studies",
-           "reproduction_table", "inconsistent_verdicts", "verdict_counts"]
+           "same_result", "reproduction_table", "inconsistent_verdicts", "verdict_counts"]
 
-COLUMNS = ["section", "quantity", "unit", "paper", "ours", "tolerance",
-           "verdict", "reason", "note"]
+COLUMNS = ["section", "quantity", "unit", "paper", "ours", "low", "high", "precision",
+           "tolerance", "verdict", "reason", "note"]
+_NUMBERS = ("paper", "ours", "low", "high")
 
 #: Why a recomputed value differs from the published one.
 REASONS = {
@@ -36,21 +48,40 @@ REASONS = {
 }
 
 
-def verdict(paper, ours, rtol=0.0, atol=0.0):
+def verdict(paper, ours, rtol=0.0, atol=0.0, interval=None):
     """Return ``("agrees" | "differs", tolerance_text)`` for one claim.
 
     Numbers are compared with ``max(atol, rtol*|paper|)``; anything else
-    (booleans, strings) must be equal.  A NaN result never agrees.
+    (booleans, strings) must be equal.  A NaN result never agrees.  With
+    ``interval = (low, high)`` (a statistic's 95 % interval) the claim agrees
+    when the interval meets the band ``paper +- tol``: only an interval wholly
+    outside it shows a difference that the noise cannot explain.
     """
     rtol = check_nonnegative("rtol", rtol)
     atol = check_nonnegative("atol", atol)
     if _is_number(paper) and _is_number(ours):
         tol = max(atol, rtol * abs(float(paper)))
-        ok = bool(np.isfinite(float(ours))) and abs(float(ours) - float(paper)) <= tol
+        low, high = (float(ours), float(ours)) if interval is None else _interval(interval)
+        gap = max(low - float(paper), float(paper) - high)     # <= 0: the interval holds paper
+        ok = bool(np.isfinite(float(ours))) and gap <= tol
         text = (f"+-{rtol:.0%}" if rtol and tol == rtol * abs(float(paper))
                 else f"+-{tol:g}")
         return ("agrees" if ok else "differs"), text
+    if interval is not None:
+        raise ValueError("interval is only meaningful for numeric claims")
     return ("agrees" if paper == ours else "differs"), "equal"
+
+
+def _interval(interval):
+    """(low, high) as finite floats with low <= high."""
+    try:
+        low, high = (float(x) for x in interval)
+    except (TypeError, ValueError):
+        raise ValueError(f"interval must be a pair (low, high) of numbers, got {interval!r}") \
+            from None
+    if not (np.isfinite(low) and np.isfinite(high) and low <= high):
+        raise ValueError(f"interval must be finite with low <= high, got ({low}, {high})")
+    return low, high
 
 
 class ClaimTable:
@@ -63,7 +94,7 @@ class ClaimTable:
         self.rows = []
 
     def add(self, section, quantity, paper, ours, *, unit="", rtol=0.0, atol=0.0,
-            reason="", note=""):
+            interval=None, precision=None, reason="", note=""):
         """Add one claim; its verdict is in the last row of :meth:`frame`.
 
         Parameters
@@ -78,6 +109,16 @@ class ClaimTable:
         unit : str, optional
         rtol, atol : float, optional
             Relative and absolute tolerance of the agreement.
+        interval : (float, float), optional
+            For a statistic (e.g. a mean over noise seeds): its 95 % interval;
+            the verdict is decided on it (:func:`verdict`).
+        precision : float, optional
+            Differences of ``ours`` below this are not results (same unit as
+            ``ours``): a rerun that moves it less leaves the file as it is.
+            Default: a quarter of the interval's width (about one standard
+            error of a mean) with an interval, else one unit of the 4th
+            significant digit.  State it for values that are rounding
+            residuals (e.g. ``precision=atol`` for "max relative error").
         reason : str, optional
             One of :data:`REASONS`: why the values may differ.  Kept only on
             rows whose verdict is "differs".
@@ -86,14 +127,26 @@ class ClaimTable:
         """
         if reason and reason not in REASONS:
             raise ValueError(f"reason must be one of {sorted(REASONS)}, got {reason!r}")
+        low = high = None
+        if interval is not None:
+            if not _is_number(ours):
+                raise ValueError(f"interval needs a numeric ours, got {ours!r}")
+            low, high = _interval(interval)
+            if not low <= float(ours) <= high:
+                raise ValueError(f"ours = {ours!r} lies outside its interval ({low}, {high})")
+            if precision is None:
+                precision = (high - low) / 4
+        if precision is not None:
+            precision = check_nonnegative("precision", precision)
         if paper is None:
             result, tol = "not published", ""
         else:
-            result, tol = verdict(paper, ours, rtol=rtol, atol=atol)
+            result, tol = verdict(paper, ours, rtol=rtol, atol=atol, interval=interval)
         if result == "differs" and not reason and paths.output_study() != REFERENCE_STUDY:
             reason = "study"      # the study changed one of the paper's choices
         self.rows.append(dict(section=section, quantity=quantity, unit=unit,
-                              paper=paper, ours=_plain(ours), tolerance=tol,
+                              paper=paper, ours=_plain(ours), low=low, high=high,
+                              precision=precision, tolerance=tol,
                               verdict=result,
                               reason=reason if result == "differs" else "",
                               note=note))
@@ -108,27 +161,76 @@ class ClaimTable:
 
 
 #: Significant digits of the numbers in the committed tables (the reproducibility
-#: rule, README "Reproducible results"): every number downstream of the committed
-#: reference controller is deterministic up to floating-point rounding (relative
-#: 1e-12), which never reaches the 4th digit except at a rounding boundary.
+#: rule, README "Reproducible results").
 SIGNIFICANT_DIGITS = 4
 
 
 def save_results(frame, name):
     """Write a DataFrame to ``<results>/<name>.csv`` atomically, floats rounded to
-    :data:`SIGNIFICANT_DIGITS` so that reruns on other machines give the same file.
+    :data:`SIGNIFICANT_DIGITS`; keep the file when it holds the same results.
 
     ``<results>`` is ``data/results/`` for the reference study and
     ``runs/<study>/results/`` for any other (:func:`piezolib.workbook.paths.results_dir`).
+    An existing file is left as it is when every row is the same result
+    (:func:`same_result`): a rerun on another machine, whose rounding moves
+    a value within its precision, leaves the committed table unchanged.
     """
     if not isinstance(frame, pd.DataFrame):
         raise TypeError(f"frame must be a pandas DataFrame, got {type(frame).__name__}")
     path = results_dir() / f"{name}.csv"
     # object columns mix numbers and text; round their floats like the rest
     frame = frame.apply(lambda col: col.map(_rounded) if col.dtype == object else col)
+    text = frame.to_csv(index=False, float_format=f"%.{SIGNIFICANT_DIGITS}g", lineterminator="\n")
+    if path.is_file() and _same_tables(path.read_text(encoding="utf-8"), text):
+        return path
     # one string, then a temporary file and a rename: a reader never sees a partial file
-    return atomic_write(path, frame.to_csv(index=False, float_format=f"%.{SIGNIFICANT_DIGITS}g",
-                                           lineterminator="\n"))
+    return atomic_write(path, text)
+
+
+def _same_tables(old_text, new_text):
+    """True when two CSV texts hold the same columns and rows, row by row the same result."""
+    read = functools.partial(pd.read_csv, dtype=str, keep_default_na=False)
+    old, new = read(io.StringIO(old_text)), read(io.StringIO(new_text))
+    if list(old.columns) != list(new.columns) or len(old) != len(new):
+        return False
+    if "precision" not in new.columns:        # not a claim table: numbers at 4 digits
+        return all(_same_number(a, b, "", "") for col in new.columns
+                   for a, b in zip(old[col], new[col]))
+    return all(same_result(a, b) for (_, a), (_, b) in zip(old.iterrows(), new.iterrows()))
+
+
+def same_result(first, second):
+    """True when two rows of a claim table (string or numeric cells) state the same result.
+
+    Text cells (quantity, verdict, tolerance, note, ...) must be equal; the
+    numbers (``paper``, ``ours``, ``low``, ``high``) may differ by less than
+    the larger of the two rows' ``precision`` (empty: one unit of the 4th
+    significant digit of the larger value).
+    """
+    for col in first.index:
+        if col == "precision":
+            continue
+        if col in _NUMBERS:
+            if not _same_number(first[col], second[col], first.get("precision", ""),
+                                second.get("precision", "")):
+                return False
+        elif str(first[col]) != str(second[col]):
+            return False
+    return True
+
+
+def _same_number(a, b, precision_a, precision_b):
+    try:
+        x, y = float(a), float(b)
+    except (TypeError, ValueError):
+        return str(a) == str(b)
+    if not (np.isfinite(x) and np.isfinite(y)):
+        return str(a) == str(b)
+    stated = [float(p) for p in (precision_a, precision_b) if str(p) not in ("", "nan")]
+    big = max(abs(x), abs(y))
+    unit = 10.0 ** (np.floor(np.log10(big)) - (SIGNIFICANT_DIGITS - 1)) if big > 0 else 0.0
+    # the printed digits themselves: one unit of the last kept digit (a rounding boundary)
+    return abs(x - y) <= max([unit * (1 + 1e-9)] + stated)
 
 
 def _is_number(x):
@@ -245,15 +347,21 @@ def compare_studies(first, second, names=None, changed_only=True):
     for name in (first, second):
         claims = load_claims(names, study=name)
         claims = claims.drop_duplicates(key)
-        frames.append(claims.set_index(key)[["unit", "paper", "ours", "verdict", "study"]])
+        frames.append(claims.set_index(key)[["unit", "paper", "ours", "precision", "verdict",
+                                             "study"]])
     a, b = frames
+    b = b.reindex(a.index)
     table = a[["unit", "paper"]].copy()
-    table[first], table[second] = a["ours"], b["ours"].reindex(a.index)
+    table[first], table[second] = a["ours"], b["ours"]
     table[f"verdict ({first})"] = a["verdict"]
-    table[f"verdict ({second})"] = b["verdict"].reindex(a.index)
-    table[f"from ({second})"] = b["study"].reindex(a.index)
+    table[f"verdict ({second})"] = b["verdict"]
+    table[f"from ({second})"] = b["study"]
     if changed_only:
-        table = table[table[first] != table[second]]
+        # a difference within the rows' precision (rounding, another machine) is no change
+        same = [a.loc[i, "verdict"] == b.loc[i, "verdict"]
+                and _same_number(a.loc[i, "ours"], b.loc[i, "ours"], a.loc[i, "precision"],
+                                 b.loc[i, "precision"]) for i in a.index]
+        table = table[~np.array(same, dtype=bool)]
     return table
 
 
@@ -273,7 +381,8 @@ def inconsistent_verdicts(table):
     """Rows whose stored verdict does not follow from their stored values and tolerance.
 
     Recomputes each numeric verdict from the table as written (``paper``,
-    ``ours`` rounded to :data:`SIGNIFICANT_DIGITS`, ``tolerance`` as
+    ``ours`` or its interval ``low`` ... ``high`` rounded to
+    :data:`SIGNIFICANT_DIGITS`, ``tolerance`` as
     ``+-x%`` or ``+-x``): a value that sits on the edge of its tolerance band
     can change its verdict when rounded, and this finds it.
 
@@ -296,12 +405,15 @@ def inconsistent_verdicts(table):
             paper_value, ours = float(row["paper"]), float(row["ours"])
         except ValueError:
             continue
+        low, high = ((float(row["low"]), float(row["high"])) if str(row.get("low", "")) != ""
+                     else (ours, ours))
         width = (float(tol[2:-1]) / 100 * abs(paper_value) if tol.endswith("%")
                  else float(tol[2:]))
         # the stored tolerance text is itself rounded: allow its last printed digit
         slack = 1e-9 + 0.5e-2 * width
-        expected = abs(ours - paper_value) <= width
-        borderline = abs(abs(ours - paper_value) - width) <= slack
+        gap = max(low - paper_value, paper_value - high)      # as in verdict()
+        expected = gap <= width
+        borderline = abs(gap - width) <= slack
         if not borderline and expected != (row["verdict"] == "agrees"):
             bad.append(index)
     return table.loc[bad]

@@ -120,3 +120,25 @@ def test_text_overlaps_finds_colliding_texts_wires_and_legends():
     plt.close(fig)
     with pytest.raises(TypeError, match="Figure"):
         plotting.text_overlaps("figure")
+
+
+def test_a_figure_is_rewritten_only_when_it_visibly_changed(tmp_path, monkeypatch):
+    monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
+    x = np.linspace(0.0, 1.0, 50)
+
+    def draw(shift):
+        fig, ax = plt.subplots(figsize=(3, 2), dpi=100)
+        ax.plot(x, x ** 2 + shift)
+        ax.set_xlim(0, 1)
+        ax.set_ylim(-0.1, 1.1)
+        path = plotting.save_figure(fig, None, "rewrite")
+        plt.close(fig)
+        return path.read_bytes()
+
+    first = draw(0.0)
+    # 1e-9 of the axis: the rounding of another machine, far below a pixel
+    assert draw(1e-9) == first
+    # a tenth of the axis: about 14 pixels, a change a reader sees
+    moved = draw(0.1)
+    assert moved != first and not plotting.same_picture(first, moved)
+    assert plotting.same_picture(first, first)

@@ -129,3 +129,57 @@ def test_inconsistent_verdicts_finds_a_verdict_the_numbers_contradict():
     bad = report.inconsistent_verdicts(table)
     # row 1 lies outside its band; row 4 sits on the edge (rounding can go either way)
     assert bad.index.tolist() == [1]
+
+
+def test_verdict_on_an_interval_needs_the_whole_interval_outside_the_band():
+    # band 1.0 +- 0.1: an interval reaching into it agrees, one wholly outside differs
+    assert report.verdict(1.0, 1.15, atol=0.1, interval=(1.08, 1.2))[0] == "agrees"
+    assert report.verdict(1.0, 1.15, atol=0.1)[0] == "differs"           # the mean alone
+    assert report.verdict(1.0, 1.2, atol=0.1, interval=(1.11, 1.3))[0] == "differs"
+    assert report.verdict(1.0, 0.8, atol=0.1, interval=(0.7, 0.95))[0] == "agrees"
+    with pytest.raises(ValueError, match="low <= high"):
+        report.verdict(1.0, 1.0, interval=(1.2, 1.1))
+    with pytest.raises(ValueError, match="numeric"):
+        report.verdict(True, True, interval=(0, 1))
+
+
+def test_claim_rows_carry_interval_and_precision():
+    table = report.ClaimTable("stats")
+    table.add("T", "mean", 1.0, 1.15, atol=0.1, interval=(1.08, 1.2))
+    table.add("T", "residual", 0.0, 2e-10, atol=1e-7, precision=1e-7)
+    table.add("T", "plain", 2.0, 2.5)
+    frame = table.frame()
+    assert frame.verdict.tolist() == ["agrees", "agrees", "differs"]
+    assert frame.loc[0, "precision"] == pytest.approx(0.03)     # a quarter of the width
+    assert frame.loc[2, ["low", "high", "precision"]].isna().all()
+    with pytest.raises(ValueError, match="outside its interval"):
+        table.add("T", "bad", 1.0, 2.0, interval=(0.0, 1.0))
+    with pytest.raises(ValueError, match="precision"):
+        table.add("T", "bad", 1.0, 1.0, precision=-1.0)
+
+
+def test_a_rerun_within_precision_leaves_the_table_as_it_is(tmp_path, monkeypatch):
+    monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
+
+    def write(residual, mean, verdict_paper=1.0, note=""):
+        table = report.ClaimTable("rerun")
+        table.add("T", "residual", 0.0, residual, atol=1e-7, precision=1e-7)
+        table.add("T", "mean", verdict_paper, mean, atol=0.1, interval=(mean - 0.04, mean + 0.04))
+        table.add("T", "value", 3.0, 3.14159, rtol=0.1, note=note)
+        return table.save().read_text()
+
+    first = write(2.226e-10, 1.15)
+    assert "2.226e-10" in first
+    assert write(5.081e-10, 1.16) == first       # rounding residual; mean within its precision
+    changed = write(5.081e-10, 1.25)              # the mean moved beyond its precision
+    assert changed != first and "1.25" in changed
+    assert write(5.081e-10, 1.25, note="other") != changed       # text is compared exactly
+    again = write(5.081e-10, 1.25, note="other")
+    assert write(5.081e-10, 1.25, verdict_paper=1.3, note="other") != again   # paper changed
+
+
+def test_same_number_allows_one_unit_of_the_last_kept_digit():
+    row = pd.Series({"quantity": "q", "ours": "0.1563", "precision": ""})
+    assert report.same_result(row, row.replace("0.1563", "0.1564"))
+    assert not report.same_result(row, row.replace("0.1563", "0.1565"))
+    assert not report.same_result(row, row.replace("q", "r"))
