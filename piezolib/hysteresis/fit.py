@@ -29,7 +29,7 @@ from piezolib.hysteresis.dahl import (FORMS, STARTS, DahlModel, NotInvertibleErr
                                       strokes)
 from piezolib.progress import postfix, progress
 
-__all__ = ["DahlFit", "fit_dahl", "monotone_path", "choose_fit", "check_fit_options", "ALPHA1_BOUNDS",
+__all__ = ["DahlFit", "fit_dahl", "rescore_dahl", "monotone_path", "choose_fit", "check_fit_options", "ALPHA1_BOUNDS",
            "ALPHA2_BOUNDS", "G_A_BOUNDS"]
 
 
@@ -384,14 +384,52 @@ def fit_dahl(loops, gamma_a, form="bliman_sorine", offset=False, start="virgin",
     model = _from_theta(result.x, form, gamma_a, start, x0)
     parameters = _parameter_estimates(output_error, result, r0, wv, offset, model, lower, upper)
     warn_about(parameters, f"fit_dahl ({form}, offset={offset}, start={start})")
+    return _scored(DahlFit(model=model, x_model=[], residuals=[], rms=np.zeros(0),
+                           rms_percent=np.zeros(0), max_percent=np.zeros(0), initial=initial,
+                           result=result, offset=offset, parameters=tuple(parameters)),
+                   loops, discard)
+
+
+def _scored(fit, loops, discard):
+    """``fit`` with its loop outputs and errors computed for ``fit.model`` on every sample."""
     full = check_loops(loops, discard, 1)
-    x_model = [simulate_dahl(model, v).x for v, x, used in full]
+    x_model = [simulate_dahl(fit.model, v).x for v, x, used in full]
     first = [int(used[0]) for v, x, used in full]
     res, rms, rms_pct, max_pct = loop_errors(
         x_model, [(v, x) for v, x, used in full], first[0])
-    return DahlFit(model=model, x_model=x_model, residuals=res, rms=rms,
-                   rms_percent=rms_pct, max_percent=max_pct,
-                   initial=initial, result=result, offset=offset, parameters=tuple(parameters))
+    return replace(fit, x_model=x_model, residuals=res, rms=rms, rms_percent=rms_pct,
+                   max_percent=max_pct)
+
+
+def rescore_dahl(fit, model, loops, discard=0):
+    """``fit`` (a :class:`DahlFit` of ``loops``) moved to another model of the same optimum.
+
+    Where the cost has a flat valley (parameters identifiable only in
+    combination), the end point of the optimisation depends on rounding; a
+    model stored from an earlier run of the same fit can then stand in for
+    it.  Its loop outputs and errors are recomputed on ``loops``; the
+    identifiability analysis (``parameters``) and ``result`` stay the fit's.
+
+    Parameters
+    ----------
+    fit : DahlFit
+    model : DahlModel
+        Of the same form and start as ``fit.model``.
+    loops, discard
+        As given to :func:`fit_dahl`.
+
+    Returns
+    -------
+    DahlFit
+    """
+    if not isinstance(fit, DahlFit):
+        raise TypeError(f"fit must be a DahlFit, got {type(fit).__name__}")
+    if not isinstance(model, DahlModel):
+        raise TypeError(f"model must be a DahlModel, got {type(model).__name__}")
+    if (model.form, model.start) != (fit.model.form, fit.model.start):
+        raise ValueError(f"model must have the fit's form and start {fit.model.form!r}, "
+                         f"{fit.model.start!r}, got {model.form!r}, {model.start!r}")
+    return _scored(replace(fit, model=model), loops, discard)
 
 
 def _multistart(solve, candidates, n_loops, bar):

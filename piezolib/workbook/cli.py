@@ -33,9 +33,13 @@ def _parser():
     rep.add_argument("--list", action="store_true", help="list the studies and exit")
     sub.add_parser("data", help="regenerate the virtual-stage experiment files in data/")
     ctl = sub.add_parser("controllers",
-                         help="the reference controllers (data/controllers/reference_design.json)")
+                         help="the reference study's committed optimisation products: the "
+                              "controllers (data/controllers/reference_design.json), their "
+                              "float32 section exports K_*.json / K_*.h and the workbook Dahl "
+                              "model (data/models/workbook_dahl.json)")
     ctl.add_argument("--write-reference", action="store_true",
-                     help="re-derive them (DK-iteration, fixed order) and rewrite the file")
+                     help="re-derive them (Dahl fit, DK-iteration, fixed order) and rewrite "
+                          "those files")
     cmp_ = sub.add_parser("compare", help="key numbers of two studies side by side")
     cmp_.add_argument("first", help="study name (e.g. reference)")
     cmp_.add_argument("second", help="study name")
@@ -66,7 +70,9 @@ def _controllers(args, stream):
 
     if args.write_reference:
         path = pipeline.write_reference_design()
-        print(f"wrote {path}", file=stream)
+        print(f"wrote {path}, the section exports "
+              + ", ".join(f"{stem}.json/.h" for stem in pipeline.SECTION_FILES)
+              + " and the workbook Dahl model", file=stream)
     found = pipeline.read_controllers(pipeline.reference_design_path())
     print(f"{found.source}: designed for choices {found.digest}; mu_RP "
           + ", ".join(f"{k} {v:.4f}" for k, v in found.mu.items()), file=stream)

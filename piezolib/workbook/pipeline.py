@@ -30,14 +30,18 @@ import numpy as np
 
 from piezolib import paper
 from piezolib.problem.design import design_controller
+from piezolib.problem.hysteresis import write_workbook_dahl
 from piezolib.records import atomic_write
+from piezolib.robust import export
+from piezolib.robust.discrete import discretize
 from piezolib.workbook import paths
 from piezolib.workbook import study as studies
 
 __all__ = ["StudyControllers", "study_problem", "study_controllers", "derive_controllers",
            "design_digest", "memory", "library_fingerprint", "reference_design_path",
            "write_controllers", "read_controllers", "write_reference_design",
-           "ArtifactError", "CACHE_ENV"]
+           "case_III_controllers", "discretized_controllers", "export_sections",
+           "study_sections", "SECTION_FILES", "ArtifactError", "CACHE_ENV"]
 
 logger = logging.getLogger(__name__)
 
@@ -247,10 +251,90 @@ def study_controllers(study, cache=True):
 
 
 def write_reference_design(cache=False):
-    """Re-derive the reference study's controllers and write the committed artifact."""
+    """Re-derive the reference study's optimisation products and write the committed artifacts.
+
+    The workbook Dahl model (:func:`piezolib.problem.hysteresis.write_workbook_dahl`),
+    the controllers (:func:`reference_design_path`) and their exported sections
+    (:func:`export_sections`): inputs of the reference study that no rerun rewrites.
+    """
+    write_workbook_dahl()
     reference = studies.load(studies.REFERENCE)
     found = derive_controllers(reference, cache=cache)
-    return write_controllers(found, reference_design_path(), reference)
+    path = write_controllers(found, reference_design_path(), reference)
+    export_sections(reference, paths.data_dir() / "controllers", found)
+    return path
+
+
+#: File stems of the Case III controllers exported as sections (``<stem>.json`` and ``.h``).
+SECTION_FILES = ("K_ours", "K_ours_full", "K_published")
+
+
+def case_III_controllers(study, controllers=None):
+    """The continuous controllers of Case III, {file stem: (label, K)}.
+
+    Our deployed (fixed-order) and full-order mu controllers of the study and
+    the published K of eq. 24, each v_e [V] -> u_b [V].
+    """
+    study = studies.load(study)
+    found = study_controllers(study) if controllers is None else controllers
+    K_pub = study_problem(study).K
+    return {"K_ours": (f"ours, {found.K_deployed.nstates}th order (deployed)", found.K_deployed),
+            "K_ours_full": (f"ours, full order ({found.K_full.nstates})", found.K_full),
+            "K_published": ("published K (eq. 24)", K_pub)}
+
+
+def discretized_controllers(study, controllers=None):
+    """{file stem: DiscreteController}: Tustin at the study's loop rate, pre-warped
+    (:func:`piezolib.robust.discrete.discretize`), checked against the study's G."""
+    study = studies.load(study)
+    G = study_problem(study).G
+    return {stem: discretize(K, study.loop.fs_hz, G=G)
+            for stem, (_, K) in case_III_controllers(study, controllers).items()}
+
+
+def export_sections(study, directory, controllers=None):
+    """Export the Case III controllers as second-order sections (JSON + C header).
+
+    Returns
+    -------
+    dict
+        {file stem: SOSController}, read back in float32 as a target runs them.
+    """
+    study = studies.load(study)
+    labels = {stem: label for stem, (label, _) in case_III_controllers(study, controllers).items()}
+    return {stem: export.export_controller(
+                d.K, directory, stem,
+                meta={"controller": labels[stem], "states": d.K.nstates,
+                      "discretisation": "Tustin", "prewarp_rad_s": d.prewarp_frequency})
+            for stem, d in discretized_controllers(study, controllers).items()}
+
+
+def study_sections(study):
+    """The float32 sections every Case III run of ``study`` uses, {file stem: SOSController}.
+
+    The reference study reads the committed exports in ``data/controllers/``
+    (inputs, like :func:`reference_design_path`: only ``python -m piezolib
+    controllers --write-reference`` rewrites them, so a rerun on another
+    machine runs the same float32 coefficients); any other study exports its
+    own to ``runs/<study>/controllers/``.
+
+    Raises
+    ------
+    ArtifactError
+        A committed export of the reference study is missing.
+    """
+    study = studies.load(study)
+    if not study.is_reference:
+        return export_sections(study, study.output_dir / "controllers")
+    found = {}
+    for stem in SECTION_FILES:
+        path = paths.data_dir() / "controllers" / f"{stem}.json"
+        if not path.is_file():
+            raise ArtifactError(f"{path} is missing: run `python -m piezolib controllers "
+                                "--write-reference` to derive and export the reference "
+                                "controllers")
+        found[stem] = export.read_json(path, "float32")
+    return found
 
 
 def write_controllers(controllers, path, study):

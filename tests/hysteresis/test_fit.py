@@ -154,3 +154,18 @@ def test_fit_progress_bar_counts_the_solves_and_changes_nothing(monkeypatch, cap
     assert bar.postfix.startswith("polishing the best start, best rms")
     single = hy.fit_dahl(loops, gamma_a=GAMMA_A, stride=5, initial=on.model)
     assert bars[-1].total == 1 and bars[-1].n == 1 and single.model.alpha1 > 0
+
+
+def test_rescore_moves_a_fit_to_another_model_and_recomputes_its_errors():
+    true = model(alpha1=2.0, alpha2=2.5, beta2=0.3 * 2.5 / 30.0, g_a=0.9)
+    loops = [(v, hy.simulate_dahl(true, v).x) for v in (triangle(a)[1] for a in (1.0, 3.0))]
+    fit = hy.fit_dahl(loops, gamma_a=GAMMA_A, stride=5)
+    same = hy.rescore_dahl(fit, fit.model, loops)
+    np.testing.assert_array_equal(same.rms, fit.rms)
+    other = hy.rescore_dahl(fit, model(g_a=0.95), loops)      # 5 % off in gain
+    assert other.model.g_a == 0.95 and np.all(other.rms_percent > 1.0)
+    assert other.parameters == fit.parameters and other.result is fit.result
+    with pytest.raises(ValueError, match="form and start"):
+        hy.rescore_dahl(fit, model("printed"), loops)
+    with pytest.raises(TypeError, match="DahlFit"):
+        hy.rescore_dahl(fit.model, fit.model, loops)

@@ -56,13 +56,16 @@ def test_candidates_and_workbook_choice():
 def test_workbook_fit_is_shared_and_deterministic():
     first = ph.workbook_dahl_fit()
     assert ph.workbook_dahl_fit() is first                    # cached: one model everywhere
-    assert ph.fit_case_I_loops(*ph.WORKBOOK_DAHL) is first
+    # on the workbook's data: the committed model, checked against the refit
+    assert first.model == ph.read_dahl_model(ph.workbook_dahl_path())
+    refit = ph.fit_case_I_loops(*ph.WORKBOOK_DAHL)
+    np.testing.assert_allclose(first.rms_percent, refit.rms_percent, rtol=1e-5)
     form, offset, start = ph.WORKBOOK_DAHL
     assert (first.model.form, first.offset, first.model.start) == (form, offset, start)
     assert first.model.gamma_a == paper.DAHL.gamma_a          # held at the published value
     ph.clear_cache()
     again = ph.workbook_dahl_fit()
-    assert again is not first and again.model == first.model  # refitted: bit-identical
+    assert again is not first and again.model == first.model  # refitted, same stored model
     np.testing.assert_array_equal(again.rms_percent, first.rms_percent)
     with pytest.raises(TypeError, match="offset must be True or False"):
         ph.fit_case_I_loops("bliman_sorine", 1, "rest")
@@ -70,6 +73,28 @@ def test_workbook_fit_is_shared_and_deterministic():
         ph.fit_case_I_loops("bliman_sorine", True, "lowered")
     with pytest.raises(ValueError, match="form must be one of"):
         ph.fit_case_I_loops("first_order", True, "rest")
+
+
+def test_a_stored_model_off_the_fits_optimum_is_refused(tmp_path, monkeypatch):
+    from dataclasses import replace
+
+    model = ph.read_dahl_model(ph.workbook_dahl_path())
+    # a rounding-size move (1e-9 of alpha1) is the same optimum; 1 % of alpha2 is not
+    for name, factor, ok in (("on the valley", 1.0 + 1e-9, True), ("alpha2", 1.01, False)):
+        moved = (replace(model, alpha1=model.alpha1 * factor) if ok else
+                 replace(model, alpha2=model.alpha2 * factor))
+        path = ph.write_dahl_model(moved, tmp_path / f"{name}.json")
+        monkeypatch.setattr(ph, "workbook_dahl_path", lambda path=path: path)
+        if ok:
+            assert ph.workbook_dahl_fit().model == moved
+        else:
+            with pytest.raises(ValueError, match="no longer matches the fit"):
+                ph.workbook_dahl_fit()
+    (tmp_path / "bad.json").write_text('{"format": 1, "model": {"alpha1": 1}}')
+    with pytest.raises(ValueError, match="not a Dahl model file"):
+        ph.read_dahl_model(tmp_path / "bad.json")
+    with pytest.raises(TypeError, match="DahlModel"):
+        ph.write_dahl_model("model", tmp_path / "x.json")
 
 
 def test_workbook_pi_fit_and_validation_records():

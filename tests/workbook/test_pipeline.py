@@ -97,3 +97,23 @@ def test_a_study_with_the_reference_design_choices_uses_the_committed_controller
     found = pipeline.study_controllers(spread)
     assert np.array_equal(found.K_fixed.A, reference.K_fixed.A) and found.mu == reference.mu
     assert (tmp_path / "spread" / "artifacts" / "controllers.json").is_file()
+
+
+def test_reference_sections_are_the_committed_exports(tmp_path, monkeypatch):
+    from piezolib.robust import export
+
+    sections = pipeline.study_sections("reference")
+    assert set(sections) == set(pipeline.SECTION_FILES)
+    committed = pipeline.paths.data_dir() / "controllers"
+    for stem, sos in sections.items():
+        np.testing.assert_array_equal(
+            sos.sos, export.read_json(committed / f"{stem}.json", "float32").sos)
+    # a fresh export of the committed controllers: the float64 coefficients agree to rounding
+    # (another BLAS kernel moves them by ~1e-10), so a float32 one moves by one unit at most
+    fresh = pipeline.export_sections("reference", tmp_path)
+    for stem, sos in sections.items():
+        np.testing.assert_allclose(fresh[stem].coefficients("float32"),
+                                   sos.coefficients("float32"), rtol=2.0 ** -23, atol=0)
+    monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
+    with pytest.raises(pipeline.ArtifactError, match="write-reference"):
+        pipeline.study_sections("reference")
