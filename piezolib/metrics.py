@@ -3,7 +3,9 @@
 :func:`tracking_error_percent` is the tracking error % of Table 5 (the
 largest |x_r - x| relative to the commanded range; its docstring says why
 this reading), :func:`peak_to_peak_error_percent` the literal reading, and
-:func:`improvement_percent` the improvement rows of Tables 4-5.  The
+:func:`improvement_percent` the improvement rows of Tables 4-5, and
+:func:`mean_interval` the mean over noise seeds with its Student-t confidence
+interval (a noise-driven figure is a random variable).  The
 hysteresis % of eq. 25-26 is :func:`piezolib.hysteresis.hysteresis_percent`.
 """
 
@@ -12,7 +14,7 @@ import numpy as np
 from piezolib._checks import check_finite_array, check_positive, check_same_length
 
 __all__ = ["tracking_error", "tracking_error_percent", "peak_to_peak_error_percent",
-           "improvement_percent"]
+           "improvement_percent", "mean_interval"]
 
 
 def tracking_error(x_r, x):
@@ -139,3 +141,61 @@ def improvement_percent(before, after):
         raise ValueError(f"before and after must have matching shapes, got {b.shape} "
                          f"and {a.shape}") from None
     return float(out) if out.ndim == 0 else out
+
+
+def mean_interval(values, axis=0, confidence=0.95):
+    """Mean of independent draws and the two-sided Student-t confidence interval of it.
+
+    For N draws x_1 ... x_N (e.g. one figure of merit per noise seed) with
+    sample mean m and sample standard deviation s (N - 1 in the
+    denominator), the interval is m -+ t s / sqrt(N), t the
+    (1 + confidence) / 2 quantile of Student's t with N - 1 degrees of
+    freedom: it holds the true mean with probability ``confidence`` when the
+    draws are independent and about normal.
+
+    Parameters
+    ----------
+    values : array_like
+        The draws, real and finite, along ``axis`` (same unit as the result).
+    axis : int
+        Axis of the draws; N = values.shape[axis] >= 2.
+    confidence : float
+        Two-sided confidence level, 0 < confidence < 1.
+
+    Returns
+    -------
+    mean, low, high : float or ndarray
+        Shape of ``values`` without ``axis`` (floats for 1-D input).
+
+    Raises
+    ------
+    ValueError
+        Fewer than 2 draws, non-finite values, a bad axis or confidence.
+
+    Examples
+    --------
+    >>> mean_interval([1.0, 2.0, 3.0])          # t(0.975, 2 dof) = 4.303
+    (2.0, -0.4841377..., 4.4841377...)
+    """
+    from scipy import stats
+
+    x = check_finite_array("values", values, real=True)
+    if x.ndim == 0:
+        raise ValueError("values must hold N >= 2 draws along axis, got a scalar")
+    if isinstance(axis, bool) or not isinstance(axis, (int, np.integer)) \
+            or not -x.ndim <= axis < x.ndim:
+        raise ValueError(f"axis must be an integer in [{-x.ndim}, {x.ndim - 1}], got {axis!r}")
+    n = x.shape[axis]
+    if n < 2:
+        raise ValueError(f"values must hold N >= 2 draws along axis {axis} for an interval, "
+                         f"got {n}")
+    confidence = check_positive("confidence", confidence)
+    if not confidence < 1:
+        raise ValueError(f"confidence must be below 1, got {confidence!r}")
+    mean = np.mean(x, axis=axis)
+    half = (stats.t.ppf(0.5 + confidence / 2, n - 1) * np.std(x, axis=axis, ddof=1)
+            / np.sqrt(n))
+    low, high = mean - half, mean + half
+    if np.ndim(mean) == 0:
+        return float(mean), float(low), float(high)
+    return mean, low, high

@@ -95,3 +95,39 @@ def test_tracking_error_bad_input():
         metrics.tracking_error_percent(x_r, x_r, range_=0.0)
     with pytest.raises(ValueError, match="at least 2 samples"):
         metrics.peak_to_peak_error_percent([1.0], [1.0], 12.0)
+
+
+# --- mean over noise seeds and its Student-t interval ---------------------------------
+def test_mean_interval_of_three_draws_uses_t_with_two_dof():
+    mean, low, high = metrics.mean_interval([1.0, 2.0, 3.0])
+    t = 4.30265273                          # t_{0.975} with 2 degrees of freedom (tables)
+    assert mean == 2.0
+    assert (low, high) == pytest.approx((2.0 - t / np.sqrt(3), 2.0 + t / np.sqrt(3)), rel=1e-8)
+    # 90 %: t_{0.95, 2 dof} = 2.919986; equal draws: no width at all
+    assert metrics.mean_interval([1.0, 2.0, 3.0], confidence=0.9)[2] == pytest.approx(
+        2.0 + 2.91998558 / np.sqrt(3), rel=1e-8)
+    assert metrics.mean_interval([5.0, 5.0]) == (5.0, 5.0, 5.0)
+
+
+def test_mean_interval_along_an_axis_and_its_coverage():
+    rng = np.random.default_rng(4)
+    draws = rng.normal(3.0, 2.0, size=(8, 4000))        # 4000 experiments of 8 draws
+    mean, low, high = metrics.mean_interval(draws, axis=0)
+    assert mean.shape == low.shape == (4000,)
+    np.testing.assert_allclose(mean, draws.mean(axis=0))
+    coverage = np.mean((low <= 3.0) & (3.0 <= high))
+    assert abs(coverage - 0.95) < 3 * np.sqrt(0.95 * 0.05 / 4000)     # 3 sigma of the rate
+    # the same along the last axis
+    again = metrics.mean_interval(draws.T, axis=-1)
+    np.testing.assert_array_equal(again[1], low)
+
+
+@pytest.mark.parametrize("values, kwargs, match", [
+    ([1.0], {}, "N >= 2 draws"),
+    (np.ones((1, 3)), {}, "N >= 2 draws along axis 0"),
+    ([1.0, 2.0], dict(confidence=1.0), "confidence must be below 1"),
+    ([1.0, 2.0], dict(axis=1), "axis must be an integer"),
+])
+def test_mean_interval_bad_input(values, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        metrics.mean_interval(values, **kwargs)

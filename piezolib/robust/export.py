@@ -15,7 +15,8 @@ section:
     s2   = b2 x - a2 y
 
 :class:`SectionFilter` is that reference implementation in numpy, in the
-precision asked for (float32 arithmetic for the float32 coefficients), and
+precision asked for (float32 arithmetic for the float32 coefficients),
+:class:`SectionFilterBatch` the same on N signals at once (bit for bit), and
 :func:`sos_filter` runs it over a signal.  :func:`write_json` and
 :func:`write_c_header` write the coefficients in float64 and rounded to
 float32; :func:`read_json` reads them back.
@@ -31,9 +32,11 @@ import control as ct
 import numpy as np
 import scipy.signal as sig
 
-from piezolib._checks import check_finite_array, check_finite_lti, check_positive, check_siso
+from piezolib._checks import (check_finite_array, check_finite_lti, check_integer, check_positive,
+                              check_siso)
 
-__all__ = ["SOSController", "controller_sos", "SectionFilter", "sos_filter", "write_json",
+__all__ = ["SOSController", "controller_sos", "SectionFilter", "SectionFilterBatch",
+           "sos_filter", "write_json",
            "read_json", "write_c_header", "export_controller"]
 
 _DTYPES = {"float64": np.float64, "float32": np.float32}
@@ -232,6 +235,85 @@ class SectionFilter:
             s[0] = b1 * u - a1 * y + s[1]
             s[1] = b2 * u - a2 * y
         return float(y)
+
+
+class SectionFilterBatch:
+    """:class:`SectionFilter` run on N signals at once (e.g. N noise seeds).
+
+    The states are arrays of shape (N,) and every operation of
+    :meth:`SectionFilter.step` is applied elementwise in the same order and
+    precision, so channel i of the output is identical, float for float, to
+    a :class:`SectionFilter` fed with channel i of the input.
+
+    Parameters
+    ----------
+    controller : SOSController or array_like
+        The sections (or an (n, 6) section matrix), shared by all channels.
+    dtype : {'float64', 'float32'}
+        Precision of the coefficients, the states and every operation.
+    size : int
+        Number of channels N >= 1.
+
+    Examples
+    --------
+    >>> f = SectionFilterBatch(np.array([[0.5, 0, 0, 1, -0.5, 0]]), size=2)
+    >>> f.step([1.0, 2.0])
+    array([0.5, 1. ])
+    """
+
+    def __init__(self, controller, dtype="float64", size=1):
+        ref = SectionFilter(controller, dtype)          # checks the sections and dtype
+        self.dtype = ref.dtype
+        self.size = check_integer("size", size, minimum=1)
+        c = np.array(ref._coef, dtype=self.dtype)       # (n_sections, 6) in dtype
+        n_sec = len(c)
+        self._b0 = [np.array(x, self.dtype) for x in c[:, 0]]
+        # the state updates of all sections at once (they need only the sections'
+        # inputs u and outputs y): [s1; s2] <- [b1; b2] u - [a1; a2] y, s1 += old s2
+        self._bb = np.stack([c[:, 1:2], c[:, 2:3]])     # (2, n_sections, 1)
+        self._aa = np.stack([c[:, 4:5], c[:, 5:6]])
+        self._v = np.empty((n_sec + 1, self.size), self.dtype)  # v[0] input, v[i+1] section i out
+        self._rows = list(self._v)
+        self._u, self._y = self._v[:-1], self._v[1:]
+        self._t = np.empty((2, n_sec, self.size), self.dtype)
+        self._t2 = np.empty_like(self._t)
+        self.reset()
+
+    def reset(self):
+        """Zero the states."""
+        self._s = np.zeros((2, len(self._b0), self.size), self.dtype)   # [s1; s2] per section
+
+    def step(self, x):
+        """One sample of every channel.
+
+        Parameters
+        ----------
+        x : array_like, shape (N,)
+            Input of each channel.
+
+        Returns
+        -------
+        ndarray, shape (N,)
+            Output of each channel, float64 holding the ``dtype`` results.
+        """
+        x = np.asarray(x, dtype=float)
+        if x.shape != (self.size,):
+            raise ValueError(f"x must have shape ({self.size},), got {x.shape}")
+        v, s, t, t2 = self._rows, self._s, self._t, self._t2
+        v[0][...] = x                      # rounds to dtype like SectionFilter's dtype(x)
+        # y = b0 u + s1, section after section (u of section i = y of section i - 1) ...
+        s1 = s[0]
+        for i, b0 in enumerate(self._b0):
+            np.multiply(b0, v[i], v[i + 1])
+            np.add(v[i + 1], s1[i], v[i + 1])
+        # ... then every section's states, in SectionFilter's order of operations:
+        # s1 <- (b1 u - a1 y) + s2,  s2 <- b2 u - a2 y
+        np.multiply(self._bb, self._u, t)
+        np.multiply(self._aa, self._y, t2)
+        np.subtract(t, t2, t)
+        np.add(t[0], s[1], t[0])
+        self._s, self._t = t, s
+        return v[-1].astype(np.float64)
 
 
 def sos_filter(controller, x, dtype="float64"):

@@ -4,12 +4,17 @@ u_c[k] = u_f[k] + u_b[k - d]: the feedforward u_f of the whole reference
 first, then the discrete controller on v_e[k] = v_r[k] - v_y[k] sample by
 sample, its output applied ``d`` samples later (the computation delay,
 default :data:`COMPUTATION_DELAY_SAMPLES` = 1), each u_c held for one DAQ
-period.  Timing, signal flow and start-up are
+period.  :func:`run_loop` with ``seeds`` (or a
+:class:`~piezolib.problem.stage.StageBatch`) runs N copies of the loop at once,
+one per noise seed, with one state array of shape (N,) per state: member i is
+identical, float for float, to the single run with seed i, and N = 32 costs
+about twice one run.  Timing, signal flow and start-up are
 described in ``docs/controller_design.md``; the experiments of Sec. V (Cases I-III,
 Tables 4-5) are in :mod:`piezolib.workbook.experiments`.
 """
 
 import math
+from collections import deque
 from dataclasses import dataclass, field
 from numbers import Real
 
@@ -22,7 +27,7 @@ from piezolib.hysteresis.compensator import feedforward as dahl_feedforward
 from piezolib.hysteresis.dahl import DahlModel
 from piezolib.metrics import tracking_error_percent
 from piezolib.robust.discrete import DiscreteController, discretize
-from piezolib.robust.export import SectionFilter, SOSController
+from piezolib.robust.export import SectionFilter, SectionFilterBatch, SOSController
 
 __all__ = ["LoopResult", "discrete_controller", "run_loop", "DISCARD_PERIODS",
            "COMPUTATION_DELAY_SAMPLES"]
@@ -216,13 +221,15 @@ def _feedforward_signal(feedforward, v_r):
 
 
 def run_loop(stage, v_r, *, feedforward=None, controller=None,
-             delay_samples=COMPUTATION_DELAY_SAMPLES, sections_dtype="float32"):
+             delay_samples=COMPUTATION_DELAY_SAMPLES, sections_dtype="float32", seeds=None):
     """Run the loop of Fig. 1 on a stage at its sample rate.
 
     Parameters
     ----------
-    stage : piezolib.problem.stage.VirtualStage
-        Each run starts from the stage's rest state with its noise seed.
+    stage : piezolib.problem.stage.VirtualStage or StageBatch
+        Each run starts from the stage's rest state with its noise seed.  A
+        :class:`~piezolib.problem.stage.StageBatch` runs the loop on every
+        member at once (as ``seeds`` does).
     v_r : array_like
         Reference voltage [V] at the stage's rate, 1-D (x_r = 3 um/V * v_r).
     feedforward : None, float, (float, float) or DahlModel
@@ -245,20 +252,37 @@ def run_loop(stage, v_r, *, feedforward=None, controller=None,
         ahead from the reference, is not delayed.
     sections_dtype : {'float32', 'float64'}
         Arithmetic of an SOSController.
+    seeds : sequence of int, optional
+        Noise seeds (distinct, non-negative): run the loop once per seed,
+        all seeds at once, on ``stage.batch(seeds)`` (the stage with only
+        its seed changed).  ``None``: one run with the stage's seed.
 
     Returns
     -------
-    LoopResult
+    LoopResult or list of LoopResult
+        A list (one result per member, in order) when ``seeds`` is given or
+        ``stage`` is a StageBatch.  Result i is identical, float for float,
+        to ``run_loop(stage.replace(seed=seeds[i]), ...)``; limited samples
+        are counted per result and warned once per place of the chain.
 
     Raises
     ------
     ValueError
-        Bad reference, a controller at another sample time, or a controller
-        output that stops being finite (an unstable loop).
+        Bad reference or seeds, a controller at another sample time, or a
+        controller output that stops being finite (an unstable loop).
     """
-    from piezolib.problem.stage import VirtualStage     # stage is imported lazily by the package
+    from piezolib.problem.stage import StageBatch, VirtualStage   # imported lazily by the package
+    if isinstance(stage, StageBatch):
+        if seeds is not None:
+            raise ValueError("seeds must be None when stage is a StageBatch (its members "
+                             "carry their seeds)")
+        return _run_batch(stage, v_r, feedforward, controller, delay_samples, sections_dtype)
     if not isinstance(stage, VirtualStage):
-        raise TypeError(f"stage must be a VirtualStage, got {type(stage).__name__}")
+        raise TypeError(f"stage must be a VirtualStage or a StageBatch, got "
+                        f"{type(stage).__name__}")
+    if seeds is not None:
+        return _run_batch(stage.batch(seeds), v_r, feedforward, controller, delay_samples,
+                          sections_dtype)
     v_r = check_finite_array("v_r", v_r, ndim=1, min_length=2)
     delay = check_integer("delay_samples", delay_samples, minimum=0)
     u_f, ff_text = _feedforward_signal(feedforward, v_r)
@@ -315,3 +339,77 @@ def _closed_loop(stage, v_r, u_f, controller_step, delay):
             ub = pending.pop(0)
         v_y = step(f + ub)
     return u_b, sim.record()
+
+
+# --------------------------------------------------------------------------- N seeds at once
+def _run_batch(batch, v_r, feedforward, controller, delay_samples, sections_dtype):
+    """:func:`run_loop` on every member of a StageBatch; a list of LoopResult."""
+    v_r = check_finite_array("v_r", v_r, ndim=1, min_length=2)
+    delay = check_integer("delay_samples", delay_samples, minimum=0)
+    u_f, ff_text = _feedforward_signal(feedforward, v_r)
+    n = batch.size
+    if isinstance(controller, SOSController):
+        if not math.isclose(controller.fs, batch.fs, rel_tol=1e-9):
+            raise ValueError(f"controller sections run at {controller.fs:g} Hz, the stage at "
+                             f"{batch.fs:g} Hz")
+        step, used = SectionFilterBatch(controller, sections_dtype, n).step, controller
+    else:
+        used = discrete_controller(controller, batch.fs)
+        if used is None:
+            return [LoopResult(v_r, u_f, np.zeros_like(v_r), record, ff_text, None, delay)
+                    for record in batch.run(u_f)]
+        step = _state_space_batch_step(used, n)
+    u_b, records = _closed_loop_batch(batch, v_r, u_f, step, delay)
+    return [LoopResult(v_r, u_f, u_b[i], record, ff_text, used, delay)
+            for i, record in enumerate(records)]
+
+
+def _state_space_batch_step(Kd, size):
+    """:func:`_state_space_step` for ``size`` members: e and u_b of shape (size,).
+
+    ``np.matmul`` of M with a stack of column vectors runs numpy's
+    matrix-vector kernel once per member, the call ``M @ w`` makes in the
+    single run, so each member's arithmetic is the single run's (a matrix
+    product ``W @ M.T`` would sum in another order).
+    """
+    M = _augmented(Kd)
+    n = M.shape[0] - 1
+    W = np.zeros((size, n + 1, 1))
+
+    def step(e):
+        nonlocal W
+        W[:, n, 0] = e
+        W = np.matmul(M, W)
+        return W[:, n, 0].copy()
+    return step
+
+
+def _closed_loop_batch(batch, v_r, u_f, controller_step, delay):
+    """:func:`_closed_loop` on every member of ``batch`` at once.
+
+    Returns
+    -------
+    u_b : ndarray, shape (N, n)
+        Row i: the controller output of member i [V].
+    records : list of StageRecord
+    """
+    sim = batch.start()
+    advance = sim._advance           # step without re-checking: u_f and u_b are finite here
+    ubs = []
+    pending = deque(np.zeros(batch.size) for _ in range(delay))   # oldest first
+    v_y = sim.v_y_V
+    for k, (r, f) in enumerate(zip(v_r.tolist(), u_f.tolist())):
+        ub = controller_step(r - v_y)
+        # as in _closed_loop, stop long before an output overflows; the root sum
+        # of squares over the members is one cheap call (NaN fails too)
+        if not ub.dot(ub) < _DIVERGED_V ** 2:
+            bad = [batch.seeds[i] for i in np.flatnonzero(~(np.abs(ub) < _DIVERGED_V))]
+            raise ValueError(f"the controller output diverged at sample {k} "
+                             f"(t = {k / batch.fs:.4f} s) for seed(s) {bad or list(batch.seeds)}"
+                             ": is the closed loop stable?")
+        ubs.append(ub)
+        if delay:
+            pending.append(ub)
+            ub = pending.popleft()
+        v_y = advance(f, ub)             # u_c = f + ub
+    return np.array(ubs).T.copy(), sim.records()

@@ -200,3 +200,110 @@ def test_exported_sections_run_like_the_model(stage):
     with pytest.raises(ValueError, match="Hz"):
         loop.run_loop(stage, v, controller=controller_sos(
             ct.tf([0.1], [1, -0.5], 1e-3), "K_slow"))
+
+
+# --- N noise seeds at once: member i is the single run with seed i, bit for bit -------
+SEEDS = [3, 0, 11]
+
+
+def sections():
+    from piezolib.robust.export import controller_sos
+    return controller_sos(loop.discrete_controller(paper.controller()), "K_pub")
+
+
+def assert_same_run(one, member):
+    for name in ("t_s", "u_c_V", "v_a_V", "x_um", "v_y_V"):
+        assert np.array_equal(getattr(one.record, name), getattr(member.record, name)), name
+    for name in ("v_r_V", "u_f_V", "u_b_V"):
+        assert np.array_equal(getattr(one, name), getattr(member, name)), name
+    assert one.saturation == member.saturation and one.delay_samples == member.delay_samples
+    assert one.feedforward == member.feedforward
+
+
+@pytest.mark.parametrize("delay", [0, 1, 2])
+@pytest.mark.parametrize("kind", ["sections float32", "sections float64", "state space"])
+def test_batched_closed_loop_member_is_the_single_run_with_its_seed(stage, kind, delay):
+    v = reference(frequency_hz=10.0)
+    controller, dtype = ((loop.discrete_controller(paper.controller()), "float32")
+                         if kind == "state space" else (sections(), kind.split()[1]))
+    runs = loop.run_loop(stage, v, feedforward=DAHL, controller=controller,
+                         delay_samples=delay, sections_dtype=dtype, seeds=SEEDS)
+    assert isinstance(runs, list) and len(runs) == len(SEEDS)
+    for seed, member in zip(SEEDS, runs):
+        one = loop.run_loop(stage.replace(seed=seed), v, feedforward=DAHL,
+                            controller=controller, delay_samples=delay, sections_dtype=dtype)
+        assert member.record.seed == seed
+        assert_same_run(one, member)
+    assert not np.array_equal(runs[0].v_y_V, runs[1].v_y_V)      # the noise differs
+
+
+def test_batched_open_loop_and_stage_batch_argument(stage):
+    from piezolib.problem.stage import StageBatch
+    v = reference()
+    runs = loop.run_loop(stage, v, feedforward=DAHL, seeds=SEEDS)
+    for seed, member in zip(SEEDS, runs):
+        assert member.controller is None
+        assert_same_run(loop.run_loop(stage.replace(seed=seed), v, feedforward=DAHL), member)
+    # a StageBatch runs its members, which may include the noise-free stage
+    batch = StageBatch([stage, stage.replace(noise_rms_V=0.0)])
+    quiet = loop.run_loop(batch, v, feedforward=DAHL, controller=sections())[1]
+    assert_same_run(loop.run_loop(stage.replace(noise_rms_V=0.0), v, feedforward=DAHL,
+                                  controller=sections()), quiet)
+    with pytest.raises(ValueError, match="seeds must be None"):
+        loop.run_loop(batch, v, seeds=[1, 2])
+
+
+def test_batched_loop_counts_saturation_per_member_and_warns_once_per_place(stage):
+    v = reference(peak=14.0, frequency_hz=10.0, periods=1)    # u_c up to 14 V > 12 V
+    with pytest.warns(StageSaturationWarning) as caught:
+        runs = loop.run_loop(stage, v, feedforward=1.0, controller=0.0, seeds=SEEDS)
+    n_over = int(np.count_nonzero(v > paper.AMPLIFIER_INPUT_RANGE_V[1]))
+    for seed, member in zip(SEEDS, runs):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", StageSaturationWarning)
+            one = loop.run_loop(stage.replace(seed=seed), v, feedforward=1.0, controller=0.0)
+        assert member.record.input_saturation == one.record.input_saturation
+        assert member.record.input_saturation.count == n_over
+        assert member.saturation_count == one.saturation_count
+    inputs = [w for w in caught if "DAC/amplifier input" in str(w.message)]
+    assert len(inputs) == 1 and "3 of 3 batch members (seeds 3, 0, 11)" in str(inputs[0].message)
+
+
+def test_batched_unstable_loop_raises_naming_the_seeds(stage):
+    K = ct.tf([1.0], [1.0, -2.0], 1 / FS)
+    with pytest.raises(ValueError, match=r"diverged at sample \d+ .* seed\(s\) \[3, 0, 11\]"), \
+            warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        loop.run_loop(stage, reference(periods=4), feedforward=1.0, controller=K, seeds=SEEDS)
+
+
+@pytest.mark.parametrize("seeds, match", [
+    ([], "seeds must hold at least 1"),
+    ([0, 0], "seeds must be distinct"),
+    ([-2], "seeds must be non-negative"),
+    ([0.5], "seeds must be integers"),
+])
+def test_run_loop_bad_seeds(stage, seeds, match):
+    with pytest.raises(ValueError, match=match):
+        loop.run_loop(stage, reference(), feedforward=1.0, seeds=seeds)
+
+
+@pytest.mark.parametrize("dtype", ["float32", "float64"])
+def test_section_filter_batch_is_the_section_filter_per_channel(dtype):
+    from piezolib.robust.export import SectionFilter, SectionFilterBatch
+    rng = np.random.default_rng(1)
+    sos = np.array([[0.3, 0.1, -0.2, 1, -1.2, 0.5], [1.1, -0.4, 0.2, 1, -0.3, 0.1],
+                    [0.7, 0.2, 0.1, 1, -1.9, 0.91]])
+    x = rng.standard_normal((400, 4)) * np.array([1.0, 1e3, 1e-3, 7.0])   # badly scaled too
+    batch = SectionFilterBatch(sos, dtype, size=4)
+    y = np.array([batch.step(row) for row in x])
+    assert y.dtype == np.float64
+    for i in range(4):
+        single = SectionFilter(sos, dtype)
+        assert np.array_equal(y[:, i], [single.step(v) for v in x[:, i].tolist()])
+    batch.reset()
+    assert np.array_equal(batch.step(x[0]), y[0])
+    with pytest.raises(ValueError, match=r"x must have shape \(4,\)"):
+        batch.step(np.ones(3))
+    with pytest.raises(ValueError, match="size must be >= 1"):
+        SectionFilterBatch(sos, dtype, size=0)
