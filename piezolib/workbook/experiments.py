@@ -7,6 +7,13 @@ I–III; the cases themselves are run by :func:`run_case` on the loop of
 :func:`tracking_test` run the three cases on references built once and give
 the tables in the paper's layout.  What each case applies and why:
 ``docs/controller_design.md``.
+
+Case III's figures sit at the sensor-noise and ADC floor of the stage, so one
+noise draw moves them by 5-50 % between machines; with ``seeds`` both tests
+run every case for N noise seeds at once (the batched loop of
+:mod:`piezolib.workbook.loop`) and report the mean over the seeds with its
+95 % Student-t interval (:func:`piezolib.metrics.mean_interval`) and the
+noise-free table beside it.
 """
 
 import functools
@@ -20,8 +27,9 @@ from piezolib import paper, signals
 from piezolib._checks import check_finite_array, check_integer, check_positive, check_same_length
 from piezolib.hysteresis.dahl import DahlModel
 from piezolib.hysteresis.measure import hysteresis_measure
-from piezolib.metrics import improvement_percent
+from piezolib.metrics import improvement_percent, mean_interval
 from piezolib.problem.hysteresis import workbook_dahl_fit
+from piezolib.problem.stage import StageBatch, VirtualStage, check_seeds
 from piezolib.robust.export import SOSController
 from piezolib.workbook.loop import (COMPUTATION_DELAY_SAMPLES, DISCARD_PERIODS,
                                     discrete_controller, run_loop)
@@ -131,7 +139,8 @@ def run_case(case, stage, v_r, dahl, controller=None, case_I_gain=None,
     Parameters
     ----------
     case : {"I", "II", "III"}
-    stage : piezolib.problem.stage.VirtualStage
+    stage : piezolib.problem.stage.VirtualStage or StageBatch
+        A StageBatch runs the case on every member at once.
     v_r : array_like
         Reference [V].
     dahl : DahlModel or None
@@ -149,7 +158,8 @@ def run_case(case, stage, v_r, dahl, controller=None, case_I_gain=None,
 
     Returns
     -------
-    piezolib.workbook.loop.LoopResult
+    piezolib.workbook.loop.LoopResult or list of LoopResult
+        A list (one per member) for a StageBatch.
     """
     if case not in CASES:
         raise ValueError(f"case must be one of {sorted(CASES)}, got {case!r}")
@@ -197,17 +207,36 @@ class ExperimentResult:
     Attributes
     ----------
     table : pandas.DataFrame
-        Same layout as :func:`piezolib.paper.table4` / :func:`~piezolib.paper.table5`.
+        Same layout as :func:`piezolib.paper.table4` / :func:`~piezolib.paper.table5`
+        [%].  With seeds: the mean over the seeds (each improvement row is
+        computed seed by seed, then averaged).
     runs : dict
-        {(case, column value): LoopResult}.
+        {(case, column value): LoopResult}; with seeds, the runs of the first
+        seed.
     saturation : pandas.DataFrame
         Limited samples per case (rows) and column: DAC/amplifier input +
-        amplifier output + ADC.
+        amplifier output + ADC; with seeds, the largest count over the seeds
+        and the noise-free run.
+    low, high : pandas.DataFrame or None
+        With seeds: the two-sided 95 % confidence interval of the mean
+        (Student t, N - 1 degrees of freedom), same layout as ``table`` [%].
+    noise_free : pandas.DataFrame or None
+        With seeds: the table of one run on the stage without sensor noise
+        (``noise_rms_V=0``; the DAC and ADC quantisation kept) [%].
+    per_seed : pandas.DataFrame or None
+        With seeds: every seed's table, rows indexed by (seed, row) [%].
+    seeds : tuple of int or None
+        The seeds used (None: one run with the stage's own seed).
     """
 
     table: pd.DataFrame
     runs: dict = field(repr=False)
     saturation: pd.DataFrame
+    low: object = field(default=None, repr=False)
+    high: object = field(default=None, repr=False)
+    noise_free: object = field(default=None, repr=False)
+    per_seed: object = field(default=None, repr=False)
+    seeds: object = None
 
 
 # --------------------------------------------------------------------------- references
@@ -281,7 +310,21 @@ def _case_III_controller(controller, stage):
     return discrete_controller(controller, stage.fs)
 
 
-def _experiment(columns, run, measure):
+def _seeded_stages(stage, seeds):
+    """None, or the StageBatch of the seeds plus the noise-free stage (last)."""
+    if seeds is None:
+        return None
+    seeds = check_seeds(seeds, min_count=2,
+                        why="N >= 2 seeds are needed for a confidence interval")
+    if not isinstance(stage, VirtualStage):
+        raise TypeError(f"stage must be a VirtualStage to run seeds, got {type(stage).__name__}")
+    return StageBatch([stage.replace(seed=s) for s in seeds]
+                      + [stage.replace(noise_rms_V=0.0)])
+
+
+def _experiment(columns, run, measure, batch=None):
+    if batch is not None:
+        return _seeded_experiment(columns, run, measure, batch)
     values, runs, sat = {c: [] for c in CASES}, {}, {c: [] for c in CASES}
     for col in columns:
         for case in CASES:
@@ -295,8 +338,35 @@ def _experiment(columns, run, measure):
     return ExperimentResult(table, runs, saturation)
 
 
+def _seeded_experiment(columns, run, measure, batch):
+    """:func:`_experiment` on a batch whose last member is the noise-free stage."""
+    seeds = batch.seeds[:-1]
+    values = {c: np.empty((batch.size, len(columns))) for c in CASES}
+    runs, sat = {}, {c: [] for c in CASES}
+    for j, col in enumerate(columns):
+        for case in CASES:
+            results = run(case, col)
+            runs[(case, float(col))] = results[0]
+            for m, result in enumerate(results):
+                values[case][m, j] = measure(result, col)
+            sat[case].append(max(r.saturation_count for r in results))
+    tables = [case_table({c: values[c][m] for c in CASES}, columns)
+              for m in range(batch.size)]
+    mean, low, high = mean_interval(np.stack([t.to_numpy() for t in tables[:-1]]), axis=0)
+
+    def like(data):
+        return pd.DataFrame(data, index=tables[0].index, columns=columns)
+
+    per_seed = pd.concat(dict(zip(seeds, tables[:-1])), names=["seed"])
+    saturation = pd.DataFrame([sat[c] for c in CASES], index=pd.Index(
+        [f"case_{c}" for c in CASES], name="row"), columns=columns)
+    return ExperimentResult(like(mean), runs, saturation, like(low), like(high), tables[-1],
+                            per_seed, tuple(seeds))
+
+
 def hysteresis_test(stage, dahl, controller, amplitudes_V=None, periods=4,
-                    discard_periods=DISCARD_PERIODS, delay_samples=COMPUTATION_DELAY_SAMPLES):
+                    discard_periods=DISCARD_PERIODS, delay_samples=COMPUTATION_DELAY_SAMPLES,
+                    seeds=None):
     """Table 4: hysteresis % of 10 Hz triangles, Cases I-III.
 
     The reference of each amplitude A is :func:`table4_reference` (0 ...
@@ -317,6 +387,12 @@ def hysteresis_test(stage, dahl, controller, amplitudes_V=None, periods=4,
     periods, discard_periods : int
     delay_samples : int
         Computation delay of Case III's feedback [samples] (default 1).
+    seeds : sequence of int, optional
+        N >= 2 distinct non-negative noise seeds: every case runs for every
+        seed (all seeds at once) and once without sensor noise, and the
+        result holds the mean, its 95 % interval, the noise-free table and
+        the per-seed tables (:class:`ExperimentResult`).  ``None``: one run
+        with the stage's seed.
 
     Returns
     -------
@@ -326,21 +402,24 @@ def hysteresis_test(stage, dahl, controller, amplitudes_V=None, periods=4,
                                     paper.HYSTERESIS_TEST["actuator_amplitudes_V"])
     periods = check_integer("periods", periods, minimum=discard_periods + 1)
     Kd = _case_III_controller(controller, stage)
+    batch = _seeded_stages(stage, seeds)
+    target = stage if batch is None else batch
 
     def run(case, A):
         v_r = _table4_triangle(A, periods, stage.fs)[1]
-        return run_case(case, stage, v_r, dahl, Kd, case_I_gain=1.0, delay_samples=delay_samples)
+        return run_case(case, target, v_r, dahl, Kd, case_I_gain=1.0,
+                        delay_samples=delay_samples)
 
     def measure(result, A):
         return table4_measure(result.v_r_V, result.v_y_V, discard_periods=discard_periods,
                               fs=stage.fs).percent
 
-    return _experiment(pd.Index(amplitudes_V, name="amplitude_V"), run, measure)
+    return _experiment(pd.Index(amplitudes_V, name="amplitude_V"), run, measure, batch)
 
 
 def tracking_test(stage, dahl, controller, frequencies_Hz=None, amplitude_um=None,
                   discard_periods=DISCARD_PERIODS, min_measured_s=MIN_MEASURED_S,
-                  delay_samples=COMPUTATION_DELAY_SAMPLES):
+                  delay_samples=COMPUTATION_DELAY_SAMPLES, seeds=None):
     """Table 5: tracking error % of 12 um triangles, Cases I-III.
 
     Each frequency runs :func:`tracking_periods` periods of
@@ -365,6 +444,9 @@ def tracking_test(stage, dahl, controller, frequencies_Hz=None, amplitude_um=Non
         [s]
     delay_samples : int
         Computation delay of Case III's feedback [samples] (default 1).
+    seeds : sequence of int, optional
+        As in :func:`hysteresis_test`: N >= 2 seeds give the mean over the
+        seeds, its 95 % interval, the noise-free and the per-seed tables.
 
     Returns
     -------
@@ -375,13 +457,15 @@ def tracking_test(stage, dahl, controller, frequencies_Hz=None, amplitude_um=Non
     amplitude_um = check_positive("amplitude_um", paper.TRACKING_TEST["amplitude_um"]
                                   if amplitude_um is None else amplitude_um)
     Kd = _case_III_controller(controller, stage)
+    batch = _seeded_stages(stage, seeds)
+    target = stage if batch is None else batch
 
     def run(case, f):
         periods = tracking_periods(f, discard_periods, min_measured_s)
         v_r = tracking_reference(f, periods, amplitude_um, stage.fs)[1]
-        return run_case(case, stage, v_r, dahl, Kd, delay_samples=delay_samples)
+        return run_case(case, target, v_r, dahl, Kd, delay_samples=delay_samples)
 
     def measure(result, f):
         return result.tracking_error_percent(f, discard_periods, range_um=amplitude_um)
 
-    return _experiment(pd.Index(frequencies_Hz, name="frequency_Hz"), run, measure)
+    return _experiment(pd.Index(frequencies_Hz, name="frequency_Hz"), run, measure, batch)

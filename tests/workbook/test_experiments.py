@@ -172,3 +172,67 @@ def test_bad_case_and_missing_controller(stage):
         ex.tracking_test(stage, DAHL, None)
     with pytest.raises(ValueError, match="controller must be given"):
         ex.hysteresis_test(stage, DAHL, None)
+
+
+# --- the experiments over N noise seeds ------------------------------------------------
+@pytest.fixture(scope="module")
+def seeded(stage):
+    from piezolib.robust.export import controller_sos
+    K = controller_sos(loop.discrete_controller(paper.controller()), "K_pub")
+    seeds = [3, 8, 1]
+    return K, seeds, (ex.hysteresis_test(stage, DAHL, K, amplitudes_V=[20.0], seeds=seeds),
+                      ex.tracking_test(stage, DAHL, K, frequencies_Hz=[25.0], seeds=seeds))
+
+
+def test_seeded_experiments_are_statistics_of_the_single_runs(stage, seeded):
+    from scipy import stats
+    K, seeds, (h, tr) = seeded
+    single = {3: (ex.hysteresis_test(stage, DAHL, K, amplitudes_V=[20.0]),
+                  ex.tracking_test(stage, DAHL, K, frequencies_Hz=[25.0]))}
+    quiet_stage = stage.replace(noise_rms_V=0.0)
+    quiet = (ex.hysteresis_test(quiet_stage, DAHL, K, amplitudes_V=[20.0]),
+             ex.tracking_test(quiet_stage, DAHL, K, frequencies_Hz=[25.0]))
+    for res, one, noise_free in ((h, single[3][0], quiet[0]), (tr, single[3][1], quiet[1])):
+        assert res.seeds == tuple(seeds)
+        # seed 3 is the stage's own seed: its table is the unseeded experiment's, exactly
+        pd.testing.assert_frame_equal(res.per_seed.loc[3], one.table)
+        pd.testing.assert_frame_equal(res.noise_free, noise_free.table)
+        assert list(res.per_seed.index.names) == ["seed", "row"]
+        for frame in (res.table, res.low, res.high, res.noise_free):
+            assert frame.index.equals(one.table.index)
+            assert frame.columns.equals(one.table.columns)
+        # mean of every row (improvements per seed, then averaged) and the t interval
+        by_seed = np.stack([res.per_seed.loc[s].to_numpy() for s in seeds])
+        np.testing.assert_allclose(res.table.to_numpy(), by_seed.mean(axis=0), rtol=1e-12)
+        half = stats.t.ppf(0.975, 2) * by_seed.std(axis=0, ddof=1) / np.sqrt(3)
+        np.testing.assert_allclose(res.high.to_numpy() - res.table.to_numpy(), half,
+                                   rtol=1e-9, atol=1e-12)
+        assert (res.low.to_numpy() <= res.table.to_numpy()).all()
+        assert (res.table.to_numpy() <= res.high.to_numpy()).all()
+        # runs are the first seed's, so the figures keep working
+        assert set(res.runs) == set(one.runs)
+        assert np.array_equal(res.runs[("III", res.table.columns[0])].v_y_V,
+                              one.runs[("III", one.table.columns[0])].v_y_V)
+        assert (res.saturation.values == 0).all()
+    # the seeds differ where the noise matters: Case III of the tracking test
+    assert tr.per_seed.xs("case_III", level="row")[25.0].nunique() == 3
+
+
+@pytest.mark.parametrize("seeds, match", [
+    ([], r"at least 2 seed\(s\), got 0"),
+    ([5], r"got 1: N >= 2 seeds are needed for a confidence interval"),
+    ([1, 2.0], "seeds must be integers"),
+    ([1, -2], "seeds must be non-negative"),
+    ([4, 4], "seeds must be distinct"),
+    (7, "seeds must be a sequence"),
+])
+def test_experiments_reject_bad_seeds(stage, seeds, match):
+    for test in (ex.hysteresis_test, ex.tracking_test):
+        with pytest.raises(ValueError, match=match):
+            test(stage, DAHL, paper.controller(), [20.0], seeds=seeds)
+
+
+def test_unseeded_experiment_has_no_statistics(stage):
+    res = ex.tracking_test(stage, DAHL, paper.controller(), frequencies_Hz=[50.0])
+    assert res.seeds is None and res.low is None and res.high is None
+    assert res.noise_free is None and res.per_seed is None
