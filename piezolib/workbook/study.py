@@ -148,13 +148,23 @@ class ExperimentChoice:
     range_um : float
         Peak-to-peak range [um] of the tracking triangle.
     stage_seed : int
-        Seed of the virtual stage's sensor noise.
+        Seed of the virtual stage's sensor noise (the first of ``noise_seeds``).
+    noise_seeds : int
+        Number of noise seeds, ``stage_seed``, ``stage_seed + 1``, ...: each
+        Table 4-5 entry is reported as the mean over them with its 95 %
+        interval (at least 2).
     """
 
     amplitudes_V: tuple = paper.HYSTERESIS_TEST["actuator_amplitudes_V"]
     frequencies_Hz: tuple = paper.TRACKING_TEST["frequencies_Hz"]
     range_um: float = paper.TRACKING_TEST["amplitude_um"]
     stage_seed: int = 0
+    noise_seeds: int = 16
+
+    @property
+    def seeds(self):
+        """The noise seeds of the experiments, a tuple of ``noise_seeds`` ints."""
+        return tuple(range(self.stage_seed, self.stage_seed + self.noise_seeds))
 
     def __post_init__(self):
         # TOML gives lists; a frozen study keeps tuples so it stays hashable
@@ -173,6 +183,10 @@ class ExperimentChoice:
                 _positive(f"experiments.{name}", v)
         _positive("experiments.range_um", self.range_um)
         _integer("experiments.stage_seed", self.stage_seed, 0, 2 ** 32 - 1)
+        _integer("experiments.noise_seeds", self.noise_seeds, 2, 1000)
+        if self.stage_seed + self.noise_seeds > 2 ** 32:
+            raise StudyError("experiments.stage_seed + noise_seeds must stay below 2**32, got "
+                             f"{self.stage_seed} + {self.noise_seeds}")
 
 
 _SECTIONS = {"uncertainty": UncertaintyChoice, "weights": WeightChoice, "design": DesignChoice,

@@ -43,7 +43,8 @@ def fig14_hysteresis_cases(result, frequency_hz=None, controller="our 6th-order 
         axes[-1, k].set_xlabel("10 x reference [V]")
     fig.suptitle(f"Fig. 14: loops at {frequency_hz:g} Hz; I open loop, II Dahl feedforward, "
                  f"III feedforward + {controller}\n(every case run here in the loop and measured "
-                 "after the first period: Case I differs slightly from the recorded data files)")
+                 "after the first period: Case I differs slightly from the recorded data files)"
+                 + _seeds_note(result))
     plotting.save_figure(fig, 14, "hysteresis_cases")
     return fig
 
@@ -89,6 +90,15 @@ def fig15_tracking_error(ours, published=None, fs=None):
                 ax.set_ylabel(f"Case {case}: e [um]")
         axes[-1, k].set_xlabel("t / period")
     axes[-1, 0].legend(fontsize=7, loc="lower left")
-    fig.suptitle("Fig. 15: tracking error of 12 um triangles over one steady-state period")
+    fig.suptitle("Fig. 15: tracking error of 12 um triangles over one steady-state period"
+                 + _seeds_note(ours))
     plotting.save_figure(fig, 15, "tracking_error")
     return fig
+
+
+def _seeds_note(result):
+    """A line saying what the numbers in the titles are when the result spans noise seeds."""
+    if result.seeds is None:
+        return ""
+    return (f"\ncurves: noise seed {result.seeds[0]}; numbers: mean over {len(result.seeds)} "
+            "noise seeds")
