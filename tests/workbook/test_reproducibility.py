@@ -1,10 +1,11 @@
-"""The committed results follow from the committed reference controllers on this machine.
+"""The committed results follow from the committed reference artifacts on this machine.
 
-Reproducibility rule (README): tables keep 4 significant digits; every number downstream of
-the committed reference controllers (data/controllers/reference_design.json) is deterministic up
-to floating-point rounding, so recomputing it here must give the committed value within one unit
-of the 4th digit (relative 1e-3).  Run before the notebooks rewrite data/results/ (pytest runs
-tests/ before notebooks/).
+Reproducibility rule (README): a table row states its precision (default one unit of the 4th
+significant digit; a statistic over noise seeds: a quarter of its 95 % interval).  Every number
+downstream of the committed artifacts (controllers, their float32 sections, the workbook Dahl
+model) is deterministic up to floating-point rounding, so recomputing it here must give the
+committed value within that precision.  Run before the notebooks rewrite data/results/ (pytest
+runs tests/ before notebooks/).
 """
 
 import pandas as pd
@@ -13,9 +14,7 @@ import pytest
 from piezolib.problem import analysis
 from piezolib.problem.hysteresis import workbook_dahl_fit
 from piezolib.problem.stage import VirtualStage
-from piezolib.robust import export
-from piezolib.robust.discrete import discretize
-from piezolib.workbook import experiments, pipeline
+from piezolib.workbook import experiments, pipeline, report, study
 from piezolib.workbook.paths import data_dir
 
 RTOL = 1e-3
@@ -24,6 +23,11 @@ RTOL = 1e-3
 def committed(table, quantity):
     frame = pd.read_csv(data_dir() / "results" / f"{table}.csv")
     return float(frame.set_index("quantity").loc[quantity, "ours"])
+
+
+def committed_row(table, quantity):
+    frame = pd.read_csv(data_dir() / "results" / f"{table}.csv", dtype=str, keep_default_na=False)
+    return frame.set_index("quantity").loc[quantity]
 
 
 @pytest.fixture(scope="module")
@@ -41,14 +45,16 @@ def test_table3_mu_of_the_committed_controllers(problem):
         assert mu == pytest.approx(committed("mu_synthesis", f"mu_RP ({name})"), rel=RTOL), name
 
 
-def test_table5_case_III_with_the_committed_controller(problem, tmp_path):
-    G = problem.G
-    ours = pipeline.study_controllers("reference")
-    sections = export.export_controller(discretize(ours.K_deployed, 10_000.0, G=G).K, tmp_path,
-                                        "K", meta={})
+def test_table5_case_III_with_the_committed_controller():
+    reference = study.load("reference")
+    sections = pipeline.study_sections(reference)["K_ours"]
     result = experiments.tracking_test(VirtualStage(seed=0), workbook_dahl_fit().model, sections,
-                                       (1.0, 50.0))
+                                       (1.0, 50.0), seeds=reference.experiments.seeds)
     for f in (1.0, 50.0):
-        value = float(result.table.loc["case_III", f])
-        assert value == pytest.approx(
-            committed("tracking", f"tracking error case_III at {f:g} Hz"), rel=RTOL), f
+        row = committed_row("tracking", f"tracking error case_III at {f:g} Hz")
+        again = row.copy()
+        again["ours"] = f"{result.table.loc['case_III', f]:.4g}"
+        again["low"] = f"{result.low.loc['case_III', f]:.4g}"
+        again["high"] = f"{result.high.loc['case_III', f]:.4g}"
+        assert report.same_result(row, again), (f, row[["ours", "low", "high"]].tolist(),
+                                                again[["ours", "low", "high"]].tolist())
