@@ -31,7 +31,10 @@ _ERR_FACTOR = 10.0    # ... or |Re lambda| <= factor * eps * ||A||
 _PENCIL_ZERO_TOL = 100 * np.finfo(float).eps  # Hamiltonian: error bound / ||pencil||
 _SPREAD_LIMIT = 1e11  # pole spread beyond which failures are reported as numerical
 _RESIDUAL_TOL = 1e-5  # relative Riccati residual accepted
-_MAX_BACKOFFS = 8     # final verifications: the search's gamma, then 7 growing raises
+_MAX_CHECKS = 16      # final verifications of the best controllers (each two dense sweeps)
+_MAX_BACKOFFS = 8     # then raises of gamma by growing steps
+_MAX_SAMPLES = 24     # trials spread over the last rtol when no controller landed there
+_GOLDEN = (np.sqrt(5.0) - 1) / 2   # low-discrepancy spacing of those trials
 
 
 class HinfSynthesisError(ValueError):
@@ -85,11 +88,11 @@ class HinfResult:
     elapsed : float
         Wall time [s] (information only: no stopping rule uses time).
     converged : bool
-        False when ``max_iter`` ended the search before the bracket was
-        ``rtol`` wide, when no central controller near the optimum passed
-        the closed-loop check (numerically ill-conditioned problem), when
-        the final check had to raise gamma, or when the returned controller
-        beat a gamma judged infeasible.
+        True exactly when ``gamma <= gamma_infeasible (1 + rtol)``: False when
+        ``max_iter`` ended the search first, when no controller within
+        ``rtol`` of the optimum passed the final checks (numerically
+        ill-conditioned problem), or when the returned controller beat a
+        gamma judged infeasible.
     attempts : tuple
         (gamma, outcome) of every trial, in order.
     """
@@ -572,10 +575,16 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60,
             effort_weight="auto", noise_weight="auto", time_scale=None, verify_rtol=1e-3):
     """H-infinity controller for P by a bounded, verified gamma-iteration.
 
-    The search is bounded by counts only (``max_iter`` gamma trials, then at
-    most 8 back-off steps of the final verification), never by wall time,
-    so the controller returned does not depend on the machine's speed or
-    load; ``elapsed`` reports the time taken.
+    The Riccati verdicts only guide the search: they bracket the optimum,
+    where every trial's central controller counts at its own closed-loop
+    peak, gammas within ``rtol`` above the bracket are sampled until one
+    controller passes, and a controller is returned only when its loop
+    passes the final checks (dense-grid peak, stability of the loop closed
+    around the given plant, norm recomputed on it); see ``docs/robust.md``.
+    The search is bounded by counts only (``max_iter`` gamma trials, at most
+    16 final checks, then at most 8 back-off steps), never by wall time, so
+    the controller returned does not depend on the machine's speed or load;
+    ``elapsed`` reports the time taken.
 
     Parameters
     ----------
@@ -596,8 +605,10 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60,
         Regularisation used when D12 / D21 is rank deficient: 'auto' adds
         1e-3 * u (1e-3 * n), a float sets the weight, None raises instead.
         With 'auto', where the Riccati conditions hold but no central
-        controller verifies at any gamma, the weights 1e-2, 1e-1 and 1 are
-        tried in turn (``HinfResult.regularization`` then says so).
+        controller verifies within ``rtol`` of the optimum, the weights 1e-2,
+        1e-1 and 1 are tried in turn until one converges
+        (``HinfResult.regularization`` then says so); if none does, the
+        smallest weight's result is returned.
     time_scale : float, optional
         Internal time scale omega_s [rad/s]; default
         :func:`piezolib.robust.lti.time_scale_of` ``(P)``.
@@ -614,43 +625,49 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60,
         Unstabilisable or undetectable plant, rank-deficient D12/D21 with
         regularisation switched off, no feasible gamma <= gamma_max, or no
         verified controller within ``max_iter`` trials and the final back-offs
-        (up to 7 raises of gamma, by 1 %, 2 %, 4 %, ... or 10 ``rtol`` if larger:
-        the controller must pass the dense-grid check and stabilise the given
-        plant with a margin).
+        (up to 8 raises of gamma, by 1 %, 2 %, 4 %, ... or 10 ``rtol`` if larger:
+        the controller must pass the dense-grid check, stabilise the given
+        plant with a margin and meet gamma on it).
     """
     t0 = time.perf_counter()
     options = dict(gamma_max=gamma_max, rtol=rtol, max_iter=max_iter, time_scale=time_scale,
                    verify_rtol=verify_rtol)
-    try:
-        return _hinfsyn_once(P, nmeas, ncon, effort_weight=effort_weight,
-                             noise_weight=noise_weight, **options)
-    except _ControllersFailed as exc:
-        auto_u = isinstance(effort_weight, str) and bool(exc.rho_u)
-        auto_n = isinstance(noise_weight, str) and bool(exc.rho_n)
-        if not (auto_u or auto_n):
-            raise
-        first = exc
     # the default regularisation can leave the central controllers too ill-conditioned to
-    # verify (a random plant with D12 = 0: X spanning 14 decades, every loop unstable up to
-    # gamma 1e9, where 1.0 gives the optimum): stronger weights, each reported
-    for factor in (10, 100, 1000):
+    # verify near the optimum (a random plant with D12 = 0: X spanning 14 decades, every
+    # loop unstable up to gamma 1e9 under one BLAS kernel, a few far above the optimum under
+    # another, where 1.0 gives the optimum): stronger weights, each reported, until one
+    # converges; if none does, the smallest weight's result
+    first, fallback, auto_u, auto_n = None, None, False, False
+    for factor in (1, 10, 100, 1000):
         weight = DEFAULT_EFFORT_WEIGHT * factor
         try:
-            res = _hinfsyn_once(P, nmeas, ncon, effort_weight=weight if auto_u else effort_weight,
-                                noise_weight=weight if auto_n else noise_weight, **options)
-        except _ControllersFailed:
-            continue
-        return replace(
-            res, elapsed=time.perf_counter() - t0,
-            regularization=f"{res.regularization} (raised from the default "
-                           f"{DEFAULT_EFFORT_WEIGHT:g}: smaller weights left no verifiable "
-                           "controller)")
-    raise first
+            res, unverified = _hinfsyn_once(
+                P, nmeas, ncon, effort_weight=weight if auto_u else effort_weight,
+                noise_weight=weight if auto_n else noise_weight, **options)
+            rho_u, rho_n = res.effort_weight, res.noise_weight
+        except _ControllersFailed as exc:
+            first, res, unverified, rho_u, rho_n = first or exc, None, True, exc.rho_u, exc.rho_n
+        if factor == 1:
+            auto_u = isinstance(effort_weight, str) and bool(rho_u)
+            auto_n = isinstance(noise_weight, str) and bool(rho_n)
+        if not (auto_u or auto_n) and res is None:
+            raise first
+        if res is not None and factor > 1:
+            res = replace(res, regularization=f"{res.regularization} (raised from the default "
+                          f"{DEFAULT_EFFORT_WEIGHT:g}: smaller weights left no controller "
+                          "verifiable near the optimum)")
+        if res is not None and not (unverified and (auto_u or auto_n)):
+            return replace(res, elapsed=time.perf_counter() - t0)
+        fallback = fallback or res
+    if fallback is None:
+        raise first
+    return replace(fallback, elapsed=time.perf_counter() - t0)
 
 
 def _hinfsyn_once(P, nmeas, ncon, *, gamma_max, rtol, max_iter, effort_weight, noise_weight,
                   time_scale, verify_rtol):
-    """:func:`hinfsyn` with the given regularisation weights (no escalation)."""
+    """:func:`hinfsyn` with the given regularisation weights (no escalation), and whether
+    the Riccati conditions' bracket closed with no controller verified within it."""
     t0 = time.perf_counter()
     check_lti("P", P)
     if P.isdtime(strict=True):
@@ -765,23 +782,6 @@ def _hinfsyn_once(P, nmeas, ncon, *, gamma_max, rtol, max_iter, effort_weight, n
             hi_cond = mid
             if verdict == "verified":
                 hi = mid
-    # a verified controller between the conditions' optimum and ``hi``, if any
-    v_lo = hi_cond
-    while hi > lo * (1 + rtol) and hi > v_lo * (1 + rtol / 8) and not out_of_trials():
-        mid = np.sqrt(v_lo * hi)
-        if feasible(mid):
-            hi = mid
-        else:
-            v_lo = mid
-    # a central controller that missed its own gamma may still beat the best verified one
-    for level in sorted(c for c in candidates if c < hi / (1 + verify_rtol)):
-        A, B, C, D = _close_loop(nz.plant, candidates[level])
-        dense, _ = hinf_norm(ct.ss(A, B, C, D), omega=_check_grid(A, 2000))
-        if dense <= level * (1 + verify_rtol):
-            cache[level], hi = candidates[level], level
-            attempts.append((float(level), "a trial's central controller, verified at its peak"))
-            break
-    converged = hi <= lo * (1 + rtol) or lo <= floor
 
     def given_loop(K):
         """(Ks, CLs, poles_s, err): K for the given plant and the loop it closes there."""
@@ -795,55 +795,122 @@ def _hinfsyn_once(P, nmeas, ncon, *, gamma_max, rtol, max_iter, effort_weight, n
         CLs = balance(Ps.lft(balance(Ks), nu=ncon, ny=nmeas))
         return (Ks, CLs, *_eig_errors(np.asarray(CLs.A, float)))
 
-    # final verification on a dense grid and on the given plant's loop, backing off
-    # gamma (by growing steps) if either fails: near the optimum the central
-    # controller can be so ill-conditioned that the same loop, realised from the
-    # given plant, has a pole at or across the axis
-    result, failure = None, "no controller passed verification"
-    gamma = hi
-    for k in range(_MAX_BACKOFFS):
-        if k:
-            gamma *= 1 + max(10 * rtol, 0.01) * 2 ** (k - 1)
-            converged = False
-        K = cache.get(gamma)
-        if K is None:
-            if not feasible(gamma):
-                continue
-            K = cache[gamma]
+    def final_check(K, level):
+        """(peak, K, CLs, poles_s, norm, w_peak), K in ordinary time, when the normalised
+        plant's controller K passes every check at ``level``, else
+        None (the reason is appended to ``attempts``).  The ground truth is the loop
+        itself: its peak on a dense grid, its poles when closed around the given plant
+        (near the optimum a controller can be so ill-conditioned that the same loop,
+        realised from the given plant, has a pole at or across the axis) and its norm
+        recomputed pointwise on the given plant."""
         A, B, C, D = _close_loop(nz.plant, K)
         peak, _ = hinf_norm(ct.ss(A, B, C, D), omega=_check_grid(A, 2000))
-        if peak > gamma * (1 + verify_rtol):
-            attempts.append((float(gamma), f"dense-grid peak {peak:.4g} > gamma"))
-            continue
+        if peak > level * (1 + verify_rtol):
+            attempts.append((float(level), f"dense-grid peak {peak:.4g} > gamma"))
+            return None
         Ks, CLs, poles_s, err = given_loop(K)
-        if np.any(_marginal(poles_s, err)):
-            worst = poles_s[np.argmax(poles_s.real)] * ws
-            failure = ("the controller does not stabilise the unregularised plant with a "
-                       f"margin (closed-loop pole at {worst:.4g} rad/s)")
-            attempts.append((float(gamma), f"given plant's loop: pole at {worst:.4g} rad/s"))
-            continue
-        result = K
-        break
+        # and closed once more as a user would, in ordinary time: near an ill-conditioned
+        # optimum one realisation of the same loop can be stable and another not
+        K_out = from_scaled(balance(Ks), ws, P.output_labels[-nmeas:], P.input_labels[-ncon:],
+                            name="K")
+        lam, lam_err = _eig_errors(np.asarray(P.lft(K_out, nu=ncon, ny=nmeas).A, float))
+        for poles, errs in ((poles_s, err), (lam / ws, lam_err / ws)):
+            if np.any(_marginal(poles, errs)):
+                worst = poles[np.argmax(poles.real)] * ws
+                attempts.append((float(level), f"given plant's loop: pole at {worst:.4g} rad/s"))
+                return None
+        # the norm from the pointwise loop, not from CLs: near pole-zero cancellations the
+        # closed loop's realisation is evaluated badly (1.7e5 instead of 1.38 seen at DC)
+        norm, w_peak = lft_hinf_norm(Ps, balance(Ks), _check_grid(CLs.A, 2000), omega_s=1.0) \
+            if CLs.nstates else (float(np.linalg.norm(CLs.D, 2)), 0.0)
+        if not np.isfinite(norm) or norm > level * (1 + verify_rtol):
+            attempts.append((float(level), f"recomputed norm {norm:.4g} on the given plant "
+                                           "> gamma"))
+            return None
+        return peak, K_out, CLs, poles_s, norm, w_peak
+
+    # A controller within rtol of the conditions' optimum.  Near an ill-conditioned
+    # optimum whether a central controller passes its checks is decided by rounding (the
+    # Lundstrom K-step: peaks from gamma to 14 gamma within 0.1 % above the optimum, in a
+    # different pattern under every BLAS kernel), so neither a bisection on "verified" nor
+    # the first controller to pass is reproducible.  Every trial's controller counts at its
+    # own closed-loop peak, the best ones go through the final checks, and gammas spread
+    # over (lo, lo (1 + rtol)] by a golden-ratio sequence are tried until one passes.
+    rejected, checks = set(), [0]
+
+    def pool():
+        """(level, K, at_peak) of the controllers not rejected by the final checks, best
+        first: verified ones at their gamma, the others at their closed-loop peak."""
+        items = [(g, K, False) for g, K in cache.items()] + \
+            [(c, K, True) for c, K in candidates.items()]
+        return sorted((item for item in items if item[0] not in rejected), key=lambda x: x[0])
+
+    def first_passing(limit):
+        """(level, K, at_peak, checked) of the best pooled controller at a level <= limit
+        that passes :func:`final_check`, or None; the ones that fail are rejected."""
+        for level, K, at_peak in pool():
+            if level > limit or checks[0] >= _MAX_CHECKS:
+                return None
+            checks[0] += 1
+            checked = final_check(K, level)
+            if checked is not None:
+                return level, K, at_peak, checked
+            rejected.add(level)
+        return None
+
+    found, samples = None, 0
+    while hi_cond <= lo * (1 + rtol):
+        found = first_passing(lo * (1 + rtol))
+        if found or samples >= _MAX_SAMPLES or checks[0] >= _MAX_CHECKS or out_of_trials():
+            break
+        samples += 1
+        gamma = lo * (1 + rtol) ** ((samples * _GOLDEN) % 1.0)
+        verdict = outcome(gamma)
+        if verdict == "infeasible" and gamma < hi_cond:
+            lo = gamma
+        elif verdict != "infeasible":
+            # an "infeasible" above a gamma where the conditions hold is a flipped verdict
+            hi_cond = min(hi_cond, gamma)
+    if found is None:
+        # nothing in the window: bisect between the conditions' optimum and the best
+        # verified gamma, as long as the verdicts there keep improving it
+        hi = min([g for g in cache if g not in rejected] + [hi])
+        v_lo = hi_cond
+        while hi > lo * (1 + rtol) and hi > v_lo * (1 + rtol / 8) and not out_of_trials():
+            mid = np.sqrt(v_lo * hi)
+            if feasible(mid):
+                hi = mid
+            else:
+                v_lo = mid
+        found = first_passing(np.inf)
+
+    if found is not None:
+        gamma, K, at_peak, result = found
+        if at_peak:
+            attempts.append((float(gamma), "a trial's central controller, verified at its peak"))
+    else:
+        # back off from the best controller by growing steps (1 %, 2 %, 4 %, ...)
+        gamma, result = (pool() or [(hi,)])[0][0], None
+        for k in range(_MAX_BACKOFFS):
+            gamma *= 1 + max(10 * rtol, 0.01) * 2 ** k
+            if feasible(gamma):
+                result = final_check(cache[gamma], gamma)
+                if result is not None:
+                    break
     if result is None:
-        raise HinfSynthesisError(f"{failure} (last gamma {gamma:.4g}, {len(attempts)} trials)")
-    if peak < lo:
+        raise HinfSynthesisError(f"no controller passed verification (last: {attempts[-1][1]}; "
+                                 f"{len(attempts)} trials)")
+    peak, K, CLs, poles_s, norm, w_peak = result
+    converged = gamma <= lo * (1 + rtol) or lo <= floor
+    unverified = not converged and hi_cond <= lo * (1 + rtol)
+    if tried.get(lo) == "infeasible" and peak < lo:
         # the controller itself does better than gammas judged infeasible: those
         # verdicts were rounding in ill-conditioned Riccati equations (seen on the
         # distillation K-step: gamma 2.378 "infeasible", this controller 1.457)
         lo = max([g for g, v in tried.items() if v == "infeasible" and g < peak] + [floor])
         converged = False
         attempts.append((float(peak), "controller beats gammas judged infeasible: those "
-                                      "verdicts were numerical"))
-    K = from_scaled(balance(Ks), ws, P.output_labels[-nmeas:], P.input_labels[-ncon:], name="K")
-    poles = poles_s * ws
-    # the norm from the pointwise loop, not from CLs: near pole-zero cancellations the
-    # closed loop's realisation is evaluated badly (1.7e5 instead of 1.38 seen at DC)
-    norm, w_peak = lft_hinf_norm(Ps, balance(Ks), _check_grid(CLs.A, 2000), omega_s=1.0) \
-        if CLs.nstates else (float(np.linalg.norm(CLs.D, 2)), 0.0)
-    if not np.isfinite(norm) or norm > gamma * (1 + verify_rtol):
-        # never report success for a loop whose recomputed norm exceeds gamma
-        converged = False
-        attempts.append((float(gamma), f"recomputed norm {norm:.4g} on the given plant > gamma"))
+                                       "verdicts were numerical"))
     CL = from_scaled(CLs, ws, P.input_labels[:-ncon], P.output_labels[:-nmeas],
                      name="closed_loop")
     if tried.get(lo) != "infeasible":
@@ -852,7 +919,7 @@ def _hinfsyn_once(P, nmeas, ncon, *, gamma_max, rtol, max_iter, effort_weight, n
         lo = gamma_d
     return HinfResult(K=K, gamma=float(gamma), gamma_infeasible=float(lo), norm=float(norm),
                       omega_peak=float(w_peak * ws), closed_loop=CL,
-                      closed_loop_poles=np.sort_complex(poles), regularization=regularization,
-                      effort_weight=rho_u, noise_weight=rho_n, time_scale=ws,
-                      iterations=len(attempts), elapsed=time.perf_counter() - t0,
-                      converged=bool(converged), attempts=tuple(attempts))
+                      closed_loop_poles=np.sort_complex(poles_s * ws),
+                      regularization=regularization, effort_weight=rho_u, noise_weight=rho_n,
+                      time_scale=ws, iterations=len(attempts), elapsed=time.perf_counter() - t0,
+                      converged=bool(converged), attempts=tuple(attempts)), unverified

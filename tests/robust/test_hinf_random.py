@@ -93,14 +93,14 @@ def test_riccati_reference_and_hinfsyn_on_a_scalar_problem():
 
 @pytest.mark.parametrize("seed", [90021, 90052])
 def test_ill_conditioned_optimum_backs_off_instead_of_raising(seed):
-    # near these optima (gamma 1.4e3 and 3.5e5) the verified central controller, realised
-    # for the given plant, left a closed-loop pole across the axis (at 0.0023 + 0.013j and
-    # 0.20 + 207j rad/s) and hinfsyn raised; now gamma backs off to a controller that
-    # stabilises the given plant with a margin
+    # near these optima (gamma 1.4e3 and 3.5e5) a verified central controller, realised
+    # for the given plant, can leave a closed-loop pole across the axis (seen at
+    # 0.0023 + 0.013j and 0.20 + 207j rad/s; which controllers do is set by rounding) and
+    # hinfsyn raised; now such a controller is rejected and another one near the optimum,
+    # or a backed-off gamma, stabilises the given plant with a margin
     P, ny, nu = riccati.random_orthonormal_plant(np.random.default_rng(seed))
     res = hinfsyn(P, ny, nu, rtol=1e-4, gamma_max=1e9)
-    assert any("given plant's loop" in status for _, status in res.attempts)
-    assert not res.converged and res.gamma <= res.gamma_infeasible * 1.02
+    assert res.gamma <= res.gamma_infeasible * 1.02
     poles = ct.poles(ct.ss(P).lft(res.K, nu=nu, ny=ny))
     assert np.all(poles.real < 0)
     assert res.norm <= res.gamma * (1 + 1e-3)
@@ -133,8 +133,10 @@ def test_rescaled_controls_measurements_and_d22_keep_the_optimum(seed):
 
 def test_default_regularisation_is_raised_where_no_controller_verifies():
     # a random plant with D12 = 0: with the default effort output 1e-3 u (and 1e-2, 1e-1)
-    # X spans 14 decades and every central controller's loop is unstable up to gamma 1e9
-    # (60-digit two-Riccati test: feasible from about 8e6); with 1.0 the search converges
+    # X spans 14 decades and no central controller near the optimum verifies (60-digit
+    # two-Riccati test: feasible from about 8e6; at 1e-1 every loop unstable up to 1e9
+    # under one BLAS kernel, a few verified 8 % above the optimum under another); with
+    # 1.0 the search converges
     P, ny, nu = riccati.random_orthonormal_plant(np.random.default_rng(60073))
     D = np.array(P.D)
     D[:-ny, -nu:] = 0

@@ -313,10 +313,20 @@ def test_distillation_first_k_step(column, dk_first_step):
 
 def test_pointwise_reference_is_exact(column, dk_first_step):
     """The frequency-by-frequency reference agrees with exact rational arithmetic."""
-    K = dk_first_step.K
-    exact = tp.exact_response(ct.ss(column.P).lft(K, nu=2, ny=2), 1e-3)
-    ref = tp.pointwise_lft(column.P, K, [1e-3])[0]
-    np.testing.assert_allclose(ref, exact, rtol=0, atol=1e-7 * np.abs(exact).max())
+    K, w = dk_first_step.K, 1e-3
+    # the exact loop from P(jw) and K(jw) in exact arithmetic (combined in floating point:
+    # cond(I - P22 K) eps ~ 1e-14), with no closed-loop realisation, whose mere forming
+    # is ill-conditioned here (cond(jwI - A_cl) from 1e12 to 5e16 with the kernel's K)
+    Pw, Kw = tp.exact_response(ct.ss(column.P), w), tp.exact_response(K, w)
+    loop = np.eye(2) - Pw[-2:, -2:] @ Kw
+    exact = Pw[:-2, :-2] + Pw[:-2, -2:] @ Kw @ np.linalg.solve(loop, Pw[-2:, :-2])
+    ref = tp.pointwise_lft(column.P, K, [w])[0]
+    # tolerance: P(jw) and K(jw) each carry a relative error up to eps times their
+    # componentwise condition (tp.response: componentwise backward stable), and solving
+    # with I - P22 K amplifies relative errors by at most its condition number
+    bound = np.finfo(float).eps * np.linalg.cond(loop) * (
+        tp.response_condition(column.P, w) + tp.response_condition(K, w))
+    np.testing.assert_allclose(ref, exact, rtol=0, atol=bound * np.abs(exact).max())
     assert np.linalg.norm(exact, 2) == pytest.approx(dk_first_step.gamma, rel=1e-3)
 
 
@@ -409,7 +419,10 @@ def test_lundstrom_k_step_default_design_reaches_the_optimum(lundstrom_plant):
     # regression: with the default effort weight the pencil Riccati solutions called
     # gamma = 2.0 unstabilising and 1.0 "on the axis", so the search returned 2.380,
     # "infeasible below 2.378", converged -- while a controller designed with effort
-    # weight 1e-4 reaches 0.974 on the same regularised plant
+    # weight 1e-4 reaches 0.974 on the same regularised plant.  The optimum is 0.9733 (the
+    # Riccati conditions fail below it), so a converged search ends below 0.9733 (1 + rtol)
+    # < 0.976; the 1e-4 design's norm on this plant (0.974-0.981: its controller, and so its
+    # effort, varies with the kernel) can only be above the optimum
     res = robust.hinfsyn(lundstrom_plant, 2, 2)
     assert "effort" in res.regularization
     P_reg = with_effort_output(lundstrom_plant, res.effort_weight, 2, 2)
@@ -417,8 +430,8 @@ def test_lundstrom_k_step_default_design_reaches_the_optimum(lundstrom_plant):
     achieved, _ = robust.lft_hinf_norm(P_reg, res.K, grid)
     other = robust.hinfsyn(lundstrom_plant, 2, 2, effort_weight=1e-4)
     reference, _ = robust.lft_hinf_norm(P_reg, other.K, grid)
-    assert reference < 0.98
-    assert res.converged and res.gamma <= reference * (1 + 1e-3)
+    assert res.converged and res.gamma < 0.976
+    assert res.gamma <= reference * (1 + 1e-3)
     assert res.gamma_infeasible < achieved <= res.gamma * (1 + 1e-3)
 
 
@@ -432,26 +445,42 @@ def assert_verified_below(res, P, weight, level):
 
 def test_lundstrom_k_step_keeps_a_central_controller_that_missed_its_gamma(lundstrom_plant,
                                                                          monkeypatch):
-    # at effort weight 1e-6 the central controllers near the optimum miss their own gamma
-    # by 0.1-0.6 % (gamma 0.9759: closed-loop peak 0.9773); without the second Riccati
-    # route the first to pass was at 1.022, and such a controller is verified at its own
-    # peak instead
+    # near the optimum the central controllers miss their own gamma by 0.1-0.6 % in a
+    # pattern set by rounding; here every one misses it by construction (the coarse
+    # check sees peaks 0.2 % high, beyond verify_rtol) and scipy's route is off, so only
+    # a trial's controller verified at its own peak (on the dense grid) can end the search
+    # below the verified gammas far above the optimum
     from piezolib.robust import hinf
-    central = hinf._central
+    central, peak_gain = hinf._central, hinf._peak_gain
 
     def pencil_first_only(pl, gamma, scipy_first=False):
         return (None, "switched off") if scipy_first else central(pl, gamma)
 
     monkeypatch.setattr(hinf, "_central", pencil_first_only)
+    monkeypatch.setattr(hinf, "_peak_gain", lambda *args: 1.002 * peak_gain(*args))
     res = robust.hinfsyn(lundstrom_plant, 2, 2, effort_weight=1e-6)
     assert any("verified at its peak" in status for _, status in res.attempts)
     assert_verified_below(res, lundstrom_plant, 1e-6, 0.98)
 
 
-def test_lundstrom_k_step_retries_a_failed_controller_with_scipy_riccati(lundstrom_plant):
-    # at effort weight 1e-6 the pencil's X, Y give central controllers 72 % above
-    # gamma = 1.0 and 0.2 % above 0.976, where scipy's solutions verify: the search now
-    # ends at 0.9754 (0.15 % above the 1e-4 design's 0.97395) instead of 0.9773
+def test_lundstrom_k_step_retries_a_failed_controller_with_scipy_riccati(lundstrom_plant,
+                                                                        monkeypatch):
+    # at effort weight 1e-6 the pencil's X, Y gave central controllers 72 % above
+    # gamma = 1.0 where scipy's verify (which route fails near the optimum is set by
+    # rounding); here the pencil route's controllers are all spoiled (twice the output
+    # gain), so every controller verified must come from the retry with scipy's solutions,
+    # and the search must still end within rtol of the optimum (0.9733)
+    from piezolib.robust import hinf
+    central = hinf._central
+
+    def spoiled_pencil(pl, gamma, scipy_first=False):
+        K, status = central(pl, gamma, scipy_first=scipy_first)
+        if K is None or scipy_first:
+            return K, status
+        Ak, Bk, Ck, Dk = K
+        return (Ak, Bk, 2 * Ck, 2 * Dk), status
+
+    monkeypatch.setattr(hinf, "_central", spoiled_pencil)
     res = robust.hinfsyn(lundstrom_plant, 2, 2, effort_weight=1e-6)
     assert any("scipy's Riccati" in status for _, status in res.attempts)
     assert_verified_below(res, lundstrom_plant, 1e-6, 0.976)
@@ -474,12 +503,12 @@ def test_infeasibility_is_never_claimed_below_the_returned_controller(monkeypatc
     assert not res.converged
 
 
-@pytest.mark.xfail(strict=True, reason="finding: at effort weight 1e-6 the search returns "
-                   "gamma 0.9754, not converged, where the 1e-4 design's 0.974 also holds: the "
-                   "Riccati conditions hold down to 0.9739, but the central controllers there "
-                   "miss their gamma by 0.1-0.6 % with either Riccati solver (1e-15 relative "
-                   "changes of K move the loop's peak by about 0.1 %)")
 def test_lundstrom_k_step_gamma_is_monotone_in_the_effort_weight(lundstrom_plant):
-    # the optimum of P plus an output eps * u can only grow with eps
+    # the optimum of P plus an output eps * u can only grow with eps.  Both searches
+    # converge (gamma <= gamma_infeasible (1 + rtol), gamma_infeasible below the optimum),
+    # so with the default rtol = 1e-3 the smaller weight's gamma is at most rtol above the
+    # larger one's: a tolerance from the stopping rule, not from one machine's digits
+    # (before the window search this held or failed with the BLAS kernel)
     small, large = (robust.hinfsyn(lundstrom_plant, 2, 2, effort_weight=w) for w in (1e-6, 1e-4))
+    assert small.converged and large.converged
     assert small.gamma <= large.gamma * (1 + 1e-3)

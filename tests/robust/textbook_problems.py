@@ -349,16 +349,49 @@ def pointwise_lft(P, K, omega):
     """F_l(P, K)(j omega) from P(j omega) and K(j omega), frequency by frequency.
 
     P11 + P12 K (I - P22 K)^-1 P21 needs no closed-loop realisation, so it is as
-    accurate as the responses of P and K themselves.  Shape (nf, p1, m1).
+    accurate as the responses of P and K themselves, and those are evaluated by
+    :func:`response` (componentwise accurate).  Shape (nf, p1, m1).
     """
     omega = np.asarray(omega, float)
     ny, nu = K.ninputs, K.noutputs
-    Pw = np.moveaxis(np.asarray(P(1j * omega, squeeze=False)), -1, 0)
-    Kw = np.moveaxis(np.asarray(K(1j * omega, squeeze=False)), -1, 0)
+    Pw, Kw = response(P, omega), response(K, omega)
     P11, P12 = Pw[:, :-ny, :-nu], Pw[:, :-ny, -nu:]
     P21, P22 = Pw[:, -ny:, :-nu], Pw[:, -ny:, -nu:]
     closed = np.linalg.solve(np.eye(ny) - P22 @ Kw, P21)
     return P11 + P12 @ Kw @ closed
+
+
+def response(sys, omega):
+    """C (j omega I - A)^-1 B + D, shape (nf, p, m), with a componentwise small error.
+
+    Gaussian elimination with one step of iterative refinement in working precision is
+    componentwise backward stable (Skeel 1980), so the error is bounded by
+    eps * :func:`response_condition`; without the refinement (or after a Hessenberg
+    reduction) it is only normwise stable, and a controller with two poles within
+    rounding of each other was evaluated 1e-4 off, differently under every BLAS kernel.
+    """
+    sys = ct.ss(sys)
+    A, B, C, D = (np.asarray(m, float) for m in (sys.A, sys.B, sys.C, sys.D))
+    out = []
+    for w in np.atleast_1d(np.asarray(omega, float)):
+        M = 1j * w * np.eye(A.shape[0]) - A
+        x = np.linalg.solve(M, B) if A.shape[0] else np.zeros((0, B.shape[1]))
+        if A.shape[0]:
+            x = x + np.linalg.solve(M, B - M @ x)
+        out.append(C @ x + D)
+    return np.array(out)
+
+
+def response_condition(sys, omega):
+    """Componentwise condition of C (j omega I - A)^-1 B + D against relative changes
+    of the entries of A: max | |C R| |j omega I - A| |R B| | / max |response|,
+    R = (j omega I - A)^-1 (first order)."""
+    sys = ct.ss(sys)
+    A, B, C, D = (np.asarray(m, float) for m in (sys.A, sys.B, sys.C, sys.D))
+    M = 1j * float(omega) * np.eye(A.shape[0]) - A
+    R = np.linalg.inv(M)
+    value = C @ R @ B + D
+    return float(np.abs(np.abs(C @ R) @ np.abs(M) @ np.abs(R @ B)).max() / np.abs(value).max())
 
 
 def exact_response(sys, omega):
