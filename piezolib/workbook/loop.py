@@ -5,10 +5,11 @@ first, then the discrete controller on v_e[k] = v_r[k] - v_y[k] sample by
 sample, its output applied ``d`` samples later (the computation delay,
 default :data:`COMPUTATION_DELAY_SAMPLES` = 1), each u_c held for one DAQ
 period.  :func:`run_loop` with ``seeds`` (or a
-:class:`~piezolib.problem.stage.StageBatch`) runs N copies of the loop at once,
-one per noise seed, with one state array of shape (N,) per state: member i is
-identical, float for float, to the single run with seed i, and N = 32 costs
-about twice one run.  Timing, signal flow and start-up are
+:class:`~piezolib.problem.stage.StageBatch`) runs N copies of the loop at
+once, one per noise seed, with one state array of shape (N,) per state:
+member i is identical, float for float, to the single run with seed i, and
+N = 32 seeds cost about four single runs
+(``benchmarks/bench_loop_seeds.py``).  Timing, signal flow and start-up are
 described in ``docs/controller_design.md``; the experiments of Sec. V (Cases I-III,
 Tables 4-5) are in :mod:`piezolib.workbook.experiments`.
 """
