@@ -787,16 +787,11 @@ class StageBatch:
         return StageBatchSimulation(self)
 
 
-def _min_max(x, lo, hi, out):
+def _clip(x, lo, hi, out):
+    """min(max(x, lo), hi) elementwise into ``out`` (two ufunc calls: np.clip's Python
+    wrapper costs more than both)."""
     np.maximum(x, lo, out)
     return np.minimum(out, hi, out)
-
-
-#: min(max(x, lo), hi) elementwise in one call: numpy's clip ufunc (np.clip is a
-#: slower Python wrapper around it), or the two calls where it is not there
-_clip = getattr(getattr(getattr(np, "_core", None), "umath", None), "clip", None)
-if not isinstance(_clip, np.ufunc):
-    _clip = _min_max
 
 
 def _read_only(arr):
