@@ -366,9 +366,10 @@ def response(sys, omega):
 
     Gaussian elimination with one step of iterative refinement in working precision is
     componentwise backward stable (Skeel 1980), so the error is bounded by
-    eps * :func:`response_condition`; without the refinement (or after a Hessenberg
-    reduction) it is only normwise stable, and a controller with two poles within
-    rounding of each other was evaluated 1e-4 off, differently under every BLAS kernel.
+    eps * :func:`response_condition`.  python-control's evaluation (after a Hessenberg
+    reduction) is only normwise stable: on the distillation K-step's controller (two
+    poles within rounding of each other) it was up to 1e-4 off, differently under every
+    BLAS kernel, where this is 2e-11 to 6e-11 off.
     """
     sys = ct.ss(sys)
     A, B, C, D = (np.asarray(m, float) for m in (sys.A, sys.B, sys.C, sys.D))
