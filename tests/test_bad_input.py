@@ -13,6 +13,7 @@ import importlib
 import inspect
 import pathlib
 import re
+from dataclasses import replace
 
 import control as ct
 import numpy as np
@@ -334,6 +335,12 @@ CASES = {
                              "stride": {"zero": 0, "text": "x"},
                              "starts": {"zero": 0, "text": "x"},
                              "initial": {"text": "abc", "pi model": PI}}),
+    "hysteresis.rescore_dahl": (dict(fit=FIT, model=FIT.model, loops=[(V, X)]),
+                                {"fit": {"text": "abc", "a model": DAHL},
+                                 "model": {"text": "abc", "pi model": PI,
+                                           "other form": replace(FIT.model, form="printed")},
+                                 "loops": LOOPS,
+                                 "discard": {"negative": -1, "whole record": V.size}}),
     "hysteresis.choose_fit": (dict(fits={"a": FIT}), {"fits": {"empty": {}, "text": "abc",
                                                                  "list": [FIT], "not fits": {"a": DAHL}}}),
     "hysteresis.play_outputs": (dict(v=V, thresholds=np.array([0.0, 0.5]), y0=np.zeros(2)),
