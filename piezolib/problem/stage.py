@@ -790,8 +790,8 @@ class StageBatch:
 def _clip(x, lo, hi, out):
     """min(max(x, lo), hi) elementwise into ``out`` (two ufunc calls: np.clip's Python
     wrapper costs more than both)."""
-    np.maximum(x, lo, out)
-    return np.minimum(out, hi, out)
+    np.maximum(x, lo, out=out)
+    return np.minimum(out, hi, out=out)
 
 
 def _read_only(arr):
