@@ -6,9 +6,6 @@ passed explicitly and every numerical scaling is chosen from the model given.
 lti         time scaling, balancing, realisation, loop functions, norms
 lft         lower linear fractional transformation and its frequency response
 blocks      uncertainty-block type ``Block`` and the MATLAB ``blk`` parser
-mu/         the mu wing: structured singular value bounds (``mussv``), one module per
-            bound (upper_complex, upper_mixed, lower) and the research refinements
-            (refine/lifted, refine/branch) that ``mussv(refine=...)`` reaches by option
 hinf        verified H-infinity synthesis by gamma-iteration (``hinfsyn``)
 sos         second-order-section magnitude model (shared by dfit and uncertainty)
 dfit        stable minimum-phase fits of magnitude data (D-scalings)
@@ -19,8 +16,13 @@ discrete    Tustin discretisation with response checks
 margins     gain, phase, delay and disk margins; sampled-loop delay tolerance
 achievable  lower bounds on the achievable peak mu (H-infinity certificates)
 export      second-order sections: JSON, C header, reference filter
+mu/         the mu wing (:mod:`piezolib.robust.mu`): structured singular value bounds,
+            entry point ``mussv`` (ssv), one module per bound (upper_complex,
+            upper_mixed, lower), research refinements that ``mussv(refine=...)``
+            reaches by option (refine/lifted, refine/branch)
 
-Derivations and design notes: ``docs/robust.md``.
+Derivations and design notes: ``docs/robust.md``; one line per module:
+``docs/architecture.md``.
 """
 
 from piezolib.robust.lti import *          # noqa: F401,F403

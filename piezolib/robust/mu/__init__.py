@@ -14,7 +14,8 @@ refine/        research refinements that ``mussv(refine=...)`` reaches by option
 _common        private helpers the bound modules share (Newton steps, the D-balanced
                matrix, the certified D,G eigenvalue); nothing else imports them
 
-Imports point one way: ssv -> refine, lower, upper_mixed -> upper_complex -> _common.
+Imports point one way: ssv -> refine -> upper_mixed -> upper_complex -> _common, and lower
+and refine/lifted use _common only.
 Derivations: ``docs/robust.md``; timings: ``benchmarks/README.md``.
 """
 
