@@ -16,7 +16,7 @@ import numpy as np
 from piezolib import paper, robust
 from piezolib.problem import genplant
 from piezolib.problem.design import DESIGN_GRID
-from piezolib.robust import bounds
+from piezolib.robust import achievable
 from piezolib.robust.fixed_order import fixed_order_musyn
 
 FINE = np.logspace(-2, 7, 3000)
@@ -40,7 +40,7 @@ def main():
     t0 = time.perf_counter()
     fo = fixed_order_musyn(P, genplant.DESIGN_BLOCK_STRUCTURE, red.K, DESIGN_GRID)
     t_fo = time.perf_counter() - t0
-    lb = bounds.structured_lower_bound(P, genplant.DESIGN_BLOCK_STRUCTURE, 1, 1)[0]
+    lb = achievable.structured_lower_bound(P, genplant.DESIGN_BLOCK_STRUCTURE, 1, 1)[0]
     print(f"delay-aware plant: {P.nstates} states; lower bound on mu_RP {lb.value:.4f}")
     print(f"{'design':32s} {'states':>6s} {'time [s]':>9s} {'mu_RP (3000 pts)':>17s}")
     rows = [("DK-iteration, full order", dk.K, t_dk),

@@ -27,7 +27,7 @@ import numpy as np
 from bench_mu_structures import blk_dims, families, random_response
 from piezolib.robust.blocks import block_slices, parse_blk
 from piezolib.robust.mu import mussv
-from piezolib.robust.mu_lower import _layout, _power_iteration
+from piezolib.robust.mu.lower import _layout, _power_iteration
 
 FAMILIES = ("5 scalars", "8 scalars", "complex <= 8")
 

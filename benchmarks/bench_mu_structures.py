@@ -39,7 +39,8 @@ import warnings
 import numpy as np
 
 from piezolib.robust.blocks import parse_blk
-from piezolib.robust.mu import _check_refine, mussv
+from piezolib.robust.mu import mussv
+from piezolib.robust.mu.ssv import _check_refine
 
 
 def random_response(rng, p, q, n, order=4):

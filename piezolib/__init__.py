@@ -1,16 +1,19 @@
 """piezolib: the library behind the piezo-mu workbook, in three layers.
 
-toolkit   general tools for any plant (never import the layers below them in this list):
-          :mod:`~piezolib.robust`, :mod:`~piezolib.identification`,
-          :mod:`~piezolib.hysteresis`, :mod:`~piezolib.uncertainty`,
-          :mod:`~piezolib.signals`, :mod:`~piezolib.metrics`
+toolkit   general tools for any plant (never import the layers above them in this list):
+          :mod:`~piezolib.robust` (with the mu wing :mod:`piezolib.robust.mu`),
+          :mod:`~piezolib.identification`, :mod:`~piezolib.hysteresis`,
+          :mod:`~piezolib.uncertainty`, :mod:`~piezolib.signals`,
+          :mod:`~piezolib.metrics`, :mod:`~piezolib.records`,
+          :mod:`~piezolib.progress` and the private ``_checks``
 problem   the paper's stage and design problem: :mod:`~piezolib.paper` and
           :mod:`piezolib.problem`
 workbook  what runs and presents the notebooks: :mod:`piezolib.workbook`
+          (``python -m piezolib`` runs its command line)
 
 Arrows point down only: workbook -> problem -> toolkit.  Submodules load on
 first use, so ``import piezolib.robust`` pulls in neither the paper nor
-matplotlib.
+matplotlib.  One line per module: ``docs/architecture.md``.
 """
 
 import importlib

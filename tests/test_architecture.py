@@ -1,8 +1,10 @@
-"""The three layers: toolkit <- problem <- workbook, checked on the source and at import."""
+"""The three layers: toolkit <- problem <- workbook, checked on the source and at import;
+the module index of docs/architecture.md kept true."""
 
 import ast
 import json
 import pathlib
+import re
 import subprocess
 import sys
 
@@ -113,3 +115,78 @@ def test_lazy_subpackages_resolve():
     assert piezolib.robust.mussv is not None
     with pytest.raises(AttributeError, match="no attribute 'nonexistent'"):
         piezolib.nonexistent
+
+
+INDEX = PACKAGE.parent / "docs" / "architecture.md"
+
+
+def indexed_modules():
+    """Paths (relative to piezolib/) that the module index of docs/architecture.md lists."""
+    section = INDEX.read_text().split("## Module index", 1)[1].split("\n## ", 1)[0]
+    return re.findall(r"^- `([\w/]+\.py)`:", section, flags=re.MULTILINE)
+
+
+def test_module_index_lists_every_module_once():
+    listed = indexed_modules()
+    modules = {str(p.relative_to(PACKAGE)) for p in SOURCES
+               if p.name not in ("__init__.py", "__main__.py")}
+    twice = sorted({m for m in listed if listed.count(m) > 1})
+    assert not twice, f"listed more than once in docs/architecture.md: {twice}"
+    assert not modules - set(listed), \
+        f"modules missing from docs/architecture.md: {sorted(modules - set(listed))}"
+    assert not set(listed) - modules, \
+        f"docs/architecture.md lists modules that do not exist: {sorted(set(listed) - modules)}"
+
+
+def _module_name(path):
+    parts = ("piezolib",) + path.relative_to(PACKAGE).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _import_graph(sources):
+    """Module -> the piezolib modules it imports (also inside functions)."""
+    names = {_module_name(p): p for p in sources}
+    graph = {}
+    for name, path in names.items():
+        tree = ast.parse(path.read_text(), filename=str(path))
+        package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        targets = set()
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                targets |= {alias.name for alias in node.names}
+            elif isinstance(node, ast.ImportFrom):
+                base = node.module or ""
+                if node.level:
+                    parent = package.rsplit(".", node.level - 1)[0]
+                    base = f"{parent}.{base}" if base else parent
+                # "from package import module" imports the module, not the package's names
+                targets |= {f"{base}.{a.name}" if f"{base}.{a.name}" in names else base
+                            for a in node.names}
+        graph[name] = {t for t in targets if t in names and t != name}
+    return graph
+
+
+def _cycle(graph):
+    """One import cycle of the graph as a list of modules, or None."""
+    state = {}
+
+    def visit(node, path):
+        state[node] = "open"
+        for nxt in sorted(graph[node]):
+            if state.get(nxt) == "open":
+                return path[path.index(nxt):] + [nxt]
+            if nxt not in state and (found := visit(nxt, path + [nxt])):
+                return found
+        state[node] = "done"
+
+    for start in sorted(graph):
+        if start not in state and (found := visit(start, [start])):
+            return found
+    return None
+
+
+def test_the_mu_wing_has_no_import_cycle():
+    wing = [p for p in SOURCES if p.is_relative_to(PACKAGE / "robust" / "mu")]
+    graph = _import_graph(wing)
+    assert "piezolib.robust.mu.refine.branch" in graph      # the whole wing is checked
+    assert _cycle(graph) is None, f"import cycle: {' -> '.join(_cycle(graph))}"

@@ -1,11 +1,13 @@
 """The paper's problem: its stage, its design problem and its analysis.
 
-genplant   generalized plant of Fig. 9 / eq. 16
-stage      virtual P-752.21 stage (the hardware stand-in)
-stage_data its experiment files (chirps, Table 4 Case I loops): definitions, CSV I/O
-design     the workbook's mu controller in one call
-analysis   Table 3: NS, NP, RS, RP of any controller
-hysteresis the paper's Dahl model and the workbook's Dahl fit to the Case I loops
+genplant         generalized plant of Fig. 9 / eq. 16
+stage            virtual P-752.21 stage (the hardware stand-in)
+stage_hysteresis the virtual stage's hysteresis truth (play operators)
+stage_data       its experiment files (chirps, Table 4 Case I loops): definitions, CSV I/O
+design           the workbook's mu controller in one call
+analysis         Table 3: NS, NP, RS, RP of any controller
+hysteresis       the paper's Dahl model and the workbook's Dahl fit to the Case I loops
+paths            where the checkout and its ``data/`` folder are
 
 The published numbers themselves live in :mod:`piezolib.paper`, whose
 ``problem()`` returns the models G, H_m, H_e, H_y, K that the functions here

@@ -25,7 +25,7 @@ from piezolib._checks import check_finite_array, check_siso
 from piezolib.problem.genplant import BLOCK_STRUCTURE, check_models, generalized_plant
 from piezolib.robust.lft import lft_response
 from piezolib.robust.mu import mussv
-from piezolib.robust.bounds import performance_lower_bound
+from piezolib.robust.achievable import performance_lower_bound
 from piezolib.robust.discrete import discretize
 from piezolib.robust.lti import closed_loop_poles, hinf_norm, is_stable, loop_functions, realize
 from piezolib.robust.margins import delay_tolerance, loop_margins
@@ -251,18 +251,18 @@ def achievable_mu_lower_bound(G, H_m, H_e, H_y, **kwargs):
     mu_RP >= ||[H_e S; H_y T]||_inf >= inf over stabilising K of it, an
     H-infinity problem on the performance channels (v_r -> y1, y2) of the
     exact P of eq. 16, solved by
-    :func:`piezolib.robust.bounds.performance_lower_bound`.
+    :func:`piezolib.robust.achievable.performance_lower_bound`.
 
     Parameters
     ----------
     G, H_m, H_e, H_y : control.LTI
         As in :func:`analyze`.
     **kwargs
-        Passed to :func:`~piezolib.robust.bounds.performance_lower_bound`.
+        Passed to :func:`~piezolib.robust.achievable.performance_lower_bound`.
 
     Returns
     -------
-    piezolib.robust.bounds.LowerBound
+    piezolib.robust.achievable.LowerBound
     """
     G, H_m, H_e, H_y = check_models(G, H_m, H_e, H_y)
     P = generalized_plant(G, H_m, H_e, H_y)

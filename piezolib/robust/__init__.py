@@ -6,10 +6,6 @@ passed explicitly and every numerical scaling is chosen from the model given.
 lti         time scaling, balancing, realisation, loop functions, norms
 lft         lower linear fractional transformation and its frequency response
 blocks      uncertainty-block type ``Block`` and the MATLAB ``blk`` parser
-mu          structured singular value bounds (``mussv``); mu_upper, mu_mixed and
-            mu_lower hold its upper-bound (D, D-G) and lower-bound algorithms, mu_lifted
-            the tighter symmetric-lift bound for complex structures (``refine``),
-            mu_branch branch and bound over real parameters (``refine`` with real blocks)
 hinf        verified H-infinity synthesis by gamma-iteration (``hinfsyn``)
 sos         second-order-section magnitude model (shared by dfit and uncertainty)
 dfit        stable minimum-phase fits of magnitude data (D-scalings)
@@ -18,10 +14,15 @@ fixed_order fixed-order mu-synthesis of a SISO controller (``fixed_order_musyn``
 reduction   (weighted) balanced controller reduction
 discrete    Tustin discretisation with response checks
 margins     gain, phase, delay and disk margins; sampled-loop delay tolerance
-bounds      lower bounds on the achievable peak mu (H-infinity certificates)
+achievable  lower bounds on the achievable peak mu (H-infinity certificates)
 export      second-order sections: JSON, C header, reference filter
+mu/         the mu wing (:mod:`piezolib.robust.mu`): structured singular value bounds,
+            entry point ``mussv`` (ssv), one module per bound (upper_complex,
+            upper_mixed, lower), research refinements that ``mussv(refine=...)``
+            reaches by option (refine/lifted, refine/branch)
 
-Derivations and design notes: ``docs/robust.md``.
+Derivations and design notes: ``docs/robust.md``; one line per module:
+``docs/architecture.md``.
 """
 
 from piezolib.robust.lti import *          # noqa: F401,F403
@@ -35,11 +36,11 @@ from piezolib.robust.fixed_order import *  # noqa: F401,F403
 from piezolib.robust.reduction import *    # noqa: F401,F403
 from piezolib.robust.discrete import *     # noqa: F401,F403
 from piezolib.robust.margins import *      # noqa: F401,F403
-from piezolib.robust.bounds import *       # noqa: F401,F403
+from piezolib.robust.achievable import *   # noqa: F401,F403
 from piezolib.robust.export import *       # noqa: F401,F403
-from piezolib.robust import (blocks, bounds, dfit, discrete, dk, export, fixed_order, hinf, lft,
-                             lti, margins, mu, reduction)
+from piezolib.robust import (achievable, blocks, dfit, discrete, dk, export, fixed_order, hinf,
+                             lft, lti, margins, mu, reduction)
 
 __all__ = (lti.__all__ + lft.__all__ + blocks.__all__ + mu.__all__ + hinf.__all__
            + dfit.__all__ + dk.__all__ + fixed_order.__all__ + reduction.__all__
-           + discrete.__all__ + margins.__all__ + bounds.__all__ + export.__all__)
+           + discrete.__all__ + margins.__all__ + achievable.__all__ + export.__all__)

@@ -1,5 +1,7 @@
 """What exists to run and present the notebooks.
 
+study        studies: every choice of the pipeline in one serialisable object
+pipeline     the pipeline's products, computed once per study and reused
 loop         the 10 kHz loop of Fig. 1 on the virtual stage
 experiments  Cases I-III of Sec. V: the Table 4 and Table 5 experiments
 report       paper-versus-reproduced comparison tables
@@ -8,6 +10,7 @@ figures      one function per paper figure, grouped by notebook
 reproduce    headless run of the whole workbook (``python -m piezolib reproduce``)
 cli          the command line (``python -m piezolib {reproduce,data}``)
 paths        where the workbook reads its inputs and writes its outputs
+interactive  the notebooks' interactive controls and the callbacks behind them
 """
 
 __all__ = ["loop", "experiments", "report", "plotting", "figures", "reproduce", "cli", "paths"]

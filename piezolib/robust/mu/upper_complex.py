@@ -9,6 +9,8 @@ is the user-facing entry point.
 import numpy as np
 
 from piezolib.robust.blocks import block_slices
+from piezolib.robust.mu._common import (STEP_FRACTIONS, absolute_hessian,
+                                       central_difference_hessian, newton_direction, scaled_matrix)
 
 __all__ = ["complex_upper_bound", "balancing_logs"]
 
@@ -16,8 +18,7 @@ __all__ = ["complex_upper_bound", "balancing_logs"]
 # while most matrices are still moving, x4 near the non-smooth optimum
 _T_SCHEDULE = tuple(2.0 ** np.array([1, 4, 7, 10, 12, 14, 16, 18, 20, 22]))
 _NEWTON_ITERATIONS = 40           # per smoothing level (most stop after 2-4)
-_STEP_FRACTIONS = np.array([1.0, 0.5, 0.25, 0.125, 1 / 16, 1 / 64, 1 / 256])
-_SHORT_FRACTIONS = 2.0 ** -np.array([10, 13, 16, 19])   # where all of those fail
+_SHORT_FRACTIONS = 2.0 ** -np.array([10, 13, 16, 19])   # where all STEP_FRACTIONS fail
 _WARM_STRIDE = 4                  # every 4th frequency of a grid starts cold
 _WARM_LEVEL = 1024.0              # the others start at this smoothing level
 _MAX_STEP = 4.0                   # [log units] per Newton step
@@ -352,61 +353,6 @@ def _log_schatten(s, t):
     return np.log(s1[:, 0]) + np.log(total) / t, r / total[:, None]
 
 
-def _absolute_hessian(H, free, rows=None):
-    """H on the free parameters with its eigenvalues replaced by their magnitudes, floored above 0.
-
-    Only ``rows`` (default: all) are transformed; the others are taken to be
-    positive definite already.  Fixed parameters' rows and columns are zero.
-    |lambda|: along negative curvature (the repeated scalars' triangular
-    parametrisation is not convex) a step goes downhill, as far as the curvature says.
-    """
-    idx = np.nonzero(free)[0]
-    Hf = H[:, idx[:, None], idx[None, :]]
-    Hf = 0.5 * (Hf + np.swapaxes(Hf, 1, 2))
-    rows = np.ones(len(H), bool) if rows is None else rows
-    if np.any(rows) and not _above_floor(Hf[rows]):
-        lam, Q = np.linalg.eigh(Hf[rows])
-        floor = 1e-9 * np.maximum(np.abs(lam).max(1, keepdims=True), 1.0)
-        Hf[rows] = (Q * np.maximum(np.abs(lam), floor)[:, None, :]) @ np.swapaxes(Q, 1, 2)
-    out = np.zeros_like(H)
-    out[:, idx[:, None], idx[None, :]] = Hf
-    return out
-
-
-def _above_floor(H):
-    """Whether every matrix of the stack H has its eigenvalues above _absolute_hessian's floor.
-
-    By a Cholesky factorisation of H - 1e-9 max(|H|_F, 1) I (cheaper than the
-    eigenvalues; the Frobenius norm bounds the largest |lambda|): where it
-    succeeds, the floored |lambda| would return H unchanged.  The diagonal
-    scalings' convex surrogate mostly passes.
-    """
-    shift = 1e-9 * np.maximum(np.linalg.norm(H, axis=(1, 2)), 1.0)
-    try:
-        np.linalg.cholesky(H - shift[:, None, None] * np.eye(H.shape[1]))
-    except np.linalg.LinAlgError:
-        return False
-    return True
-
-
-def _newton_direction(H, g, free, max_step=None, positive=False):
-    """Regularised Newton direction -H^-1 g on the free parameters, and its decrement.
-
-    H is first made positive definite (:func:`_absolute_hessian`) unless
-    ``positive`` says it is.  The step's length is limited to ``max_step``
-    (default ``_MAX_STEP``).
-    """
-    max_step = _MAX_STEP if max_step is None else max_step
-    H = H if positive else _absolute_hessian(H, free)
-    idx = np.nonzero(free)[0]
-    step = np.zeros_like(g)
-    step[:, idx] = -np.linalg.solve(H[:, idx[:, None], idx[None, :]], g[:, idx, None])[:, :, 0]
-    norm = np.linalg.norm(step, axis=1, keepdims=True)
-    step *= np.minimum(1.0, max_step / np.maximum(norm, 1e-300))
-    decrement = -np.einsum("ni,ni->n", step, g)
-    return step, decrement
-
-
 def _power_divided_differences(mu, m, rows):
     """(mu_k^m - mu_l^m) / (mu_k - mu_l) for mu in [0, 1], m * mu^(m-1) where they are equal.
 
@@ -521,34 +467,15 @@ def _hessian_by_differences(M, theta, scaling, t, free):
     """
     cols = np.nonzero(free)[0]
     copies = 2 * cols.size + 1
-    return _central_difference_hessian(
+    return central_difference_hessian(
         lambda pts: _surrogate(np.tile(M, (copies, 1, 1)), pts, scaling, t)[:2],
         theta, 1e-4 / np.sqrt(t), cols)
-
-
-def _central_difference_hessian(value_and_gradient, x, h, cols):
-    """Value, gradient and Hessian columns ``cols`` by central differences of gradients.
-
-    ``value_and_gradient(points)`` maps the stacked points (2 len(cols) + 1
-    copies of x (N, n), shifted by +-h along each of ``cols``) to their values
-    and gradients; the other Hessian columns are zero.
-    """
-    N, n = x.shape
-    k = cols.size
-    shifts = np.zeros((2 * k + 1, n))
-    shifts[1 + np.arange(k), cols] = h
-    shifts[1 + k + np.arange(k), cols] = -h
-    F, g = value_and_gradient((x[None] + shifts[:, None]).reshape(-1, n))
-    g = g.reshape(len(shifts), N, n)
-    H = np.zeros((N, n, n))
-    H[:, :, cols] = np.moveaxis((g[1:1 + k] - g[1 + k:]) / (2 * h), 0, 2)
-    return F[:N], g[0], H
 
 
 def _line_search(M, theta, step, scaling, t, F0):
     """Full Newton step, then shorter fractions only where the longer ones did not decrease F.
 
-    Where none of ``_STEP_FRACTIONS`` decreases F either, fractions down to
+    Where none of ``STEP_FRACTIONS`` decreases F either, fractions down to
     2^-19 are tried: close to a kink of sigma_max (two singular values a
     relative 1e-4 apart) the surrogate at large t hardly sees the second one,
     and even 1/256 of its Newton step can overshoot the kink (seen to leave
@@ -561,7 +488,7 @@ def _line_search(M, theta, step, scaling, t, F0):
     F, _, s = _surrogate(M, cand, scaling, t, need_grad=False)
     cand_F, cand_s = cand.copy(), cand.copy()
     # halving first: where the full step fails, 1/2 or 1/4 of it mostly succeeds
-    for fractions in (_STEP_FRACTIONS[1:2], _STEP_FRACTIONS[2:3], _STEP_FRACTIONS[3:],
+    for fractions in (STEP_FRACTIONS[1:2], STEP_FRACTIONS[2:3], STEP_FRACTIONS[3:],
                       _SHORT_FRACTIONS):
         retry = np.nonzero(~(F < F0))[0]
         if retry.size:
@@ -659,8 +586,8 @@ def _newton_level(M, active, state, scaling, t, free, tol, hessians=None, strict
         else:
             F0, g0, H, fresh = _refreshed_model(Ma, th, scaling, t, free, model)
         # updated Hessians are positive definite already (BFGS on a positive one)
-        H = _absolute_hessian(H, free, fresh)
-        step, dec = _newton_direction(H, g0, free, positive=True)
+        H = absolute_hessian(H, free, fresh)
+        step, dec = newton_direction(H, g0, free, _MAX_STEP, positive=True)
         Fnew, sbest, cand_best, cand_new = _line_search(Ma, th, step, scaling, t, F0)
         improved = Fnew < F0
         theta[active[improved]] = cand_new[improved]
@@ -702,7 +629,7 @@ def _updated_model(M, theta, scaling, t, model, theta0, improved, retry, done):
     """The next step's model: BFGS-updated where a step was taken, NaN-marked to recompute.
 
     ``model`` = (F, g, H) at ``theta0``, H the positive definite Hessian the
-    step was taken with (:func:`_absolute_hessian`); the update keeps it
+    step was taken with (:func:`absolute_hessian`); the update keeps it
     positive definite, and is skipped where y^T s <= 0.
     """
     F0, g0, H = model
@@ -828,11 +755,6 @@ def _skewed(Dl, scaling):
         d = np.sqrt(np.abs(np.diagonal(B, axis1=1, axis2=2)))
         out |= np.linalg.cond(B / d[:, :, None] / d[:, None, :]) > _SKEWED_SCALE
     return out
-
-
-def scaled_matrix(M, Dl, Dr):
-    """Dl M Dr^-1 for stacks of matrices (nf, p, q), by a solve rather than an inverse."""
-    return np.swapaxes(np.linalg.solve(np.swapaxes(Dr, 1, 2), np.swapaxes(Dl @ M, 1, 2)), 1, 2)
 
 
 def _optimised_scaling(M, blocks, tol):

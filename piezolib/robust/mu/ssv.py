@@ -1,10 +1,12 @@
-"""Structured singular value (mu) bounds of frequency-response arrays: :func:`mussv`.
+"""The structured singular value's entry point: :func:`mussv` and its result :class:`MuResult`.
 
 Upper and lower bounds of mu_Delta(M) at every frequency, for a block
 structure in MATLAB's ``mussv`` convention (:mod:`piezolib.robust.blocks`).
-The algorithms live in :mod:`~piezolib.robust.mu_upper` (D-scaling),
-:mod:`~piezolib.robust.mu_mixed` (real blocks, AB13MD) and
-:mod:`~piezolib.robust.mu_lower` (power iteration); their derivations are in
+It chooses the algorithms of the wing (:mod:`piezolib.robust.mu`):
+:mod:`~piezolib.robust.mu.upper_complex` (D-scaling),
+:mod:`~piezolib.robust.mu.upper_mixed` (real blocks, AB13MD),
+:mod:`~piezolib.robust.mu.lower` (power iteration) and, on request
+(``refine``), :mod:`~piezolib.robust.mu.refine`; their derivations are in
 ``docs/robust.md``.
 """
 
@@ -16,11 +18,12 @@ from threadpoolctl import ThreadpoolController
 
 from piezolib._checks import check_finite_array, check_integer
 from piezolib.robust.blocks import parse_blk
-from piezolib.robust.mu_branch import branch_and_bound_upper
-from piezolib.robust.mu_lifted import MAX_LIFTED_UNKNOWNS, lifted_unknowns, lifted_upper_bound
-from piezolib.robust.mu_lower import complex_lower_bound, mixed_lower_bound
-from piezolib.robust.mu_mixed import mixed_upper_bound
-from piezolib.robust.mu_upper import complex_upper_bound
+from piezolib.robust.mu.lower import complex_lower_bound, mixed_lower_bound
+from piezolib.robust.mu.refine.branch import branch_and_bound_upper
+from piezolib.robust.mu.refine.lifted import (MAX_LIFTED_UNKNOWNS, lifted_unknowns,
+                                              lifted_upper_bound)
+from piezolib.robust.mu.upper_complex import complex_upper_bound
+from piezolib.robust.mu.upper_mixed import mixed_upper_bound
 
 __all__ = ["MuResult", "mussv"]
 
@@ -195,30 +198,19 @@ def mussv(M, blk, omega=None, *, lower=True, restarts=3, iterations=60, tol=1e-1
         Seed of the random starts (results are deterministic).
     refine : float, optional
         For complex structures (full blocks and complex scalars, at most
-        :data:`~piezolib.robust.mu_lifted.MAX_LIFTED_UNKNOWNS` unknowns, i.e. blocks x q^2
+        :data:`~piezolib.robust.mu.refine.lifted.MAX_LIFTED_UNKNOWNS` unknowns, i.e. blocks x q^2
         <= 3000): at frequencies whose relative gap exceeds ``refine`` (e.g. 0.01),
         tighten the upper bound with the symmetric-lift certificate of
-        :mod:`piezolib.robust.mu_lifted`, each until its gap is at most ``0.9 refine`` or
-        the certificate's optimum (or its cap of 60 centres) is reached.  For 8 scalars it
-        cost 3-7 ms per refined frequency on a 1,000-point grid (a neighbour's
-        certificate mostly carries over), about 0.2 s at an isolated frequency; for
-        six or seven blocks (repeated scalars, full blocks) on q = 10-13, seconds to
-        about a minute more on a 1,000-point grid with 145-450 refined frequencies, and
-        one to two minutes for seven or eight blocks on q = 15-19 (four repeated scalars
-        and a 3 x 3 block on q = 15, 548 refined frequencies: about two minutes, with cuts
-        of the repeated scalars' full weight at the 20 points where S_b and T_b alone stop
-        up to 1.34 % above the lower bound; five repeated scalars and two scalars on
-        q = 15, 682 refined frequencies: about ten minutes).
+        :mod:`piezolib.robust.mu.refine.lifted`, each until its gap is at most ``0.9 refine`` or
+        the certificate's optimum (or its cap of 60 centres) is reached.
         With real blocks (1 x 1 real scalars; repeated real scalars are
         rejected): branch and bound over the real parameters
-        (:mod:`piezolib.robust.mu_branch`) tries to certify lower / (1 - 0.9 refine)
+        (:mod:`piezolib.robust.mu.refine.branch`) tries to certify lower / (1 - 0.9 refine)
         at each frequency whose gap exceeds ``refine``, with a budget of
-        :data:`~piezolib.robust.mu_branch.MAX_BOXES` D,G bounds there (about 1-3 ms
-        each); where that runs out the D,G bound stays.  On the benchmark's six
-        purely real cases (1,000 frequencies; five refined, two to four real
-        scalars, the sixth has a repeated one) with ``refine=0.05``: 22 s per case
-        instead of 3 s, median gap 11 % -> 4.5 %; with four real scalars a third of
-        the points stay above 5 %.
+        :data:`~piezolib.robust.mu.refine.branch.MAX_BOXES` D,G bounds there; where
+        that runs out the D,G bound stays.
+        Both cost far more than the plain bounds (milliseconds to seconds per refined
+        frequency; measured in ``benchmarks/README.md``, "What mussv(refine=...) costs").
         Default None (the D-scaled or D,G bound only).
 
     Returns

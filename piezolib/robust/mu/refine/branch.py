@@ -1,6 +1,6 @@
 """A tighter upper bound of mu with real blocks: branch and bound over the real parameters.
 
-The D,G bound of :mod:`piezolib.robust.mu_mixed` can lie well above mu when real blocks
+The D,G bound of :mod:`piezolib.robust.mu.upper_mixed` can lie well above mu when real blocks
 dominate (on the benchmark's purely real structures the lower bound is mostly mu and the
 upper bound 5-40 % above it).  Splitting the box of real parameters closes that gap: mu(M) <
 beta holds when no Delta of norm <= r = 1 / beta makes I - M Delta singular, and the real
@@ -24,7 +24,8 @@ import numpy as np
 
 from piezolib._checks import check_finite_array, check_integer
 from piezolib.robust.blocks import block_slices, parse_blk
-from piezolib.robust.mu_mixed import certified_lmi_top, mixed_upper_bound
+from piezolib.robust.mu._common import certified_lmi_top
+from piezolib.robust.mu.upper_mixed import mixed_upper_bound
 
 __all__ = ["branch_and_bound_upper", "certifies_below"]
 
@@ -86,7 +87,7 @@ def _certificate_value(Mc, Dl, Dr, G):
 
     Below 1, the scalings (Dl, Dr, G) certify mu(Mc) < 1 (the D,G LMI of
     :func:`mixed_upper_bound` at beta = 1), rounding included
-    (:func:`~piezolib.robust.mu_mixed.certified_lmi_top`).
+    (:func:`~piezolib.robust.mu._common.certified_lmi_top`).
     """
     dl, dr = np.diagonal(Dl, axis1=1, axis2=2), np.diagonal(Dr, axis1=1, axis2=2)
     A = dl[:, :, None] * Mc / dr[:, None, :]                 # Dl Mc Dr^-1

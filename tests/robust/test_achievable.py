@@ -3,8 +3,8 @@
 import control as ct
 import pytest
 
-from piezolib.robust.bounds import (LowerBound, achievable_range, performance_lower_bound,
-                                    pointwise_lower_bound, structured_lower_bound)
+from piezolib.robust.achievable import (LowerBound, achievable_range, performance_lower_bound,
+                                        pointwise_lower_bound, structured_lower_bound)
 from piezolib.robust.hinf import hinfsyn
 from piezolib.robust.lft import lower_lft
 from piezolib.robust.lti import hinf_norm

@@ -8,8 +8,9 @@ entry point.
 import numpy as np
 
 from piezolib.robust.blocks import Block, block_slices
-from piezolib.robust.mu_upper import (_STEP_FRACTIONS, _central_difference_hessian,
-                                      _newton_direction, balancing_logs, complex_upper_bound)
+from piezolib.robust.mu._common import (STEP_FRACTIONS, central_difference_hessian,
+                                       certified_lmi_top, newton_direction)
+from piezolib.robust.mu.upper_complex import balancing_logs, complex_upper_bound
 
 __all__ = ["mixed_upper_bound"]
 
@@ -270,7 +271,7 @@ def _refine_dg(M, nblock, itype, upper, dpad, gpad):
                 break
             Ma, xa, sa = Mr[active], x[active], scale[active]
             F0, g0, H = _dg_newton_model(prob, Ma, xa, sa, t)
-            step, _ = _newton_direction(H, g0, np.ones(prob.size, bool), _DG_MAX_STEP)
+            step, _ = newton_direction(H, g0, np.ones(prob.size, bool), _DG_MAX_STEP)
             F, xn, lam = _dg_line_search(prob, Ma, xa, step, sa, t, cap[active])
             improved = F < F0
             x[active[improved]] = xn[improved]
@@ -311,24 +312,10 @@ def _certified_lambda_max(prob, M, x):
     return certified_lmi_top(A, g[:, :, None] * A)
 
 
-def certified_lmi_top(A, GA):
-    """lambda_max of A^H A + j (GA - GA^H) plus a bound on its rounding errors.
-
-    A = D M D^-1 and GA = D^-1 G M D^-1 (the D,G LMI after the congruence with
-    D^-1).  Forming H and its eigenvalues in floating point errs by a few n eps
-    times the size of its terms; added, so that sqrt of the result bounds mu
-    also when G is large (the bound must not fall below mu by rounding).
-    """
-    H = np.swapaxes(A, 1, 2).conj() @ A + 1j * (GA - np.swapaxes(GA, 1, 2).conj())
-    H = 0.5 * (H + np.swapaxes(H, 1, 2).conj())
-    size = np.linalg.norm(A, axis=(1, 2)) ** 2 + 2 * np.linalg.norm(GA, axis=(1, 2))
-    return np.linalg.eigvalsh(H)[:, -1] + 8 * A.shape[2] * np.finfo(float).eps * size
-
-
 def _dg_newton_model(prob, M, x, scale, t):
     """Surrogate, gradient and a Hessian by central differences of the gradient."""
     copies = 2 * x.shape[1] + 1
-    return _central_difference_hessian(
+    return central_difference_hessian(
         lambda pts: prob.surrogate(np.tile(M, (copies, 1, 1)), pts, np.tile(scale, copies), t)[:2],
         x, 1e-4 / np.sqrt(t), np.arange(x.shape[1]))
 
@@ -336,7 +323,7 @@ def _dg_newton_model(prob, M, x, scale, t):
 def _dg_line_search(prob, M, x, step, scale, t, cap):
     """The fraction of the step with the lowest surrogate (all fractions at once)."""
     N, P = x.shape
-    fr = _STEP_FRACTIONS
+    fr = STEP_FRACTIONS
     cand = np.clip(x[None] + fr[:, None, None] * step[None], -cap, cap)
     F, _, lam = prob.surrogate(np.tile(M, (len(fr), 1, 1)), cand.reshape(-1, P),
                                np.tile(scale, len(fr)), t, need_grad=False)

@@ -7,7 +7,7 @@ import pytest
 
 from piezolib.robust.blocks import parse_blk
 from piezolib.robust.mu import mussv
-from piezolib.robust.mu_branch import branch_and_bound_upper, certifies_below
+from piezolib.robust.mu.refine.branch import branch_and_bound_upper, certifies_below
 
 DATA = Path(__file__).parent / "data"
 THREE_REAL = [(-1, 0)] * 3
@@ -79,13 +79,13 @@ def test_inherited_scalings_are_checked_by_the_d_g_inequality(blk, p, q):
     at the scalings of a D,G bound it returns that bound squared (plus its rounding; at most
     0 where the bound is 0, as real parameters can leave a complex M without any real
     destabilising member)."""
-    from piezolib.robust import mu_branch
-    from piezolib.robust.mu_mixed import mixed_upper_bound
+    from piezolib.robust.mu.refine import branch
+    from piezolib.robust.mu.upper_mixed import mixed_upper_bound
 
     rng = np.random.default_rng(5)
     M = rng.standard_normal((6, p, q)) + 1j * rng.standard_normal((6, p, q))
     bound, _, _, Dl, Dr, G = mixed_upper_bound(M, parse_blk(blk, p, q))
-    value = mu_branch._certificate_value(M, Dl, Dr, G)
+    value = branch._certificate_value(M, Dl, Dr, G)
     positive = bound > 0
     assert positive.sum() >= 3
     np.testing.assert_allclose(value[positive], bound[positive] ** 2, rtol=1e-6)

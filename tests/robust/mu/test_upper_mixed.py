@@ -4,7 +4,7 @@ import numpy as np
 
 from piezolib.robust.blocks import parse_blk
 from piezolib.robust.mu import mussv
-from piezolib.robust.mu_mixed import mixed_upper_bound
+from piezolib.robust.mu.upper_mixed import mixed_upper_bound
 
 
 def crandn(rng, *shape):

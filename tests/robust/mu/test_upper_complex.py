@@ -7,7 +7,7 @@ from hypothesis import given, settings, strategies as st
 
 from piezolib.robust.blocks import parse_blk
 from piezolib.robust.mu import mussv
-from piezolib.robust.mu_upper import balancing_logs, complex_upper_bound
+from piezolib.robust.mu.upper_complex import balancing_logs, complex_upper_bound
 
 
 def crandn(rng, *shape):
@@ -124,14 +124,14 @@ def test_repeated_scalar_with_full_block_reaches_1e_6():
 def test_analytic_hessian_matches_differences_of_the_gradient(blk, p, q, t):
     """The Newton model for diagonal scalings (Daleckii-Krein Hessian of the
     log-Schatten surrogate) against central differences of its gradient."""
-    from piezolib.robust import mu_upper
+    from piezolib.robust.mu import upper_complex
 
     rng = np.random.default_rng(7)
-    scaling = mu_upper._Scaling(parse_blk(blk, p, q), p, q)
+    scaling = upper_complex._Scaling(parse_blk(blk, p, q), p, q)
     M = crandn(rng, 3, p, q)
     theta = 0.5 * rng.standard_normal((3, scaling.n))
-    F, grad, hess, smax = mu_upper._diagonal_newton_model(M, theta, scaling, t)
-    F_ref, grad_ref, smax_ref = mu_upper._surrogate(M, theta, scaling, t)
+    F, grad, hess, smax = upper_complex._diagonal_newton_model(M, theta, scaling, t)
+    F_ref, grad_ref, smax_ref = upper_complex._surrogate(M, theta, scaling, t)
     np.testing.assert_allclose(F, F_ref, rtol=1e-12)
     np.testing.assert_allclose(grad, grad_ref, atol=1e-12)
     np.testing.assert_allclose(smax, smax_ref, rtol=1e-12)
@@ -140,8 +140,8 @@ def test_analytic_hessian_matches_differences_of_the_gradient(blk, p, q, t):
     for j in range(scaling.n):
         e = np.zeros(scaling.n)
         e[j] = h
-        fd[:, :, j] = (mu_upper._surrogate(M, theta + e, scaling, t)[1]
-                       - mu_upper._surrogate(M, theta - e, scaling, t)[1]) / (2 * h)
+        fd[:, :, j] = (upper_complex._surrogate(M, theta + e, scaling, t)[1]
+                       - upper_complex._surrogate(M, theta - e, scaling, t)[1]) / (2 * h)
     np.testing.assert_allclose(hess, fd, atol=1e-6 * np.abs(fd).max())
 
 
@@ -150,22 +150,22 @@ def test_newton_model_keeps_every_eigenvalue_that_carries_weight(t, monkeypatch)
     """At large t the diagonal Newton model runs over the leading eigenvalues of
     G = A^H A only; near a kink (top singular values 1e-7 apart) it keeps at least
     two of them, and agrees with the model over all eigenvalues."""
-    from piezolib.robust import mu_upper
+    from piezolib.robust.mu import upper_complex
 
     rng = np.random.default_rng(11)
-    scaling = mu_upper._Scaling(parse_blk([(1, 1)] * 6, 6, 6), 6, 6)
+    scaling = upper_complex._Scaling(parse_blk([(1, 1)] * 6, 6, 6), 6, 6)
     U = np.linalg.qr(crandn(rng, 2, 6, 6))[0]
     V = np.linalg.qr(crandn(rng, 2, 6, 6))[0]
     s = np.array([1.0, 1 - 1e-7, 0.9, 0.5, 0.2, 0.1])
     M = U * s @ np.swapaxes(V, 1, 2).conj()
     theta = np.zeros((2, scaling.n))
     lam = np.linalg.eigvalsh(np.swapaxes(M, 1, 2).conj() @ M)[:, ::-1]
-    kept = mu_upper._leading_count(lam / lam[:, :1], t / 2 - 1)
+    kept = upper_complex._leading_count(lam / lam[:, :1], t / 2 - 1)
     assert 2 <= kept < 6
-    truncated = mu_upper._diagonal_newton_model(M, theta, scaling, t)
-    monkeypatch.setattr(mu_upper, "_NEGLIGIBLE_WEIGHT", -1.0)
-    assert mu_upper._leading_count(lam / lam[:, :1], t / 2 - 1) == 6
-    full = mu_upper._diagonal_newton_model(M, theta, scaling, t)
+    truncated = upper_complex._diagonal_newton_model(M, theta, scaling, t)
+    monkeypatch.setattr(upper_complex, "_NEGLIGIBLE_WEIGHT", -1.0)
+    assert upper_complex._leading_count(lam / lam[:, :1], t / 2 - 1) == 6
+    full = upper_complex._diagonal_newton_model(M, theta, scaling, t)
     for a, b in zip(truncated, full):
         np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12 * np.abs(b).max())
 
@@ -251,7 +251,7 @@ def test_carried_scalings_give_the_same_d(blk, units):
     # with the same M under two different balancings (one offset per balancing
     # unit), the carried parameters must give the same scaled matrix up to a
     # factor, hence the same sigma_max
-    from piezolib.robust.mu_upper import _carried_scalings, _complex_upper
+    from piezolib.robust.mu.upper_complex import _carried_scalings, _complex_upper
     rng = np.random.default_rng(6)
     blocks = parse_blk(blk)
     M = crandn(rng, 1, sum(units[0]), sum(units[1]))

@@ -8,10 +8,10 @@ import scipy.linalg as sla
 from hypothesis import given, settings, strategies as st
 
 from piezolib.robust.blocks import parse_blk
-from piezolib.robust import mu_lifted
 from piezolib.robust.mu import mussv
-from piezolib.robust.mu_lifted import (MAX_LIFTED_UNKNOWNS, _LiftedCertificate, _refine_point,
-                                      lifted_unknowns)
+from piezolib.robust.mu.refine import lifted
+from piezolib.robust.mu.refine.lifted import (MAX_LIFTED_UNKNOWNS, _LiftedCertificate,
+                                              _refine_point, lifted_unknowns)
 
 EIGHT = [(1, 1)] * 8
 EIGHT_BLOCKS = parse_blk(EIGHT, 8, 8)
@@ -219,7 +219,7 @@ def test_cuts_of_the_full_repeated_scalar_weight_close_a_gap_the_relaxation_leav
     M = mixed_matrix(52)
     plain = mussv(M, MIXED)
     Mb = balanced(M, plain)
-    monkeypatch.setattr(mu_lifted, "MAX_CUTS", 0)
+    monkeypatch.setattr(lifted, "MAX_CUTS", 0)
     without = _refine_point(Mb, parse_blk(MIXED, 7, 6), None, 0.0, 0.0, 60)[0]
     monkeypatch.undo()
     assert without > 1.002 * plain.lower[0]      # S_b and T_b alone stop 0.22 % above

@@ -49,7 +49,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from piezolib.robust.blocks import block_slices
-from piezolib.robust.mu_upper import scaled_matrix
+from piezolib.robust.mu._common import scaled_matrix
 
 __all__ = ["lifted_upper_bound", "lifted_unknowns", "MAX_LIFTED_UNKNOWNS"]
 

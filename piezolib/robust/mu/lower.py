@@ -12,7 +12,7 @@ from typing import NamedTuple
 import numpy as np
 
 from piezolib.robust.blocks import block_slices
-from piezolib.robust.mu_upper import scaled_matrix
+from piezolib.robust.mu._common import scaled_matrix
 
 __all__ = ["complex_lower_bound", "mixed_lower_bound"]
 

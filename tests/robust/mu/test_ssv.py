@@ -9,7 +9,7 @@ from threadpoolctl import threadpool_info, threadpool_limits
 
 from piezolib import paper, robust
 from piezolib.robust.blocks import Block, block_slices, parse_blk
-from piezolib.robust import mu as mu_module
+from piezolib.robust.mu import ssv
 from piezolib.robust.mu import MuResult, mussv
 
 RP_BLK = [(1, 1), (1, 2)]          # eq. 21: Delta_r 1x1, Delta_f 1x2
@@ -420,12 +420,12 @@ def test_mussv_computes_its_bounds_on_one_blas_thread(monkeypatch):
     seen = []
 
     def spy(name):
-        real = getattr(mu_module, name)
+        real = getattr(ssv, name)
 
         def call(*args, **kwargs):
             seen.append(blas_threads())
             return real(*args, **kwargs)
-        monkeypatch.setattr(mu_module, name, call)
+        monkeypatch.setattr(ssv, name, call)
 
     for name in ("complex_upper_bound", "complex_lower_bound", "lifted_upper_bound"):
         spy(name)
