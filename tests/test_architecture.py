@@ -107,8 +107,18 @@ def test_robust_imports_no_paper_pandas_or_plotting():
 def test_toolkit_packages_import_without_the_paper(module):
     loaded = _loaded_after(f"import {module}")
     assert module in loaded
-    assert "piezolib.paper" not in loaded and "piezolib.workbook.plotting" not in loaded
+    assert not {"piezolib.paper", "piezolib.problem.paper"} & loaded
+    assert "piezolib.workbook.plotting" not in loaded
     assert "pandas" not in loaded
+
+
+def test_the_paper_at_its_old_address_is_the_problem_layers_module():
+    from piezolib import paper as by_name
+    import piezolib.paper
+    import piezolib.problem.paper
+
+    assert by_name is piezolib.paper is piezolib.problem.paper
+    assert piezolib.paper.__name__ == "piezolib.problem.paper"
 
 
 def test_lazy_subpackages_resolve():

@@ -22,11 +22,12 @@ import control as ct
 import numpy as np
 import scipy.signal as sg
 
-from piezolib import paper, signals
+from piezolib import signals
 from piezolib._checks import (check_finite_array, check_integer, check_nonnegative,
                               check_positive, check_siso, check_stable)
 from piezolib.identification import zoh_coefficients
 from piezolib.hysteresis.measure import hysteresis_percent
+from piezolib.problem import paper
 from piezolib.problem.stage_hysteresis import (CALIBRATED_HYSTERESIS, HysteresisLaw,
                                                PlayHysteresis)
 from piezolib.robust.lti import realize

@@ -15,7 +15,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.optimize as opt
 
-from piezolib import paper
+from piezolib.problem import paper
 from piezolib._checks import check_finite_array, check_integer, check_positive, check_same_length
 
 __all__ = ["PlayHysteresis", "HysteresisLaw", "CALIBRATED_HYSTERESIS", "calibrate_hysteresis"]
