@@ -55,6 +55,9 @@ import numpy as np
 import pandas as pd
 
 from piezolib._checks import check_positive, check_nonnegative
+from piezolib.robust.performance_weights import (complementary_sensitivity_weight,
+                                                 sensitivity_weight)
+from piezolib.uncertainty.weight import inverse_notch_weight
 
 __all__ = [
     "SAMPLING_FREQUENCY_HZ", "SAMPLE_TIME_S", "UM_PER_VOLT", "AMPLIFIER_GAIN",
@@ -172,7 +175,9 @@ def uncertainty_weight(params=UNCERTAINTY_WEIGHT, **overrides):
     """Return the multiplicative uncertainty weight H_m(s) of eq. 8.
 
     Two inverse notch filters at omega1 and omega2 in series with a first-order
-    low-pass (eps*s + omega3)/(s + omega3/M), scaled by g.
+    low-pass (eps*s + omega3)/(s + omega3/M), scaled by g: the toolkit's
+    :func:`~piezolib.uncertainty.weight.inverse_notch_weight` with Table 2's
+    parameters.
 
     Parameters
     ----------
@@ -187,20 +192,14 @@ def uncertainty_weight(params=UNCERTAINTY_WEIGHT, **overrides):
         Fifth-order weight from ``u_c`` to ``y_Delta``, named ``H_m``.
     """
     p = _with_overrides(params, UncertaintyWeightParameters, overrides)
-    for name in ("g", "omega1", "omega2", "omega3", "M"):
+    # checked under Table 2's names first: those are the names the caller passed
+    for name in ("g", "omega1", "omega2", "omega3", "M", "zeta2", "zeta4"):
         check_positive(name, getattr(p, name))
-    for name in ("zeta1", "zeta2", "zeta3", "zeta4", "epsilon"):
+    for name in ("zeta1", "zeta3", "epsilon"):
         check_nonnegative(name, getattr(p, name))
-    for name in ("zeta2", "zeta4"):
-        # a zero denominator damping puts poles on the imaginary axis
-        check_positive(name, getattr(p, name))
-    num = p.g * np.polymul(np.polymul([1, 2 * p.zeta1 * p.omega1, p.omega1 ** 2],
-                                      [1, 2 * p.zeta3 * p.omega2, p.omega2 ** 2]),
-                           [p.epsilon, p.omega3])
-    den = np.polymul(np.polymul([1, 2 * p.zeta2 * p.omega1, p.omega1 ** 2],
-                                [1, 2 * p.zeta4 * p.omega2, p.omega2 ** 2]),
-                     [1, p.omega3 / p.M])
-    return ct.tf(num, den, inputs="u_c", outputs="y_Delta", name="H_m")
+    return inverse_notch_weight(p.g, [(p.omega1, p.zeta1, p.zeta2), (p.omega2, p.zeta3, p.zeta4)],
+                                p.omega3, p.M, p.epsilon,
+                                inputs="u_c", outputs="y_Delta", name="H_m")
 
 
 # --- Sec. III-C: Dahl hysteresis model --------------------------------------
@@ -250,7 +249,8 @@ def error_weight(params=ERROR_WEIGHT, **overrides):
     """Return the error weight H_e(s) of eq. 15.
 
     1/|H_e| is the template on S: it tends to eps_e at low frequency and to
-    M_e at high frequency, crossing 1 near omega_e.
+    M_e at high frequency, crossing 1 near omega_e (the toolkit's
+    :func:`~piezolib.robust.performance_weights.sensitivity_weight`).
 
     Parameters
     ----------
@@ -265,18 +265,18 @@ def error_weight(params=ERROR_WEIGHT, **overrides):
         First-order weight from ``v_e`` to ``y1``, named ``H_e``.
     """
     p = _with_overrides(params, ErrorWeightParameters, overrides)
-    M_e = check_positive("M_e", p.M_e)
-    eps_e = check_positive("eps_e", p.eps_e)
-    omega_e = check_positive("omega_e", p.omega_e)
-    return ct.tf([1 / M_e, omega_e], [1, omega_e * eps_e],
-                 inputs="v_e", outputs="y1", name="H_e")
+    for name in ("M_e", "eps_e", "omega_e"):     # the names the caller passed
+        check_positive(name, getattr(p, name))
+    return sensitivity_weight(p.eps_e, p.M_e, p.omega_e, inputs="v_e", outputs="y1", name="H_e")
 
 
 def output_weight(params=OUTPUT_WEIGHT, **overrides):
     """Return the output weight H_y(s) of eq. 15.
 
     1/|H_y| is the template on T: M_y^2 at low frequency, eps_y^2 at high
-    frequency.
+    frequency (the toolkit's
+    :func:`~piezolib.robust.performance_weights.complementary_sensitivity_weight`
+    of order 2).
 
     Parameters
     ----------
@@ -291,12 +291,10 @@ def output_weight(params=OUTPUT_WEIGHT, **overrides):
         Second-order weight from ``v_y`` to ``y2``, named ``H_y``.
     """
     p = _with_overrides(params, OutputWeightParameters, overrides)
-    M_y = check_positive("M_y", p.M_y)
-    eps_y = check_positive("eps_y", p.eps_y)
-    omega_y = check_positive("omega_y", p.omega_y)
-    num = np.polymul([1, omega_y / M_y], [1, omega_y / M_y])
-    den = np.polymul([eps_y, omega_y], [eps_y, omega_y])
-    return ct.tf(num, den, inputs="v_y", outputs="y2", name="H_y")
+    for name in ("M_y", "eps_y", "omega_y"):     # the names the caller passed
+        check_positive(name, getattr(p, name))
+    return complementary_sensitivity_weight(p.M_y, p.eps_y, p.omega_y, order=2,
+                                            inputs="v_y", outputs="y2", name="H_y")
 
 
 # --- Sec. IV-B, eq. 24: reduced 6th-order controller -------------------------
