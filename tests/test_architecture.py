@@ -212,3 +212,124 @@ def test_the_cycle_check_sees_imports_inside_functions(tmp_path):
     graph = _import_graph(sorted(package.rglob("*.py")), package)
     assert graph == {"pkg": set(), "pkg.a": {"pkg.b"}, "pkg.b": {"pkg.a"}, "pkg.c": {"pkg.a"}}
     assert _cycle(graph) == ["pkg.a", "pkg.b", "pkg.a"]
+
+
+# --- tests use public names; the one exception is stated in docs/architecture.md ---------------
+TESTS = PACKAGE.parent / "tests"
+MODULES = {_module_name(p) for p in SOURCES}
+
+
+def module_under_test(test_file):
+    """The module ``tests/<path>/test_<name>.py`` tests: ``piezolib/<path>/<name>.py``, or the
+    private ``_<name>.py``; None for conftest files and test-data modules."""
+    rel = test_file.relative_to(TESTS)
+    if not rel.name.startswith("test_"):
+        return None
+    stem = rel.stem.removeprefix("test_")
+    for name in (stem, f"_{stem}"):
+        candidate = PACKAGE.joinpath(*rel.parts[:-1], f"{name}.py")
+        if candidate.exists():
+            return _module_name(candidate)
+    return None
+
+
+def _is_private(name):
+    return name.startswith("_") and not name.startswith("__")
+
+
+def _owner(dotted):
+    """The longest prefix of a dotted piezolib path that is a module, or None."""
+    parts = dotted.split(".")
+    for end in range(len(parts), 0, -1):
+        if ".".join(parts[:end]) in MODULES:
+            return ".".join(parts[:end])
+    return None
+
+
+def private_uses(path):
+    """(module, what) for every private name of a piezolib module a test file reaches: by
+    import, by attribute (``module._helper``) and by name (``monkeypatch.setattr(module,
+    "_helper", ...)``).  A private module counts as a private name of itself."""
+    tree = ast.parse(path.read_text(), filename=str(path))
+    aliases, imported = {}, set()               # local name -> dotted path; every path imported
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.name.split(".")[0] == "piezolib":
+                    imported.add(alias.name)
+                    aliases[alias.asname or "piezolib"] = alias.name if alias.asname else "piezolib"
+        elif isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[0] == "piezolib":
+            for alias in node.names:
+                imported.add(f"{node.module}.{alias.name}")
+                aliases[alias.asname or alias.name] = f"{node.module}.{alias.name}"
+
+    def dotted(expr):
+        if isinstance(expr, ast.Name):
+            return aliases.get(expr.id)
+        if isinstance(expr, ast.Attribute) and (base := dotted(expr.value)):
+            return f"{base}.{expr.attr}"
+        return None
+
+    def private_part(path_):
+        """(owner module, name) if the dotted path passes through a private part."""
+        parts = path_.split(".")
+        for i, part in enumerate(parts):
+            if _is_private(part):
+                return _owner(".".join(parts[:i + 1])), ".".join(parts[i:])
+        return None
+
+    found = []
+    for path_ in imported:
+        if hit := private_part(path_):
+            found.append(hit)
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and _is_private(node.attr):
+            if (base := dotted(node.value)) and (hit := private_part(f"{base}.{node.attr}")):
+                found.append(hit)
+        elif (isinstance(node, ast.Call) and isinstance(node.func, (ast.Name, ast.Attribute))
+              and getattr(node.func, "id", getattr(node.func, "attr", None))
+              in ("setattr", "getattr", "delattr", "hasattr")):
+            args = node.args
+            if (len(args) >= 2 and isinstance(args[1], ast.Constant)
+                    and isinstance(args[1].value, str) and (base := dotted(args[0]))):
+                hit = private_part(f"{base}.{args[1].value}")
+            elif args and isinstance(args[0], ast.Constant) and isinstance(args[0].value, str) \
+                    and args[0].value.startswith("piezolib."):
+                hit = private_part(args[0].value)         # monkeypatch.setattr("mod._x", ...)
+            else:
+                hit = None
+            if hit:
+                found.append(hit)
+    return sorted(set(found))
+
+
+TEST_FILES = sorted(TESTS.rglob("*.py"))
+
+
+@pytest.mark.parametrize("path", TEST_FILES, ids=lambda p: str(p.relative_to(TESTS)))
+def test_a_test_reaches_only_the_private_names_of_the_module_it_tests(path):
+    own = module_under_test(path)
+    foreign = [f"{module}: {name}" for module, name in private_uses(path) if module != own]
+    assert not foreign, (f"{path.relative_to(TESTS)} tests {own or 'no module'} but reaches "
+                         f"private names of others (docs/architecture.md): {foreign}")
+
+
+def test_the_private_name_check_sees_every_form(tmp_path):
+    test_file = TESTS / "robust" / "test_hinf.py"      # only its path is used: it tests hinf
+    source = tmp_path / "test_x.py"
+    source.write_text(
+        "import piezolib._checks\n"
+        "from piezolib import robust\n"
+        "from piezolib.robust import dk as D, hinf\n"
+        "from piezolib.robust.lft import _POLE_CONDITION\n"
+        "def test(monkeypatch):\n"
+        "    D._full_blocks, robust.lti._unused, hinf._central\n"
+        "    monkeypatch.setattr(hinf, '_peak_gain', None)\n"
+        "    monkeypatch.setattr('piezolib.robust.margins._x', None)\n")
+    uses = private_uses(source)
+    assert {module for module, _ in uses} == {
+        "piezolib._checks", "piezolib.robust.dk", "piezolib.robust.lti", "piezolib.robust.hinf",
+        "piezolib.robust.lft", "piezolib.robust.margins"}
+    assert module_under_test(test_file) == "piezolib.robust.hinf"
+    assert module_under_test(TESTS / "test_checks.py") == "piezolib._checks"
+    assert module_under_test(TESTS / "robust" / "conftest.py") is None
