@@ -56,12 +56,9 @@ def sensitivity_weight(low_frequency_bound, high_frequency_bound, bandwidth_rad_
         When a bound or the bandwidth is not a positive finite number, or
         ``order`` is not an integer >= 1 (the message names the argument).
     """
-    A = check_positive("low_frequency_bound", low_frequency_bound)
-    M = check_positive("high_frequency_bound", high_frequency_bound)
-    omega_b = check_positive("bandwidth_rad_s", bandwidth_rad_s)
-    order = check_integer("order", order, minimum=1)
-    num, den = _power([1 / M, omega_b], [1, omega_b * A], order)
-    return ct.tf(num, den, inputs=inputs, outputs=outputs, name=name)
+    A, M, omega_b, order = _checked(low_frequency_bound, high_frequency_bound, bandwidth_rad_s,
+                                    order)
+    return _power([1 / M, omega_b], [1, omega_b * A], order, inputs, outputs, name)
 
 
 def complementary_sensitivity_weight(low_frequency_bound, high_frequency_bound, bandwidth_rad_s,
@@ -95,20 +92,24 @@ def complementary_sensitivity_weight(low_frequency_bound, high_frequency_bound, 
     Raises
     ------
     ValueError, TypeError
-        When a bound or the bandwidth is not a positive finite number, or
-        ``order`` is not an integer >= 1 (the message names the argument).
+        As :func:`sensitivity_weight`.
     """
-    M = check_positive("low_frequency_bound", low_frequency_bound)
-    eps = check_positive("high_frequency_bound", high_frequency_bound)
-    omega_b = check_positive("bandwidth_rad_s", bandwidth_rad_s)
-    order = check_integer("order", order, minimum=1)
-    num, den = _power([1, omega_b / M], [eps, omega_b], order)
-    return ct.tf(num, den, inputs=inputs, outputs=outputs, name=name)
+    M, eps, omega_b, order = _checked(low_frequency_bound, high_frequency_bound, bandwidth_rad_s,
+                                      order)
+    return _power([1, omega_b / M], [eps, omega_b], order, inputs, outputs, name)
 
 
-def _power(num, den, order):
-    """Numerator and denominator of (num/den)^order as coefficient arrays."""
+def _checked(low_frequency_bound, high_frequency_bound, bandwidth_rad_s, order):
+    """The arguments both weights share, checked under their public names."""
+    return (check_positive("low_frequency_bound", low_frequency_bound),
+            check_positive("high_frequency_bound", high_frequency_bound),
+            check_positive("bandwidth_rad_s", bandwidth_rad_s),
+            check_integer("order", order, minimum=1))
+
+
+def _power(num, den, order, inputs, outputs, name):
+    """(num/den)^order as a named transfer function."""
     num_n, den_n = np.ones(1), np.ones(1)
     for _ in range(order):
         num_n, den_n = np.polymul(num_n, num), np.polymul(den_n, den)
-    return num_n, den_n
+    return ct.tf(num_n, den_n, inputs=inputs, outputs=outputs, name=name)
