@@ -12,7 +12,7 @@ import warnings
 
 from piezolib import identification as ident
 from piezolib.problem import stage as vstage
-from piezolib.problem import stage_data, stage_hysteresis
+from piezolib.problem import stage_data
 
 
 def best_of(func, repeat=3):
@@ -43,7 +43,7 @@ def main():
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        t = best_of(stage_hysteresis.calibrate_hysteresis, repeat=1)
+        t = best_of(vstage.calibrate_hysteresis, repeat=1)
     print(f"calibrate_hysteresis():                    {t:7.2f} s")
 
     ex = stage_data.load_chirp("identification")

@@ -6,8 +6,9 @@ toolkit   general tools for any plant (never import the layers above them in thi
           :mod:`~piezolib.uncertainty`, :mod:`~piezolib.signals`,
           :mod:`~piezolib.metrics`, :mod:`~piezolib.records`,
           :mod:`~piezolib.progress` and the private ``_checks``
-problem   the paper's stage and design problem: :mod:`~piezolib.paper` and
-          :mod:`piezolib.problem`
+problem   the paper's numbers, stage and design problem: :mod:`piezolib.problem`
+          (the published numbers in :mod:`piezolib.problem.paper`, also reachable
+          as ``piezolib.paper``)
 workbook  what runs and presents the notebooks: :mod:`piezolib.workbook`
           (``python -m piezolib`` runs its command line)
 

@@ -107,8 +107,18 @@ def test_robust_imports_no_paper_pandas_or_plotting():
 def test_toolkit_packages_import_without_the_paper(module):
     loaded = _loaded_after(f"import {module}")
     assert module in loaded
-    assert "piezolib.paper" not in loaded and "piezolib.workbook.plotting" not in loaded
+    assert not {"piezolib.paper", "piezolib.problem.paper"} & loaded
+    assert "piezolib.workbook.plotting" not in loaded
     assert "pandas" not in loaded
+
+
+def test_the_paper_at_its_old_address_is_the_problem_layers_module():
+    from piezolib import paper as by_name
+    import piezolib.paper
+    import piezolib.problem.paper
+
+    assert by_name is piezolib.paper is piezolib.problem.paper
+    assert piezolib.paper.__name__ == "piezolib.problem.paper"
 
 
 def test_lazy_subpackages_resolve():
@@ -138,14 +148,14 @@ def test_module_index_lists_every_module_once():
         f"docs/architecture.md lists modules that do not exist: {sorted(set(listed) - modules)}"
 
 
-def _module_name(path):
-    parts = ("piezolib",) + path.relative_to(PACKAGE).with_suffix("").parts
+def _module_name(path, package=PACKAGE):
+    parts = (package.name,) + path.relative_to(package).with_suffix("").parts
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-def _import_graph(sources):
-    """Module -> the piezolib modules it imports (also inside functions)."""
-    names = {_module_name(p): p for p in sources}
+def _import_graph(sources, package=PACKAGE):
+    """Module -> the modules of ``package`` it imports (also inside functions)."""
+    names = {_module_name(p, package): p for p in sources}
     graph = {}
     for name, path in names.items():
         tree = ast.parse(path.read_text(), filename=str(path))
@@ -185,8 +195,141 @@ def _cycle(graph):
     return None
 
 
-def test_the_mu_wing_has_no_import_cycle():
-    wing = [p for p in SOURCES if p.is_relative_to(PACKAGE / "robust" / "mu")]
-    graph = _import_graph(wing)
-    assert "piezolib.robust.mu.refine.branch" in graph      # the whole wing is checked
+def test_the_package_has_no_import_cycle():
+    # imports inside functions count: they hide a cycle from the interpreter, not from a reader
+    graph = _import_graph(SOURCES)
+    assert len(graph) == len(SOURCES)                        # every module is checked
     assert _cycle(graph) is None, f"import cycle: {' -> '.join(_cycle(graph))}"
+
+
+def test_the_cycle_check_sees_imports_inside_functions(tmp_path):
+    package = tmp_path / "pkg"
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    (package / "a.py").write_text("from pkg import b\n")
+    (package / "b.py").write_text("def f():\n    from pkg.a import g\n")
+    (package / "c.py").write_text("from . import a\n")
+    graph = _import_graph(sorted(package.rglob("*.py")), package)
+    assert graph == {"pkg": set(), "pkg.a": {"pkg.b"}, "pkg.b": {"pkg.a"}, "pkg.c": {"pkg.a"}}
+    assert _cycle(graph) == ["pkg.a", "pkg.b", "pkg.a"]
+
+
+# --- tests use public names; the one exception is stated in docs/architecture.md ---------------
+TESTS = PACKAGE.parent / "tests"
+MODULES = {_module_name(p) for p in SOURCES}
+
+
+def module_under_test(test_file):
+    """The module ``tests/<path>/test_<name>.py`` tests: ``piezolib/<path>/<name>.py``, or the
+    private ``_<name>.py``; None for conftest files and test-data modules."""
+    rel = test_file.relative_to(TESTS)
+    if not rel.name.startswith("test_"):
+        return None
+    stem = rel.stem.removeprefix("test_")
+    for name in (stem, f"_{stem}"):
+        candidate = PACKAGE.joinpath(*rel.parts[:-1], f"{name}.py")
+        if candidate.exists():
+            return _module_name(candidate)
+    return None
+
+
+def _is_private(name):
+    return name.startswith("_") and not name.startswith("__")
+
+
+def _owner(dotted):
+    """The longest prefix of a dotted piezolib path that is a module, or None."""
+    parts = dotted.split(".")
+    for end in range(len(parts), 0, -1):
+        if ".".join(parts[:end]) in MODULES:
+            return ".".join(parts[:end])
+    return None
+
+
+def private_uses(path):
+    """(module, what) for every private name of a piezolib module a test file reaches: by
+    import, by attribute (``module._helper``) and by name (``monkeypatch.setattr(module,
+    "_helper", ...)``).  A private module counts as a private name of itself."""
+    tree = ast.parse(path.read_text(), filename=str(path))
+    aliases, imported = {}, set()               # local name -> dotted path; every path imported
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.name.split(".")[0] == "piezolib":
+                    imported.add(alias.name)
+                    aliases[alias.asname or "piezolib"] = alias.name if alias.asname else "piezolib"
+        elif isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[0] == "piezolib":
+            for alias in node.names:
+                imported.add(f"{node.module}.{alias.name}")
+                aliases[alias.asname or alias.name] = f"{node.module}.{alias.name}"
+
+    def dotted(expr):
+        if isinstance(expr, ast.Name):
+            return aliases.get(expr.id)
+        if isinstance(expr, ast.Attribute) and (base := dotted(expr.value)):
+            return f"{base}.{expr.attr}"
+        return None
+
+    def private_part(path_):
+        """(owner module, name) if the dotted path passes through a private part."""
+        parts = path_.split(".")
+        for i, part in enumerate(parts):
+            if _is_private(part):
+                return _owner(".".join(parts[:i + 1])), ".".join(parts[i:])
+        return None
+
+    found = []
+    for path_ in imported:
+        if hit := private_part(path_):
+            found.append(hit)
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and _is_private(node.attr):
+            if (base := dotted(node.value)) and (hit := private_part(f"{base}.{node.attr}")):
+                found.append(hit)
+        elif (isinstance(node, ast.Call) and isinstance(node.func, (ast.Name, ast.Attribute))
+              and getattr(node.func, "id", getattr(node.func, "attr", None))
+              in ("setattr", "getattr", "delattr", "hasattr")):
+            args = node.args
+            if (len(args) >= 2 and isinstance(args[1], ast.Constant)
+                    and isinstance(args[1].value, str) and (base := dotted(args[0]))):
+                hit = private_part(f"{base}.{args[1].value}")
+            elif args and isinstance(args[0], ast.Constant) and isinstance(args[0].value, str) \
+                    and args[0].value.startswith("piezolib."):
+                hit = private_part(args[0].value)         # monkeypatch.setattr("mod._x", ...)
+            else:
+                hit = None
+            if hit:
+                found.append(hit)
+    return sorted(set(found))
+
+
+TEST_FILES = sorted(TESTS.rglob("*.py"))
+
+
+@pytest.mark.parametrize("path", TEST_FILES, ids=lambda p: str(p.relative_to(TESTS)))
+def test_a_test_reaches_only_the_private_names_of_the_module_it_tests(path):
+    own = module_under_test(path)
+    foreign = [f"{module}: {name}" for module, name in private_uses(path) if module != own]
+    assert not foreign, (f"{path.relative_to(TESTS)} tests {own or 'no module'} but reaches "
+                         f"private names of others (docs/architecture.md): {foreign}")
+
+
+def test_the_private_name_check_sees_every_form(tmp_path):
+    test_file = TESTS / "robust" / "test_hinf.py"      # only its path is used: it tests hinf
+    source = tmp_path / "test_x.py"
+    source.write_text(
+        "import piezolib._checks\n"
+        "from piezolib import robust\n"
+        "from piezolib.robust import dk as D, hinf\n"
+        "from piezolib.robust.lft import _POLE_CONDITION\n"
+        "def test(monkeypatch):\n"
+        "    D._full_blocks, robust.lti._unused, hinf._central\n"
+        "    monkeypatch.setattr(hinf, '_peak_gain', None)\n"
+        "    monkeypatch.setattr('piezolib.robust.margins._x', None)\n")
+    uses = private_uses(source)
+    assert {module for module, _ in uses} == {
+        "piezolib._checks", "piezolib.robust.dk", "piezolib.robust.lti", "piezolib.robust.hinf",
+        "piezolib.robust.lft", "piezolib.robust.margins"}
+    assert module_under_test(test_file) == "piezolib.robust.hinf"
+    assert module_under_test(TESTS / "test_checks.py") == "piezolib._checks"
+    assert module_under_test(TESTS / "robust" / "conftest.py") is None

@@ -174,6 +174,21 @@ CASES = {
                                        "rtol": {**POSITIVE, "below float resolution": 1e-300}}),
     "uncertainty.fit_covering_weight": (dict(omega=OMEGA, envelope=0.1 + OMEGA / 100, order=1),
                                         {"omega": GRID, "envelope": SIGNAL}),
+    "uncertainty.inverse_notch_weight": (
+        dict(gain=0.02, notches=[(10.0, 3.5, 0.05)], lowpass_rad_s=5.0, lowpass_dc_gain=1.0,
+             lowpass_hf_gain=1e-3),
+        {"gain": POSITIVE, "lowpass_rad_s": POSITIVE, "lowpass_dc_gain": POSITIVE,
+         "lowpass_hf_gain": {k: v for k, v in POSITIVE.items() if k != "zero"},
+         "notches": {"nan": [(np.nan, 3.5, 0.05)], "text": "abc", "not triples": [(10.0, 3.5)],
+                     "zero pole damping": [(10.0, 3.5, 0.0)], "negative frequency": [(-1.0, 1, 1)]}}),
+    "robust.sensitivity_weight": (
+        dict(low_frequency_bound=0.003, high_frequency_bound=2.0, bandwidth_rad_s=10.0, order=1),
+        {"low_frequency_bound": POSITIVE, "high_frequency_bound": POSITIVE,
+         "bandwidth_rad_s": POSITIVE, "order": {"zero": 0, "fraction": 1.5, "text": "x"}}),
+    "robust.complementary_sensitivity_weight": (
+        dict(low_frequency_bound=1.5, high_frequency_bound=1e-4, bandwidth_rad_s=10.0, order=2),
+        {"low_frequency_bound": POSITIVE, "high_frequency_bound": POSITIVE,
+         "bandwidth_rad_s": POSITIVE, "order": {"zero": 0, "fraction": 1.5, "text": "x"}}),
     "hysteresis.hysteresis_percent": (dict(v=np.sin(np.linspace(0, 13, 400)),
                                            x=np.sin(np.linspace(0, 13, 400) - 0.1)),
                                       {"v": SIGNAL, "x": SIGNAL}),

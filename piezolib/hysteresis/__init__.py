@@ -1,8 +1,9 @@
 """Hysteresis models: Dahl (as printed and the workbook's variant), Prandtl-Ishlinskii, fits,
 feedforwards and model choice by validation.
 
-dahl         the Dahl model (eq. 10-13): exact stroke integration, simulation
-compensator  the inverse-free Dahl feedforward of eq. 14 (:func:`feedforward`, :class:`DahlFeedforward`)
+dahl         the Dahl model (eq. 10-13): exact stroke integration, simulation, and its
+             inverse-free feedforward of eq. 14 on a record (:func:`feedforward`)
+compensator  the same feedforward sample by sample for a real-time loop (:class:`DahlFeedforward`)
 fit          least-squares Dahl fit to measured loops, and the rule that picks among fits
 pi           Prandtl-Ishlinskii model: play operators, NNLS fit, exact inverse feedforward
 common       the shared model protocol, parameter tables with confidence intervals, loop checks

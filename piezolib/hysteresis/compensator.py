@@ -1,8 +1,11 @@
-"""Dahl feedforward compensator (eq. 14, inverse-free): on a whole record and sample by sample.
+"""Dahl feedforward compensator (eq. 14, inverse-free), sample by sample for a real-time loop.
 
 u_f = (x_r - x0 + H(x_r)) / g_a with H of :mod:`piezolib.hysteresis.dahl`
 driven by the desired displacement x_r; fed to the voltage-driven model it
-gives x = x_r exactly.  Equations: ``docs/hysteresis.md``.
+gives x = x_r exactly.  The same on a whole record is
+:func:`piezolib.hysteresis.dahl.feedforward` (the model's own inverse, so it
+lives with the model and this module imports it, never the other way).
+Equations: ``docs/hysteresis.md``.
 """
 
 import math
@@ -10,36 +13,9 @@ import math
 import numpy as np
 
 from piezolib._checks import check_finite_array
-from piezolib.hysteresis.dahl import (StrokeDynamics, check_dahl_model, dahl_hysteresis,
-                                      initial_state_of)
+from piezolib.hysteresis.dahl import StrokeDynamics, check_dahl_model, initial_state_of
 
-__all__ = ["feedforward", "DahlFeedforward"]
-
-
-def feedforward(model, x_r, z0=None, direction0=None):
-    """Inverse-free Dahl feedforward of eq. 14 on a whole record.
-
-    u_f = (x_r - x0 + H(x_r)) / g_a, with H driven by the desired
-    displacement (x0 = ``model.x0``, 0 for the paper's model: eq. 14 as
-    printed).  Fed to the voltage-driven model, it gives x = x_r exactly.
-
-    Parameters
-    ----------
-    model : DahlModel
-    x_r : array_like
-        Desired displacement [x-unit] (workbook: reference v_r [V]).
-    z0, direction0
-        Initial state and direction, as in :func:`dahl_hysteresis`.
-
-    Returns
-    -------
-    ndarray
-        Feedforward input u_f [v-unit] (workbook: amplifier input [V]).
-    """
-    check_dahl_model(model)
-    x_r = check_finite_array("x_r", x_r, ndim=1, min_length=2, real=True)
-    H = dahl_hysteresis(model, x_r, z0=z0, direction0=direction0)
-    return (x_r - model.x0 + H) / model.g_a
+__all__ = ["DahlFeedforward"]
 
 
 class DahlFeedforward:
@@ -47,7 +23,8 @@ class DahlFeedforward:
 
     Each :meth:`step` costs a few dozen floating-point operations on Python
     floats (closed-form 2x2 matrix exponential), and the sequence of steps
-    equals :func:`feedforward` on the whole record to rounding.
+    equals :func:`~piezolib.hysteresis.dahl.feedforward` on the whole record
+    to rounding.
 
     Parameters
     ----------

@@ -6,8 +6,11 @@ x0 (x = g_a v - H + x0; 0 is eq. 13) and an initial state ("virgin" or
 "rest").  Along each monotone stroke the model is linear in the path length
 and is integrated exactly (closed-form 2x2 matrix exponential); the implicit
 relation of the voltage-driven model is solved exactly too.  The model is
-unit agnostic.  Its feedforward (eq. 14): :mod:`piezolib.hysteresis.compensator`.  Equations, the workbook's unit convention and why the
-published parameters give no loop: ``docs/hysteresis.md``.
+unit agnostic.  Its inverse-free feedforward (eq. 14) on a record is
+:func:`feedforward`; sample by sample for a real-time loop it is
+:class:`piezolib.hysteresis.compensator.DahlFeedforward`.  Equations, the
+workbook's unit convention and why the published parameters give no loop:
+``docs/hysteresis.md``.
 """
 
 import math
@@ -20,7 +23,7 @@ from piezolib._checks import check_finite_array, check_positive, check_same_leng
 __all__ = [
     "FORMS", "STARTS", "DahlModel", "DahlResponse", "NotInvertibleError", "strokes",
     "dahl_hysteresis", "simulate_dahl", "simulate_dahl_records", "min_stroke_slope",
-    "StrokeDynamics", "check_dahl_model",
+    "StrokeDynamics", "check_dahl_model", "feedforward",
 ]   # initial_state_of: shared with compensator.py, not part of the API
 
 #: The two model forms: eq. 10 as printed, and the Bliman-Sorine placement.
@@ -135,9 +138,8 @@ class DahlModel:
     def feedforward(self, x_r):
         """Input [v-unit] for the desired displacement ``x_r`` [x-unit] (eq. 14).
 
-        :func:`piezolib.hysteresis.compensator.feedforward` from the model's start.
+        :func:`feedforward` from the model's start.
         """
-        from piezolib.hysteresis.compensator import feedforward    # it imports this module
         return feedforward(self, x_r)
 
 
@@ -330,6 +332,32 @@ def dahl_hysteresis(model, x, z0=None, direction0=None, return_state=False, dire
         z[start + 1:stop + 1] = dyn.propagate(s, sigma, z[start])
         H[start + 1:stop + 1] = z[start + 1:stop + 1] @ dyn.C[s]
     return (H, z) if return_state else H
+
+
+def feedforward(model, x_r, z0=None, direction0=None):
+    """Inverse-free Dahl feedforward of eq. 14 on a whole record.
+
+    u_f = (x_r - x0 + H(x_r)) / g_a, with H driven by the desired
+    displacement (x0 = ``model.x0``, 0 for the paper's model: eq. 14 as
+    printed).  Fed to the voltage-driven model, it gives x = x_r exactly.
+
+    Parameters
+    ----------
+    model : DahlModel
+    x_r : array_like
+        Desired displacement [x-unit] (workbook: reference v_r [V]).
+    z0, direction0
+        Initial state and direction, as in :func:`dahl_hysteresis`.
+
+    Returns
+    -------
+    ndarray
+        Feedforward input u_f [v-unit] (workbook: amplifier input [V]).
+    """
+    check_dahl_model(model)
+    x_r = check_finite_array("x_r", x_r, ndim=1, min_length=2, real=True)
+    H = dahl_hysteresis(model, x_r, z0=z0, direction0=direction0)
+    return (x_r - model.x0 + H) / model.g_a
 
 
 # --------------------------------------------------------------------------- driven by v

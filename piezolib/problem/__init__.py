@@ -1,5 +1,6 @@
-"""The paper's problem: its stage, its design problem and its analysis.
+"""The paper's problem: its published numbers, its stage, its design problem and its analysis.
 
+paper            the published numbers, the units table, ``problem()`` -> G, H_m, H_e, H_y, K
 genplant         generalized plant of Fig. 9 / eq. 16
 stage            virtual P-752.21 stage (the hardware stand-in)
 stage_hysteresis the virtual stage's hysteresis truth (play operators)
@@ -9,9 +10,9 @@ analysis         Table 3: NS, NP, RS, RP of any controller
 hysteresis       the paper's Dahl model and the workbook's Dahl fit to the Case I loops
 paths            where the checkout and its ``data/`` folder are
 
-The published numbers themselves live in :mod:`piezolib.paper`, whose
-``problem()`` returns the models G, H_m, H_e, H_y, K that the functions here
-take explicitly (plant first, then the weights).
+:func:`piezolib.problem.paper.problem` returns the models G, H_m, H_e, H_y, K
+that the other modules here take explicitly (plant first, then the weights);
+``piezolib.paper`` is the same module under its old name.
 """
 
-__all__ = ["genplant", "stage", "stage_data", "design", "analysis", "hysteresis"]
+__all__ = ["paper", "genplant", "stage", "stage_data", "design", "analysis", "hysteresis"]

@@ -128,7 +128,7 @@ def analyze(K, G, H_m, H_e, H_y, *, omega=None, name=None):
         SISO controller from v_e [V] to u_b [V].
     G, H_m, H_e, H_y : control.LTI
         Plant (u_c [V] -> v_y [V]) and the weights of the problem, e.g. those
-        of :func:`piezolib.paper.problem`.
+        of :func:`piezolib.problem.paper.problem`.
     omega : array_like, optional
         Analysis grid [rad/s]; default :data:`ANALYSIS_GRID`.
     name : str, optional
@@ -142,7 +142,7 @@ def analyze(K, G, H_m, H_e, H_y, *, omega=None, name=None):
 
     Examples
     --------
-    >>> from piezolib import paper
+    >>> from piezolib.problem import paper
     >>> G, H_m, H_e, H_y, K = paper.problem()
     >>> round(analyze(K, G, H_m, H_e, H_y).norm_He_S, 2)
     0.81
@@ -185,7 +185,7 @@ def table3(*analyses, paper_values=None):
     *analyses : RobustnessAnalysis
     paper_values : dict, optional
         Published values keyed ``norm_He_S``, ``norm_Hy_T``, ``mu_RS``,
-        ``mu_RP`` (e.g. ``piezolib.paper.FIGURES_OF_MERIT``), shown as a column.
+        ``mu_RP`` (e.g. ``piezolib.problem.paper.FIGURES_OF_MERIT``), shown as a column.
 
     Returns
     -------

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 import control as ct
 import numpy as np
 
-from piezolib import paper
+from piezolib.problem import paper
 from piezolib._checks import check_integer, check_positive
 from piezolib.problem.genplant import (DESIGN_BLOCK_STRUCTURE, DESIGN_DELAY_SAMPLES,
                                        DESIGN_EFFORT_WEIGHT, DESIGN_PADE_ORDER, DESIGN_ROLLOFF,
@@ -104,7 +104,7 @@ def design_controller(G, H_m, H_e, H_y, *, order=6, d_order=DESIGN_D_ORDER, max_
     Parameters
     ----------
     G, H_m, H_e, H_y : control.LTI
-        Plant (u_c [V] -> v_y [V]) and weights, e.g. from :func:`piezolib.paper.problem`.
+        Plant (u_c [V] -> v_y [V]) and weights, e.g. from :func:`piezolib.problem.paper.problem`.
     order : int
         Order of the reduced and fixed-order controllers (the paper's is 6).
     d_order : int or 'auto'

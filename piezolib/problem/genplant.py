@@ -177,7 +177,7 @@ def generalized_plant(G, H_m, H_e, H_y, *, effort_weight=0.0, omega_s=None):
 
     Examples
     --------
-    >>> from piezolib import paper
+    >>> from piezolib.problem import paper
     >>> G, H_m, H_e, H_y, _ = paper.problem()
     >>> generalized_plant(G, H_m, H_e, H_y).nstates
     14

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 
-from piezolib import paper
+from piezolib.problem import paper
 from piezolib._checks import check_integer
 from piezolib.hysteresis.dahl import FORMS, STARTS, DahlModel
 from piezolib.hysteresis.fit import check_fit_options, fit_dahl, rescore_dahl
@@ -56,7 +56,7 @@ def published_dahl(form="printed", params=paper.DAHL):
     form : {"printed", "bliman_sorine"}, optional
         Where the sign of the velocity enters (``docs/hysteresis.md``).
     params : paper.DahlParameters, optional
-        The parameters (default: the published ones, :data:`piezolib.paper.DAHL`).
+        The parameters (default: the published ones, :data:`piezolib.problem.paper.DAHL`).
 
     Returns
     -------

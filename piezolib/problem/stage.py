@@ -6,7 +6,7 @@ Prandtl-Ishlinskii hysteresis of unit small-signal gain -> G(s) of eq. 4
 (exact ZOH) -> sensor noise -> ADC (16 bit).  Out-of-range signals are limited
 and reported (:class:`StageSaturationWarning`, :class:`Saturation`).  The
 hysteresis (:mod:`piezolib.problem.stage_hysteresis`) is calibrated on Table 4
-Case I only (:func:`~piezolib.problem.stage_hysteresis.calibrate_hysteresis`).
+Case I only (:func:`calibrate_hysteresis`).
 
 Signal path, assumptions table and calibration rule: ``docs/stage.md``.  The
 experiment files recorded on this stage: :mod:`piezolib.problem.stage_data`.
@@ -20,13 +20,15 @@ from dataclasses import dataclass, field, fields, replace
 
 import control as ct
 import numpy as np
+import scipy.optimize as opt
 import scipy.signal as sg
 
-from piezolib import paper, signals
+from piezolib import signals
 from piezolib._checks import (check_finite_array, check_integer, check_nonnegative,
                               check_positive, check_siso, check_stable)
 from piezolib.identification import zoh_coefficients
 from piezolib.hysteresis.measure import hysteresis_percent
+from piezolib.problem import paper
 from piezolib.problem.stage_hysteresis import (CALIBRATED_HYSTERESIS, HysteresisLaw,
                                                PlayHysteresis)
 from piezolib.robust.lti import realize
@@ -35,6 +37,7 @@ __all__ = [
     "ADC_RANGE_V", "StageSettings", "Saturation", "RECORD_COLUMNS", "StageRecord",
     "StageSaturationWarning", "VirtualStage", "StageSimulation", "StageBatch",
     "StageBatchSimulation", "check_seeds", "case_I_input", "run_case_I", "case_I_hysteresis",
+    "calibrate_hysteresis",
 ]
 
 
@@ -1150,3 +1153,46 @@ def case_I_hysteresis(records):
         {amplitude [V]: hysteresis %}.
     """
     return {A: hysteresis_percent(rec.v_a_V, rec.x_measured_um) for A, rec in records.items()}
+
+
+def calibrate_hysteresis(law=CALIBRATED_HYSTERESIS, targets=None):
+    """Re-derive the hysteresis parameters from Table 4 Case I only.
+
+    Least squares on (log c, log rho) of :class:`HysteresisLaw` so that the
+    noise-free stage's Case I hysteresis % matches Table 4's first row.  The
+    noise is switched off so that the parameters do not depend on one noise
+    realisation; everything else (DAC, ADC, dynamics of G) is as in the
+    experiment files.
+
+    Parameters
+    ----------
+    law : HysteresisLaw, optional
+        Starting point; its fixed fields (threshold grid) are kept.
+    targets : dict, optional
+        {amplitude [V]: %}; default Table 4 Case I.
+
+    Returns
+    -------
+    law : HysteresisLaw
+        Calibrated law (c and rho rounded to 6 significant digits).
+    achieved : dict
+        {amplitude: %} of the noise-free stage with that law.
+    """
+    if targets is None:
+        targets = paper.table4().loc["case_I"].to_dict()
+    amplitudes = sorted(targets)
+    want = np.array([targets[A] for A in amplitudes])
+
+    def percents(law_):
+        stage = VirtualStage(seed=0, noise_rms_V=0.0, hysteresis=law_)
+        got = case_I_hysteresis(run_case_I(stage, amplitudes))
+        return np.array([got[A] for A in amplitudes])
+
+    def residual(p):
+        return percents(replace(law, density_per_V=math.exp(p[0]), decay_V=math.exp(p[1]))) - want
+
+    sol = opt.least_squares(residual, [math.log(law.density_per_V), math.log(law.decay_V)],
+                            diff_step=1e-4, xtol=1e-10, ftol=1e-10)
+    fitted = replace(law, density_per_V=float(f"{math.exp(sol.x[0]):.6g}"),
+                     decay_V=float(f"{math.exp(sol.x[1]):.6g}"))
+    return fitted, dict(zip(amplitudes, percents(fitted).tolist()))

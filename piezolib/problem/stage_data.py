@@ -17,7 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from piezolib import paper, records, signals
+from piezolib import records, signals
+from piezolib.problem import paper
 from piezolib.problem.paths import data_dir
 from piezolib.problem.stage import (ADC_RANGE_V, RECORD_COLUMNS, Saturation, StageRecord,
                                     VirtualStage, case_I_hysteresis, case_I_input)

@@ -2,23 +2,20 @@
 
 :class:`PlayHysteresis` is the operator the stage applies to the actuator
 voltage, :class:`HysteresisLaw` the two-parameter family it is chosen from,
-:data:`CALIBRATED_HYSTERESIS` the law calibrated on Table 4 Case I only, and
-:func:`calibrate_hysteresis` re-derives it with
-:class:`piezolib.problem.stage.VirtualStage`.
+:data:`CALIBRATED_HYSTERESIS` the law calibrated on Table 4 Case I only.
+Calibrating runs the stage, so :func:`piezolib.problem.stage.calibrate_hysteresis`
+lives with the stage, which imports this module (never the other way).
 
 Operator definition and calibration rule: ``docs/stage.md``.
 """
 
-import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
-import scipy.optimize as opt
 
-from piezolib import paper
 from piezolib._checks import check_finite_array, check_integer, check_positive, check_same_length
 
-__all__ = ["PlayHysteresis", "HysteresisLaw", "CALIBRATED_HYSTERESIS", "calibrate_hysteresis"]
+__all__ = ["PlayHysteresis", "HysteresisLaw", "CALIBRATED_HYSTERESIS"]
 
 
 # --- hysteresis truth: Prandtl-Ishlinskii play operators ----------------------
@@ -155,52 +152,6 @@ class HysteresisLaw:
         return PlayHysteresis(tuple(r), tuple(w), 1.0)
 
 
-#: Calibrated on Table 4 Case I only; re-derive with :func:`calibrate_hysteresis`.
+#: Calibrated on Table 4 Case I only; re-derive with
+#: :func:`piezolib.problem.stage.calibrate_hysteresis`.
 CALIBRATED_HYSTERESIS = HysteresisLaw(density_per_V=0.0553682, decay_V=20.9598)
-
-
-# --- calibration on Table 4 Case I ------------------------------------------
-def calibrate_hysteresis(law=CALIBRATED_HYSTERESIS, targets=None):
-    """Re-derive the hysteresis parameters from Table 4 Case I only.
-
-    Least squares on (log c, log rho) of :class:`HysteresisLaw` so that the
-    noise-free stage's Case I hysteresis % matches Table 4's first row.  The
-    noise is switched off so that the parameters do not depend on one noise
-    realisation; everything else (DAC, ADC, dynamics of G) is as in the
-    experiment files.
-
-    Parameters
-    ----------
-    law : HysteresisLaw, optional
-        Starting point; its fixed fields (threshold grid) are kept.
-    targets : dict, optional
-        {amplitude [V]: %}; default Table 4 Case I.
-
-    Returns
-    -------
-    law : HysteresisLaw
-        Calibrated law (c and rho rounded to 6 significant digits).
-    achieved : dict
-        {amplitude: %} of the noise-free stage with that law.
-    """
-    # the stage simulates the law: imported here, as stage.py imports this module
-    from piezolib.problem.stage import VirtualStage, case_I_hysteresis, run_case_I
-
-    if targets is None:
-        targets = paper.table4().loc["case_I"].to_dict()
-    amplitudes = sorted(targets)
-    want = np.array([targets[A] for A in amplitudes])
-
-    def percents(law_):
-        stage = VirtualStage(seed=0, noise_rms_V=0.0, hysteresis=law_)
-        got = case_I_hysteresis(run_case_I(stage, amplitudes))
-        return np.array([got[A] for A in amplitudes])
-
-    def residual(p):
-        return percents(replace(law, density_per_V=math.exp(p[0]), decay_V=math.exp(p[1]))) - want
-
-    sol = opt.least_squares(residual, [math.log(law.density_per_V), math.log(law.decay_V)],
-                            diff_step=1e-4, xtol=1e-10, ftol=1e-10)
-    fitted = replace(law, density_per_V=float(f"{math.exp(sol.x[0]):.6g}"),
-                     decay_V=float(f"{math.exp(sol.x[1]):.6g}"))
-    return fitted, dict(zip(amplitudes, percents(fitted).tolist()))

@@ -15,6 +15,9 @@ reduction   (weighted) balanced controller reduction
 discrete    Tustin discretisation with response checks
 margins     gain, phase, delay and disk margins; sampled-loop delay tolerance
 achievable  lower bounds on the achievable peak mu (H-infinity certificates)
+performance_weights
+            templates on S and T (``sensitivity_weight``,
+            ``complementary_sensitivity_weight``)
 export      second-order sections: JSON, C header, reference filter
 mu/         the mu wing (:mod:`piezolib.robust.mu`): structured singular value bounds,
             entry point ``mussv`` (ssv), one module per bound (upper_complex,
@@ -37,10 +40,12 @@ from piezolib.robust.reduction import *    # noqa: F401,F403
 from piezolib.robust.discrete import *     # noqa: F401,F403
 from piezolib.robust.margins import *      # noqa: F401,F403
 from piezolib.robust.achievable import *   # noqa: F401,F403
+from piezolib.robust.performance_weights import *  # noqa: F401,F403
 from piezolib.robust.export import *       # noqa: F401,F403
 from piezolib.robust import (achievable, blocks, dfit, discrete, dk, export, fixed_order, hinf,
-                             lft, lti, margins, mu, reduction)
+                             lft, lti, margins, mu, performance_weights, reduction)
 
 __all__ = (lti.__all__ + lft.__all__ + blocks.__all__ + mu.__all__ + hinf.__all__
            + dfit.__all__ + dk.__all__ + fixed_order.__all__ + reduction.__all__
-           + discrete.__all__ + margins.__all__ + achievable.__all__ + export.__all__)
+           + discrete.__all__ + margins.__all__ + achievable.__all__ + export.__all__
+           + performance_weights.__all__)

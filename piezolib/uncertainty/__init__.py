@@ -2,7 +2,8 @@
 
 modelset     the parametric model set (perturbed denominator coefficients), responses, poles
 envelope     relative errors, their envelope and its refined peak, the exact box bound, coverage
-weight       fit of a stable minimum-phase weight covering an envelope
+weight       the inverse-notch weight shape, and the fit of a stable minimum-phase weight
+             covering an envelope
 margin       exact parametric stability margin (zero exclusion) and small-gain certificates
 polynomials  polynomial helpers shared by the modules above
 
@@ -16,7 +17,7 @@ from piezolib.uncertainty.modelset import (
 from piezolib.uncertainty.envelope import (
     Coverage, SpreadBracket, coverage, envelope_peak, largest_covered_spread,
     relative_error_bound, relative_error_envelope, relative_errors)
-from piezolib.uncertainty.weight import fit_covering_weight
+from piezolib.uncertainty.weight import fit_covering_weight, inverse_notch_weight
 from piezolib.uncertainty.margin import (
     ParametricMargin, parametric_stability_margin, small_gain_spread, stability_gauge,
     weight_certified_spread)
@@ -26,7 +27,7 @@ __all__ = [
     "relative_errors",
     "member_poles", "member_closed_loop_poles", "unstable_members", "relative_error_envelope",
     "envelope_peak", "relative_error_bound", "Coverage", "coverage",
-    "SpreadBracket", "largest_covered_spread", "fit_covering_weight",
+    "SpreadBracket", "largest_covered_spread", "inverse_notch_weight", "fit_covering_weight",
     "ParametricMargin", "stability_gauge", "parametric_stability_margin",
     "small_gain_spread", "weight_certified_spread", "MAX_MEMBERS",
 ]

@@ -1,8 +1,11 @@
-"""Fit of a stable, minimum-phase weight of given order that covers a relative-error envelope.
+"""Multiplicative uncertainty weights: a shape given by its parameters, or a fit that covers.
 
-In the spirit of MATLAB's ``ucover``; the weight is the gain-and-sections model
-of :mod:`piezolib.robust.sos`.  The fitting method is described in
-``docs/uncertainty.md``.
+:func:`inverse_notch_weight` builds the classic shape (gain, inverse notches
+at the plant's resonances, a first-order low-pass) from explicit parameters;
+:func:`fit_covering_weight` fits a stable, minimum-phase weight of given order
+that covers a relative-error envelope, in the spirit of MATLAB's ``ucover``
+(the gain-and-sections model of :mod:`piezolib.robust.sos`; the method is
+described in ``docs/uncertainty.md``).
 """
 
 import control as ct
@@ -10,11 +13,75 @@ import numpy as np
 import scipy.optimize as opt
 from scipy.signal import find_peaks, peak_widths
 
-from piezolib._checks import check_finite_array, check_integer
+from piezolib._checks import check_finite_array, check_integer, check_nonnegative, check_positive
 from piezolib.robust import sos
 from piezolib.uncertainty.polynomials import check_frequencies
 
-__all__ = ["fit_covering_weight"]
+__all__ = ["inverse_notch_weight", "fit_covering_weight"]
+
+
+def inverse_notch_weight(gain, notches, lowpass_rad_s, lowpass_dc_gain=1.0, lowpass_hf_gain=0.0,
+                         *, inputs="u", outputs="y_Delta", name="W_m"):
+    """Weight of inverse notches in series with a first-order low-pass.
+
+    W(s) = g prod_i (s^2 + 2 zeta_z,i omega_i s + omega_i^2)
+    / (s^2 + 2 zeta_p,i omega_i s + omega_i^2) * (eps s + omega_c) / (s + omega_c / M).
+
+    Each section has unit gain far from omega_i and gain zeta_z,i / zeta_p,i
+    at omega_i: with zeta_z > zeta_p it lifts |W| around a resonance, where a
+    set of plant models spreads most.  The low-pass has gain M at low and eps
+    at high frequency, so |W| tends to g M at DC and g eps at high frequency.
+
+    Parameters
+    ----------
+    gain : float
+        g > 0 (dimensionless: a relative model error).
+    notches : array_like of shape (k, 3)
+        One row (omega_i [rad/s] > 0, zeta_z,i >= 0, zeta_p,i > 0) per
+        section; k = 0 (an empty sequence) leaves only the low-pass.
+    lowpass_rad_s : float
+        omega_c > 0 [rad/s]: the low-pass's pole is at -omega_c / M, its zero
+        at -omega_c / eps.
+    lowpass_dc_gain : float, optional
+        M > 0, the low-pass's gain at DC.
+    lowpass_hf_gain : float, optional
+        eps >= 0, its gain at high frequency (0: W is strictly proper).
+    inputs, outputs, name : str, optional
+        Signal and system names (default ``u -> y_Delta``, ``W_m``).
+
+    Returns
+    -------
+    control.TransferFunction
+        Stable weight of order 2 k + 1 (minimum phase when eps > 0 and every
+        zeta_z,i > 0).
+
+    Raises
+    ------
+    ValueError, TypeError
+        When a parameter is not finite or outside its range, or ``notches``
+        is not k rows of three numbers (the message names the argument).
+    """
+    g = check_positive("gain", gain)
+    rows = check_finite_array("notches", notches, real=True)
+    if rows.size == 0:
+        rows = rows.reshape(0, 3)
+    if rows.ndim != 2 or rows.shape[1] != 3:
+        raise ValueError("notches must be rows of (omega_rad_s, zeta_zeros, zeta_poles), "
+                         f"got shape {rows.shape}")
+    omega_c = check_positive("lowpass_rad_s", lowpass_rad_s)
+    M = check_positive("lowpass_dc_gain", lowpass_dc_gain)
+    eps = check_nonnegative("lowpass_hf_gain", lowpass_hf_gain)
+    num, den = np.ones(1), np.ones(1)
+    for i, (omega, zeta_z, zeta_p) in enumerate(rows):
+        omega = check_positive(f"notches[{i}] omega_rad_s", omega)
+        zeta_z = check_nonnegative(f"notches[{i}] zeta_zeros", zeta_z)
+        # a zero pole damping puts poles on the imaginary axis
+        zeta_p = check_positive(f"notches[{i}] zeta_poles", zeta_p)
+        num = np.polymul(num, [1, 2 * zeta_z * omega, omega ** 2])
+        den = np.polymul(den, [1, 2 * zeta_p * omega, omega ** 2])
+    num = g * np.polymul(num, [eps, omega_c])
+    den = np.polymul(den, [1, omega_c / M])
+    return ct.tf(num, den, inputs=inputs, outputs=outputs, name=name)
 
 #: Bounds of every damping ratio of the weight's sections.
 _ZETA_RANGE = (1e-4, 1e2)

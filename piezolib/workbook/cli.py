@@ -95,7 +95,7 @@ def _compare(args, stream):
 
 
 def _data(stream):
-    from piezolib import paper
+    from piezolib.problem import paper
     from piezolib.problem import stage, stage_data
 
     start = time.perf_counter()

@@ -23,11 +23,12 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from piezolib import paper, signals
+from piezolib import signals
 from piezolib._checks import check_finite_array, check_integer, check_positive, check_same_length
 from piezolib.hysteresis.dahl import DahlModel
 from piezolib.hysteresis.measure import hysteresis_measure
 from piezolib.metrics import improvement_percent, mean_interval
+from piezolib.problem import paper
 from piezolib.problem.hysteresis import workbook_dahl_fit
 from piezolib.problem.stage import StageBatch, VirtualStage, check_seeds
 from piezolib.robust.export import SOSController
@@ -192,7 +193,7 @@ def case_table(case_values, columns):
     Returns
     -------
     pandas.DataFrame
-        Rows as in :func:`piezolib.paper.table4` (its row index).
+        Rows as in :func:`piezolib.problem.paper.table4` (its row index).
     """
     I, II, III = (np.asarray(case_values[c], dtype=float) for c in ("I", "II", "III"))
     data = [I, II, III, improvement_percent(I, II), improvement_percent(I, III),
@@ -207,9 +208,9 @@ class ExperimentResult:
     Attributes
     ----------
     table : pandas.DataFrame
-        Same layout as :func:`piezolib.paper.table4` / :func:`~piezolib.paper.table5`
-        [%].  With seeds: the mean over the seeds (each improvement row is
-        computed seed by seed, then averaged).
+        Same layout as :func:`piezolib.problem.paper.table4` /
+        :func:`~piezolib.problem.paper.table5` [%].  With seeds: the mean over the
+        seeds (each improvement row is computed seed by seed, then averaged).
     runs : dict
         {(case, column value): LoopResult}; with seeds, the runs of the first
         seed.

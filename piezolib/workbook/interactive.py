@@ -43,7 +43,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from piezolib import paper
+from piezolib.problem import paper
 from piezolib import uncertainty as unc
 from piezolib._checks import check_frequency_grid, check_integer, check_positive, check_siso
 from piezolib.hysteresis.dahl import DahlModel, check_dahl_model, simulate_dahl
@@ -319,7 +319,7 @@ def weight_design_view(G, H_m, K, params=None, omega=None, *, controller=None):
     params : dict or object, optional
         M_e, eps_e, omega_e [rad/s], M_y, eps_y, omega_y [rad/s], as dict keys
         or attributes (e.g. a study's ``weights``), all six, positive; default
-        the published values of :mod:`piezolib.paper`.
+        the published values of :mod:`piezolib.problem.paper`.
     omega : array_like, optional
         Grid [rad/s] of the curves, increasing; default 1 ... 1e7 rad/s,
         1500 points.  The peaks come from
@@ -334,7 +334,7 @@ def weight_design_view(G, H_m, K, params=None, omega=None, *, controller=None):
 
     Examples
     --------
-    >>> from piezolib import paper
+    >>> from piezolib.problem import paper
     >>> G, H_m, H_e, H_y, K = paper.problem()
     >>> view = weight_design_view(G, H_m, K)
     >>> round(view.norm_He_S, 2)

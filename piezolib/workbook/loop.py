@@ -22,10 +22,10 @@ from numbers import Real
 import control as ct
 import numpy as np
 
-from piezolib import paper
+from piezolib.problem import paper
 from piezolib._checks import check_finite_array, check_integer, check_positive, check_proper, check_siso
-from piezolib.hysteresis.compensator import feedforward as dahl_feedforward
 from piezolib.hysteresis.dahl import DahlModel
+from piezolib.hysteresis.dahl import feedforward as dahl_feedforward
 from piezolib.metrics import tracking_error_percent
 from piezolib.robust.discrete import DiscreteController, discretize
 from piezolib.robust.export import SectionFilter, SectionFilterBatch, SOSController

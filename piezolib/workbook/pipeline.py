@@ -28,7 +28,7 @@ from pathlib import Path
 import control as ct
 import numpy as np
 
-from piezolib import paper
+from piezolib.problem import paper
 from piezolib.problem.design import design_controller
 from piezolib.problem.hysteresis import write_workbook_dahl
 from piezolib.records import atomic_write
@@ -120,7 +120,7 @@ def study_problem(study):
 
     Returns
     -------
-    piezolib.paper.DesignProblem
+    piezolib.problem.paper.DesignProblem
     """
     study = studies.load(study)
     published = paper.problem()

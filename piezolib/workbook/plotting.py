@@ -12,7 +12,7 @@ Figure functions write plain ASCII (``"x [um]"``, ``"mu_RP"``, ``"omega_e"``,
 ``µm``, the structured singular value ``μ``, angular frequency ``ω`` and
 ``±`` the same way.  Frequencies are in rad/s (models, grids) or Hz
 (trajectories), voltages in V, times in s or ms, as in the units table of
-:mod:`piezolib.paper`.
+:mod:`piezolib.problem.paper`.
 
 :func:`block_diagram` draws the signal-flow diagrams (Fig. 1, 2, 3, 5, 9) and
 :func:`text_overlaps` finds texts that collide with each other, with the

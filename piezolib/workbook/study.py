@@ -23,7 +23,7 @@ import tomllib
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 
-from piezolib import paper
+from piezolib.problem import paper
 from piezolib.problem.design import DESIGN_D_ORDER
 from piezolib.workbook import paths
 from piezolib.workbook.loop import COMPUTATION_DELAY_SAMPLES
@@ -77,12 +77,12 @@ class WeightChoice:
 
     @property
     def error(self):
-        """:class:`piezolib.paper.ErrorWeightParameters` of these weights."""
+        """:class:`piezolib.problem.paper.ErrorWeightParameters` of these weights."""
         return paper.ErrorWeightParameters(M_e=self.M_e, eps_e=self.eps_e, omega_e=self.omega_e)
 
     @property
     def output(self):
-        """:class:`piezolib.paper.OutputWeightParameters` of these weights."""
+        """:class:`piezolib.problem.paper.OutputWeightParameters` of these weights."""
         return paper.OutputWeightParameters(M_y=self.M_y, eps_y=self.eps_y, omega_y=self.omega_y)
 
 

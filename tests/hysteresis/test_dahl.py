@@ -299,3 +299,30 @@ def test_complex_input_is_a_clear_error():
         hy.dahl_hysteresis(model(), x)
     with pytest.raises(TypeError, match="v must be real-valued"):
         hy.simulate_dahl(model(), x)
+
+
+# --- the feedforward of eq. 14 on a record: the model's inverse -------------------
+
+@pytest.mark.parametrize("form", hy.FORMS)
+@pytest.mark.parametrize("alpha1", [3.0, 4.0, 10.0])   # oscillatory, critical, overdamped
+def test_feedforward_inverts_the_model(form, alpha1):
+    m = model(form, alpha1=alpha1)
+    x_r = minor_loop_reference()
+    u_f = hy.feedforward(m, x_r)
+    x = hy.simulate_dahl(m, u_f).x
+    np.testing.assert_allclose(x, x_r, rtol=0, atol=1e-9)
+
+
+def test_feedforward_of_printed_model_is_offset_only():
+    """Printed form, long strokes: after the first transient u_f = (x_r + H_ss)/g_a."""
+    m = model("printed", alpha1=200.0, alpha2=1e4)
+    t, x_r = signals.triangle(3.6, 10.0, fs=FS, periods=2)
+    u_f = hy.feedforward(m, x_r)
+    np.testing.assert_allclose(u_f[100:], (x_r[100:] + m.steady_state(1)) / m.g_a, rtol=1e-9)
+
+
+def test_bad_feedforward_inputs_raise():
+    with pytest.raises(ValueError, match="x_r contains"):
+        hy.feedforward(model(), [0.0, np.inf])
+    with pytest.raises(TypeError, match="model must be a DahlModel"):
+        hy.feedforward(PARAMS, [0.0, 1.0])              # the parameters, not a model

@@ -1,4 +1,4 @@
-"""Virtual stage simulator: determinism, step == run, causality, saturation."""
+"""Virtual stage simulator: determinism, step == run, causality, saturation, calibration."""
 
 import warnings
 
@@ -9,6 +9,7 @@ import pytest
 from piezolib import identification, paper
 from piezolib.problem import stage as S
 from piezolib.problem.stage_data import IDENTIFICATION_CHIRP, chirp_input
+from piezolib.problem.stage_hysteresis import CALIBRATED_HYSTERESIS
 
 FS = paper.SAMPLING_FREQUENCY_HZ
 
@@ -317,3 +318,11 @@ def test_batch_rejects_incompatible_stages_and_bad_steps(stage):
     assert sim.record(1).u_c_V[0] == sim.record(0).u_c_V[0] == stage.run([0.5]).u_c_V[0]
     with pytest.raises(ValueError, match="batch size"):
         sim.record(2)
+
+
+def test_calibration_rederives_the_stored_parameters():
+    law, achieved = S.calibrate_hysteresis()
+    assert law.density_per_V == pytest.approx(CALIBRATED_HYSTERESIS.density_per_V, rel=1e-3)
+    assert law.decay_V == pytest.approx(CALIBRATED_HYSTERESIS.decay_V, rel=1e-3)
+    target = paper.table4().loc["case_I"]
+    assert all(abs(achieved[A] - target[A]) <= 0.5 for A in achieved)

@@ -1,8 +1,10 @@
-"""Shared fixture of the robust-toolkit tests: the paper's mu design, computed once."""
+"""Shared fixtures of the robust-toolkit tests: the paper's mu design, computed once, and the
+textbook problems more than one test module uses."""
 
 import pytest
 
-from piezolib import paper
+import textbook_problems as tp
+from piezolib import paper, robust
 from piezolib.problem import design
 
 
@@ -33,3 +35,16 @@ class SlowClock:
 def slow_clock():
     """A clock on which every step seems to take 1000 s (results must not depend on it)."""
     return SlowClock()
+
+
+@pytest.fixture(scope="module")
+def column():
+    """The book's distillation column (textbook_problems.distillation_column)."""
+    return tp.distillation_column()
+
+
+@pytest.fixture(scope="module")
+def lundstrom_plant(column):
+    """The book's K-step with Lundstrom's mu-optimal scaling d_opt on both input blocks."""
+    d = tp.lundstrom_scaling()
+    return robust.dk.scaled_plant(column.P, tp.BLK_RP, [d, d], 2, 2)

@@ -1,6 +1,7 @@
 """Textbook robust-control problems with published or closed-form answers (test data).
 
-Shared by ``tests/robust/test_textbook.py`` and ``benchmarks/bench_textbook.py``; nothing
+Shared by ``tests/robust/test_textbook.py``, ``test_dk.py``, ``test_hinf.py`` and
+``benchmarks/bench_textbook.py``; nothing
 in ``piezolib`` imports it.  Every builder is written from the textbook definition of the
 problem; every closed form is derived in the docstring or comment next to it.  Only
 ``numpy``, ``scipy`` and python-control are used here, so the references are independent
@@ -441,3 +442,13 @@ def exact_response(sys, omega):
             im = sum(Fraction(C[i, j]) * X[j][k][1] for j in range(n))
             out[i, k] = float(re) + 1j * float(im)
     return out
+
+
+def with_effort_output(P, weight, nmeas, ncon):
+    """P with ``weight`` * u appended to its performance outputs (hinfsyn's P_reg for D12)."""
+    P = ct.ss(P)
+    n, m = P.nstates, P.ninputs
+    C = np.vstack([P.C[:-nmeas], np.zeros((ncon, n)), P.C[-nmeas:]])
+    D = np.vstack([P.D[:-nmeas], np.hstack([np.zeros((ncon, m - ncon)), weight * np.eye(ncon)]),
+                   P.D[-nmeas:]])
+    return ct.ss(P.A, P.B, C, D)

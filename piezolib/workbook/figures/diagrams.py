@@ -1,6 +1,6 @@
 """The paper's block diagrams (Fig. 1, 2, 3, 5 and 9), drawn in one style.
 
-Signals carry the names and units of the units table of :mod:`piezolib.paper`
+Signals carry the names and units of the units table of :mod:`piezolib.problem.paper`
 (u_c, u_f, u_b, v_a, v_y, v_r, v_e in V; x, x_r in um), blocks name the
 equations of the paper they stand for.  Every function draws with
 :func:`piezolib.workbook.plotting.block_diagram`, saves the figure under the
@@ -8,7 +8,7 @@ paper's number and returns it.  Notebook 00 draws Fig. 1, 2 and 9, notebook
 01 Fig. 3 and notebook 02 Fig. 5.
 """
 
-from piezolib import paper
+from piezolib.problem import paper
 from piezolib.workbook import plotting
 
 __all__ = ["fig01_control_loop", "fig02_experimental_loop", "fig03_identification_steps",

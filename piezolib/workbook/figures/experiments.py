@@ -1,6 +1,6 @@
 """Figures of notebook 06 (tracking experiments): Fig. 14 and Fig. 15."""
 
-from piezolib import paper
+from piezolib.problem import paper
 from piezolib.workbook import plotting
 from piezolib.workbook.experiments import CASES
 

@@ -6,7 +6,7 @@ micrometres (3 um/V x sensor volts).
 
 import numpy as np
 
-from piezolib import paper
+from piezolib.problem import paper
 from piezolib.hysteresis import dahl_hysteresis, feedforward, hysteresis_percent
 from piezolib.workbook import plotting
 from piezolib.workbook.experiments import table4_reference

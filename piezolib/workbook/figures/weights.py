@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from piezolib import paper
+from piezolib.problem import paper
 from piezolib.robust.lti import frequency_grid
 from piezolib.workbook import plotting
 from piezolib.workbook.figures.audit import sensitivity_templates_figure
@@ -16,8 +16,8 @@ def extra_weight_templates(error_params, output_params, omega=None,
 
     Parameters
     ----------
-    error_params : piezolib.paper.ErrorWeightParameters
-    output_params : piezolib.paper.OutputWeightParameters
+    error_params : piezolib.problem.paper.ErrorWeightParameters
+    output_params : piezolib.problem.paper.OutputWeightParameters
     omega : array_like, optional
         Frequency grid [rad/s]; default 0.1 ... 1e9 rad/s, 3000 points.
     factors : sequence of float
