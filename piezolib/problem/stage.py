@@ -359,13 +359,7 @@ class VirtualStage:
         """
         u = check_finite_array("u_c", u_c, ndim=1, min_length=1, real=True)
         n = len(u)
-        u_dac = self.dac.convert(u)
-        sat_in = Saturation.of("DAC/amplifier input", self.dac.limits, u)
-        v_cmd = self.gain * u_dac
-        v_a = np.minimum(np.maximum(v_cmd, self.out_lo), self.out_hi)
-        sat_out = Saturation.of("amplifier output", (self.out_lo, self.out_hi), v_cmd)
-        v_h = v_a if self.hysteresis is None else self.hysteresis.apply(v_a)[0]
-        y = sg.lfilter(self.b, self.a, v_h / self.gain)
+        u_dac, v_a, y, sat_in, sat_out = self._noise_free(u)
         noise = self.noise_rms * np.random.default_rng(self.seed).standard_normal(n)
         analog = y + noise
         v_y = self.adc.convert(analog)
@@ -374,6 +368,18 @@ class VirtualStage:
                              v_y, sat_in, sat_out, sat_adc, self.seed)
         self._warn(record)
         return record
+
+    def _noise_free(self, u):
+        """(u_dac, v_a, y, input saturation, output saturation) of the input u [V]:
+        everything of :meth:`run` before the sensor noise and the ADC."""
+        u_dac = self.dac.convert(u)
+        sat_in = Saturation.of("DAC/amplifier input", self.dac.limits, u)
+        v_cmd = self.gain * u_dac
+        v_a = np.minimum(np.maximum(v_cmd, self.out_lo), self.out_hi)
+        sat_out = Saturation.of("amplifier output", (self.out_lo, self.out_hi), v_cmd)
+        v_h = v_a if self.hysteresis is None else self.hysteresis.apply(v_a)[0]
+        y = sg.lfilter(self.b, self.a, v_h / self.gain)
+        return u_dac, v_a, y, sat_in, sat_out
 
     def start(self):
         """Begin a sample-by-sample simulation (for closed loops); see
@@ -754,7 +760,7 @@ class StageBatch:
         for st in self.stages:
             key = self._truth_key(st)
             if key not in truths:
-                truths[key] = self._truth(st, u)
+                truths[key] = st._noise_free(u)
             u_dac, v_a, y, sat_in, sat_out = truths[key]
             # the arithmetic of VirtualStage.run, member by member
             noise = st.noise_rms * np.random.default_rng(st.seed).standard_normal(n)
@@ -772,17 +778,6 @@ class StageBatch:
         return (st.b.tobytes(), st.a.tobytes(),
                 None if h is None else (h.thresholds_V, h.weights, h.linear_weight))
 
-    @staticmethod
-    def _truth(st, u):
-        # the noise-free half of VirtualStage.run, the same operations
-        u_dac = st.dac.convert(u)
-        sat_in = Saturation.of("DAC/amplifier input", st.dac.limits, u)
-        v_cmd = st.gain * u_dac
-        v_a = np.minimum(np.maximum(v_cmd, st.out_lo), st.out_hi)
-        sat_out = Saturation.of("amplifier output", (st.out_lo, st.out_hi), v_cmd)
-        v_h = v_a if st.hysteresis is None else st.hysteresis.apply(v_a)[0]
-        y = sg.lfilter(st.b, st.a, v_h / st.gain)
-        return u_dac, v_a, y, sat_in, sat_out
 
     def start(self):
         """Begin a sample-by-sample simulation of all members (for closed
