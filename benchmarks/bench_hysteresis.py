@@ -19,7 +19,7 @@ import time
 import numpy as np
 
 from piezolib import hysteresis as hy
-from piezolib.problem import hysteresis as ph
+from piezolib.problem import hysteresis_fits as ph
 from piezolib.workbook.experiments import table4_reference
 
 from bench_stage import best_of      # scripts run from benchmarks/ see each other

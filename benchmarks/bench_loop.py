@@ -17,7 +17,7 @@ from pathlib import Path
 from piezolib import paper
 from piezolib.problem import stage as vstage
 from piezolib.problem.design import design_controller
-from piezolib.problem.hysteresis import workbook_dahl_fit
+from piezolib.problem.hysteresis_fits import workbook_dahl_fit
 from piezolib.robust.discrete import discretize
 from piezolib.robust.export import controller_sos
 from piezolib.workbook import experiments

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from piezolib.problem.hysteresis import workbook_dahl_fit
+from piezolib.problem.hysteresis_fits import workbook_dahl_fit
 from piezolib.problem.stage import VirtualStage
 from piezolib.robust.export import read_json
 from piezolib.workbook import experiments, loop

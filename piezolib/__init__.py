@@ -8,7 +8,7 @@ toolkit   general tools for any plant (never import the layers above them in thi
           :mod:`~piezolib.progress` and the private ``_checks``
 problem   the paper's numbers, stage and design problem: :mod:`piezolib.problem`
           (the published numbers in :mod:`piezolib.problem.paper`, also reachable
-          as ``piezolib.paper``)
+          as ``from piezolib import paper``)
 workbook  what runs and presents the notebooks: :mod:`piezolib.workbook`
           (``python -m piezolib`` runs its command line)
 
@@ -24,8 +24,12 @@ __all__ = ["robust", "identification", "hysteresis", "uncertainty", "signals", "
 __version__ = "0.2.0"
 
 
+#: names that are not subpackages of their own but live in a layer below
+_ELSEWHERE = {"paper": "piezolib.problem.paper"}
+
+
 def __getattr__(name):
     # PEP 562: load subpackages lazily
     if name in __all__:
-        return importlib.import_module(f"{__name__}.{name}")
+        return importlib.import_module(_ELSEWHERE.get(name, f"{__name__}.{name}"))
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

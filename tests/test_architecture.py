@@ -16,11 +16,11 @@ PACKAGE = pathlib.Path(piezolib.__file__).parent
 
 TOOLKIT = ("robust", "hysteresis", "uncertainty", "identification", "signals", "metrics",
            "records", "_checks", "progress")
-PROBLEM = ("paper", "problem")
+PROBLEM = ("problem",)
 WORKBOOK = ("workbook", "__main__")
 # what each layer may not import (at any depth of the module)
 FORBIDDEN = {
-    "toolkit": ("piezolib.paper", "piezolib.problem", "piezolib.workbook"),
+    "toolkit": ("piezolib.problem", "piezolib.workbook"),
     "problem": ("piezolib.workbook",),
     "workbook": (),
 }
@@ -95,7 +95,7 @@ def test_robust_imports_no_paper_pandas_or_plotting():
     loaded = _loaded_after("import piezolib.robust")
     assert "piezolib.robust.mu" in loaded          # the import did load the toolkit
     assert "pandas" not in loaded
-    assert not {m for m in loaded if m.startswith(("piezolib.paper", "piezolib.problem",
+    assert not {m for m in loaded if m.startswith(("piezolib.problem",
                                                    "piezolib.workbook"))}
     # python-control 0.10 imports matplotlib itself; piezolib.robust must add nothing to it
     by_control = _loaded_after("import control")
@@ -107,18 +107,26 @@ def test_robust_imports_no_paper_pandas_or_plotting():
 def test_toolkit_packages_import_without_the_paper(module):
     loaded = _loaded_after(f"import {module}")
     assert module in loaded
-    assert not {"piezolib.paper", "piezolib.problem.paper"} & loaded
+    assert "piezolib.problem.paper" not in loaded
     assert "piezolib.workbook.plotting" not in loaded
     assert "pandas" not in loaded
 
 
 def test_the_paper_at_its_old_address_is_the_problem_layers_module():
     from piezolib import paper as by_name
-    import piezolib.paper
     import piezolib.problem.paper
 
     assert by_name is piezolib.paper is piezolib.problem.paper
-    assert piezolib.paper.__name__ == "piezolib.problem.paper"
+    assert by_name.__name__ == "piezolib.problem.paper"
+
+
+def test_no_two_modules_share_a_name():
+    # a notebook importing two modules of one name has to alias one of them
+    by_name = {}
+    for path in PACKAGE.rglob("*.py"):
+        if path.name != "__init__.py":
+            by_name.setdefault(path.stem, []).append(str(path.relative_to(PACKAGE)))
+    assert {name: where for name, where in by_name.items() if len(where) > 1} == {}
 
 
 def test_lazy_subpackages_resolve():

@@ -5,7 +5,7 @@ import re
 
 import pytest
 
-from piezolib.workbook.paths import notebooks_dir
+from piezolib.workbook.outputs import notebooks_dir
 
 NOTEBOOKS = sorted(notebooks_dir().glob("*.ipynb"))
 

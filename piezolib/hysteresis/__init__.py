@@ -12,7 +12,7 @@ measure      the hysteresis measure of eq. 25-26
 
 Equations and design notes: ``docs/hysteresis.md``.  The paper's parameters
 and the workbook's fit to the virtual stage are in
-:mod:`piezolib.problem.hysteresis`.
+:mod:`piezolib.problem.hysteresis_fits`.
 """
 
 from piezolib.hysteresis.dahl import *          # noqa: F401,F403

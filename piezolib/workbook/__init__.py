@@ -9,8 +9,8 @@ plotting     the workbook's figure style and figure saving
 figures      one function per paper figure, grouped by notebook
 reproduce    headless run of the whole workbook (``python -m piezolib reproduce``)
 cli          the command line (``python -m piezolib {reproduce,data}``)
-paths        where the workbook reads its inputs and writes its outputs
+outputs      where the workbook reads its inputs and writes its outputs
 interactive  the notebooks' interactive controls and the callbacks behind them
 """
 
-__all__ = ["loop", "experiments", "report", "plotting", "figures", "reproduce", "cli", "paths"]
+__all__ = ["loop", "experiments", "report", "plotting", "figures", "reproduce", "cli", "outputs"]

@@ -29,7 +29,7 @@ from piezolib.hysteresis.dahl import DahlModel
 from piezolib.hysteresis.measure import hysteresis_measure
 from piezolib.metrics import improvement_percent, mean_interval
 from piezolib.problem import paper
-from piezolib.problem.hysteresis import workbook_dahl_fit
+from piezolib.problem.hysteresis_fits import workbook_dahl_fit
 from piezolib.problem.stage import StageBatch, VirtualStage, check_seeds
 from piezolib.robust.export import SOSController
 from piezolib.workbook.loop import (COMPUTATION_DELAY_SAMPLES, DISCARD_PERIODS,
@@ -147,7 +147,7 @@ def run_case(case, stage, v_r, dahl, controller=None, case_I_gain=None,
     dahl : DahlModel or None
         The feedforward model (Cases II, III) whose g_a and x0 also map the
         reference in Case I.  None: the workbook's shared model,
-        :func:`piezolib.problem.hysteresis.workbook_dahl_fit`.
+        :func:`piezolib.problem.hysteresis_fits.workbook_dahl_fit`.
     controller : see :func:`piezolib.workbook.loop.discrete_controller`
         Required for Case III, ignored otherwise.
     case_I_gain : float, optional

@@ -687,7 +687,7 @@ def dahl_view(model_params, loop, *, discard=None):
     """Model loop against measured loop and its RMS error in % of the stroke.
 
     The callback of :func:`dahl_control`; with the fitted model of
-    :func:`piezolib.problem.hysteresis.workbook_dahl_fit` and one of the Case I
+    :func:`piezolib.problem.hysteresis_fits.workbook_dahl_fit` and one of the Case I
     loops it reproduces that fit's ``rms_percent`` for the loop.
 
     Parameters

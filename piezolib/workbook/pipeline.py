@@ -30,11 +30,11 @@ import numpy as np
 
 from piezolib.problem import paper
 from piezolib.problem.design import design_controller
-from piezolib.problem.hysteresis import write_workbook_dahl
+from piezolib.problem.hysteresis_fits import write_workbook_dahl
 from piezolib.records import atomic_write
 from piezolib.robust import export
 from piezolib.robust.discrete import discretize
-from piezolib.workbook import paths
+from piezolib.workbook import outputs
 from piezolib.workbook import study as studies
 
 __all__ = ["StudyControllers", "study_problem", "study_controllers", "derive_controllers",
@@ -151,7 +151,7 @@ def memory():
     setting = os.environ.get(CACHE_ENV, "")
     if setting.lower() in {"0", "off", "no", "false"}:
         return joblib.Memory(location=None, verbose=0)
-    location = Path(setting) if setting else paths.runs_dir() / "cache"
+    location = Path(setting) if setting else outputs.runs_dir() / "cache"
     return joblib.Memory(location=location, verbose=0)
 
 
@@ -208,7 +208,7 @@ def derive_controllers(study, cache=True):
 
 def reference_design_path():
     """``data/controllers/reference_design.json``: the committed reference controllers."""
-    return paths.data_dir() / "controllers" / "reference_design.json"
+    return outputs.data_dir() / "controllers" / "reference_design.json"
 
 
 def study_controllers(study, cache=True):
@@ -253,7 +253,7 @@ def study_controllers(study, cache=True):
 def write_reference_design(cache=False):
     """Re-derive the reference study's optimisation products and write the committed artifacts.
 
-    The workbook Dahl model (:func:`piezolib.problem.hysteresis.write_workbook_dahl`),
+    The workbook Dahl model (:func:`piezolib.problem.hysteresis_fits.write_workbook_dahl`),
     the controllers (:func:`reference_design_path`) and their exported sections
     (:func:`export_sections`): inputs of the reference study that no rerun rewrites.
     """
@@ -261,7 +261,7 @@ def write_reference_design(cache=False):
     reference = studies.load(studies.REFERENCE)
     found = derive_controllers(reference, cache=cache)
     path = write_controllers(found, reference_design_path(), reference)
-    export_sections(reference, paths.data_dir() / "controllers", found)
+    export_sections(reference, outputs.data_dir() / "controllers", found)
     return path
 
 
@@ -328,7 +328,7 @@ def study_sections(study):
         return export_sections(study, study.output_dir / "controllers")
     found = {}
     for stem in SECTION_FILES:
-        path = paths.data_dir() / "controllers" / f"{stem}.json"
+        path = outputs.data_dir() / "controllers" / f"{stem}.json"
         if not path.is_file():
             raise ArtifactError(f"{path} is missing: run `python -m piezolib controllers "
                                 "--write-reference` to derive and export the reference "

@@ -28,7 +28,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from piezolib.records import atomic_write
-from piezolib.workbook.paths import figures_dir
+from piezolib.workbook.outputs import figures_dir
 
 __all__ = ["STYLE", "use_style", "new_figure", "save_figure", "same_picture", "PIXEL_TOLERANCE",
            "figure_path", "unit_text", "apply_unit_text", "db", "plot_magnitude", "block_diagram", "text_overlaps"]

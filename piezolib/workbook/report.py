@@ -26,8 +26,8 @@ import pandas as pd
 
 from piezolib._checks import check_nonnegative
 from piezolib.records import atomic_write
-from piezolib.workbook import paths
-from piezolib.workbook.paths import REFERENCE_STUDY, results_dir
+from piezolib.workbook import outputs
+from piezolib.workbook.outputs import REFERENCE_STUDY, results_dir
 
 __all__ = ["COLUMNS", "REASONS", "NOTEBOOK_TABLES", "OTHER_TABLES", "SIGNIFICANT_DIGITS",
            "verdict", "ClaimTable", "save_results", "load_claims", "compare_studies",
@@ -142,7 +142,7 @@ class ClaimTable:
             result, tol = "not published", ""
         else:
             result, tol = verdict(paper, ours, rtol=rtol, atol=atol, interval=interval)
-        if result == "differs" and not reason and paths.output_study() != REFERENCE_STUDY:
+        if result == "differs" and not reason and outputs.output_study() != REFERENCE_STUDY:
             reason = "study"      # the study changed one of the paper's choices
         self.rows.append(dict(section=section, quantity=quantity, unit=unit,
                               paper=paper, ours=_plain(ours), low=low, high=high,
@@ -170,7 +170,7 @@ def save_results(frame, name):
     :data:`SIGNIFICANT_DIGITS`; keep the file when it holds the same results.
 
     ``<results>`` is ``data/results/`` for the reference study and
-    ``runs/<study>/results/`` for any other (:func:`piezolib.workbook.paths.results_dir`).
+    ``runs/<study>/results/`` for any other (:func:`piezolib.workbook.outputs.results_dir`).
     An existing file is left as it is when every row is the same result
     (:func:`same_result`): a rerun on another machine, whose rounding moves
     a value within its precision, leaves the committed table unchanged.
@@ -275,7 +275,7 @@ def load_claims(names=None, study=None):
         default all of :data:`NOTEBOOK_TABLES`.
     study : str, optional
         Name of the study whose tables to read (default: the study this
-        process writes, :func:`piezolib.workbook.paths.output_study`).  A
+        process writes, :func:`piezolib.workbook.outputs.output_study`).  A
         table the study has not written yet is read from the reference
         study's ``data/results/``, and the ``study`` column says so.
 
@@ -292,7 +292,7 @@ def load_claims(names=None, study=None):
     """
     names = list(NOTEBOOK_TABLES) if names is None else list(names)
     tables = {**NOTEBOOK_TABLES, **OTHER_TABLES}
-    study = paths.output_study() if study is None else study
+    study = outputs.output_study() if study is None else study
     frames = []
     for name in names:
         if name not in tables:
@@ -315,10 +315,10 @@ def load_claims(names=None, study=None):
 def _study_table(study, name):
     """Path of table ``name`` of ``study`` and the study it belongs to (the
     reference's when the study has not written it)."""
-    own = paths.study_results_dir(study) / f"{name}.csv"
+    own = outputs.study_results_dir(study) / f"{name}.csv"
     if study == REFERENCE_STUDY or own.exists():
         return own, study
-    return paths.study_results_dir(REFERENCE_STUDY) / f"{name}.csv", REFERENCE_STUDY
+    return outputs.study_results_dir(REFERENCE_STUDY) / f"{name}.csv", REFERENCE_STUDY
 
 
 def compare_studies(first, second, names=None, changed_only=True):

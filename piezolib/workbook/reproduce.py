@@ -24,7 +24,7 @@ from pathlib import Path
 
 from piezolib import progress
 from piezolib.workbook import study as studies
-from piezolib.workbook.paths import notebooks_dir, project_root, study_results_dir
+from piezolib.workbook.outputs import notebooks_dir, project_root, study_results_dir
 
 __all__ = ["DATA_STEPS", "DATA_CHECKS", "GATHERING", "check_data", "list_notebooks",
            "notebook_waves", "default_jobs", "inject_study", "run_notebook", "run",

@@ -25,7 +25,7 @@ from pathlib import Path
 
 from piezolib.problem import paper
 from piezolib.problem.design import DESIGN_D_ORDER
-from piezolib.workbook import paths
+from piezolib.workbook import outputs
 from piezolib.workbook.loop import COMPUTATION_DELAY_SAMPLES
 
 __all__ = ["Study", "UncertaintyChoice", "WeightChoice", "DesignChoice", "LoopChoice",
@@ -33,7 +33,7 @@ __all__ = ["Study", "UncertaintyChoice", "WeightChoice", "DesignChoice", "LoopCh
            "active", "studies_dir"]
 
 #: Name of the paper's reproduction; only this study writes the committed outputs.
-REFERENCE = paths.REFERENCE_STUDY
+REFERENCE = outputs.REFERENCE_STUDY
 
 
 class StudyError(ValueError):
@@ -305,12 +305,12 @@ class Study:
     @property
     def output_dir(self):
         """Folder of this study's figures, tables, artifacts and executed notebooks."""
-        return paths.study_output_dir(self.name)
+        return outputs.study_output_dir(self.name)
 
 
 def studies_dir():
     """``studies/``: the study files of the checkout."""
-    return paths.project_root() / "studies"
+    return outputs.project_root() / "studies"
 
 
 def list_studies():
@@ -382,7 +382,7 @@ def use(spec=REFERENCE):
     """
     global _active
     _active = load(spec)
-    paths.set_output_study(_active.name)
+    outputs.set_output_study(_active.name)
     return _active
 
 

@@ -6,7 +6,7 @@ import pytest
 from piezolib import paper
 from piezolib.problem import stage_data as D
 from piezolib.problem.stage import VirtualStage, case_I_input
-from piezolib.workbook.paths import data_dir
+from piezolib.workbook.outputs import data_dir
 
 
 def test_experiment_files_are_reproducible_and_current(tmp_path):

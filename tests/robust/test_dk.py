@@ -121,7 +121,7 @@ print(json.dumps({"gamma": h.gamma, "mu": float(m.upper.max()), "musyn": r.mu_pe
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, timeout=120)
     result = json.loads(out.stdout.strip().splitlines()[-1])
-    assert "piezolib.paper" not in result["loaded"]
+    assert "piezolib.problem.paper" not in result["loaded"]
     assert not [m for m in result["loaded"] if m.startswith(("piezolib.problem", "pandas"))]
     assert result["gamma"] > 0 and result["mu"] > 0 and result["musyn"] > 0
 

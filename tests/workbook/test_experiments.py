@@ -7,7 +7,7 @@ import pytest
 
 from piezolib import hysteresis as hy
 from piezolib import paper, signals
-from piezolib.problem.hysteresis import workbook_dahl_fit
+from piezolib.problem.hysteresis_fits import workbook_dahl_fit
 from piezolib.problem.stage import VirtualStage
 from piezolib.workbook import experiments as ex
 from piezolib.workbook import loop

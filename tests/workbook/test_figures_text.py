@@ -19,7 +19,7 @@ from piezolib.workbook.figures import audit
 from piezolib.workbook.figures import hysteresis as hyst_figures
 from piezolib.workbook.figures import identification as ident_figures
 from piezolib.workbook.figures import mu as mu_figures
-from piezolib.workbook.figures import report as report_figures
+from piezolib.workbook.figures import scorecard as report_figures
 from piezolib.workbook.figures import uncertainty as unc_figures
 from piezolib.workbook.figures import weights
 

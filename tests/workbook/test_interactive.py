@@ -15,7 +15,7 @@ from piezolib import paper
 from piezolib import uncertainty as unc
 from piezolib.hysteresis import FitWarning
 from piezolib.problem import analysis, stage_data
-from piezolib.problem.hysteresis import workbook_dahl_fit
+from piezolib.problem.hysteresis_fits import workbook_dahl_fit
 from piezolib.robust.lti import is_stable
 from piezolib.workbook import interactive as I
 from piezolib.workbook.plotting import text_overlaps

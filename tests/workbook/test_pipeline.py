@@ -104,7 +104,7 @@ def test_reference_sections_are_the_committed_exports(tmp_path, monkeypatch):
 
     sections = pipeline.study_sections("reference")
     assert set(sections) == set(pipeline.SECTION_FILES)
-    committed = pipeline.paths.data_dir() / "controllers"
+    committed = pipeline.outputs.data_dir() / "controllers"
     for stem, sos in sections.items():
         np.testing.assert_array_equal(
             sos.sos, export.read_json(committed / f"{stem}.json", "float32").sos)

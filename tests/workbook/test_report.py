@@ -3,7 +3,7 @@
 import pandas as pd
 import pytest
 
-from piezolib.workbook import paths, report
+from piezolib.workbook import outputs, report
 
 
 def test_verdict_relative_and_absolute():
@@ -91,23 +91,23 @@ def test_other_tables_load_only_by_name(tmp_path, monkeypatch):
 def test_study_tables_fall_back_to_the_reference_and_compare(tmp_path, monkeypatch):
     monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
     for name, value in (("reference", 0.80), ("other", 0.95)):
-        paths.set_output_study(name)
+        outputs.set_output_study(name)
         table = report.ClaimTable("mu_synthesis")
         table.add("IV-B", "mu_RP", 0.71, value, rtol=0.05)
         table.add("IV-B", "order", 6, 6)
         table.save()
-    paths.set_output_study("reference")
+    outputs.set_output_study("reference")
     table = report.ClaimTable("weights")
     table.add("eq. 15", "M_e", 2.0, 2.0)
     table.save()
     assert (tmp_path / "runs" / "other" / "results" / "mu_synthesis.csv").is_file()
     assert (tmp_path / "data" / "results" / "mu_synthesis.csv").is_file()
-    paths.set_output_study("other")
+    outputs.set_output_study("other")
     changed = report.ClaimTable("x")
     changed.add("IV-B", "unexplained in a study", 0.71, 0.9, rtol=0.05)
     changed.add("IV-B", "explained", 0.71, 0.9, rtol=0.05, reason="method")
     assert changed.frame().reason.tolist() == ["study", "method"]
-    paths.set_output_study("reference")
+    outputs.set_output_study("reference")
     claims = report.load_claims(["mu_synthesis", "weights"], study="other")
     assert dict(zip(claims.quantity, claims.study)) == {"mu_RP": "other", "order": "other",
                                                         "M_e": "reference"}

@@ -119,7 +119,7 @@ def test_reproduce_says_when_it_regenerates_a_file_that_failed_its_check(workboo
     import shutil
 
     from piezolib.problem import stage_data
-    from piezolib.workbook.paths import project_root
+    from piezolib.workbook.outputs import project_root
 
     real = project_root().__class__(__file__).resolve().parents[2] / "data"
     (workbook / "data").mkdir()
@@ -156,7 +156,7 @@ def test_study_is_injected_after_the_parameters_cell(workbook):
 
 
 def test_every_workbook_notebook_has_a_parameters_cell_naming_the_study():
-    from piezolib.workbook.paths import notebooks_dir
+    from piezolib.workbook.outputs import notebooks_dir
 
     for path in sorted(notebooks_dir().glob("[0-9][0-9]_*.ipynb")):
         nb = nbformat.read(path, as_version=4)

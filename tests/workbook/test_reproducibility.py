@@ -12,10 +12,10 @@ import pandas as pd
 import pytest
 
 from piezolib.problem import analysis
-from piezolib.problem.hysteresis import workbook_dahl_fit
+from piezolib.problem.hysteresis_fits import workbook_dahl_fit
 from piezolib.problem.stage import VirtualStage
 from piezolib.workbook import experiments, pipeline, report, study
-from piezolib.workbook.paths import data_dir
+from piezolib.workbook.outputs import data_dir
 
 RTOL = 1e-3
 

@@ -3,7 +3,7 @@
 import pytest
 
 from piezolib import paper
-from piezolib.workbook import paths, study
+from piezolib.workbook import outputs, study
 
 
 @pytest.fixture
@@ -71,12 +71,12 @@ def test_bad_studies_name_the_field(checkout):
 
 
 def test_use_sends_outputs_to_the_study_folder(checkout):
-    assert paths.figures_dir() == checkout / "figures"
+    assert outputs.figures_dir() == checkout / "figures"
     s = study.use(study.Study().replace(name="explore", uncertainty={"spread": 0.03}))
     assert study.active() is s
-    assert paths.figures_dir() == checkout / "runs" / "explore" / "figures"
-    assert paths.results_dir() == checkout / "runs" / "explore" / "results"
-    assert paths.controllers_dir() == checkout / "runs" / "explore" / "controllers"
+    assert outputs.figures_dir() == checkout / "runs" / "explore" / "figures"
+    assert outputs.results_dir() == checkout / "runs" / "explore" / "results"
+    assert outputs.controllers_dir() == checkout / "runs" / "explore" / "controllers"
     study.use("reference")
-    assert paths.results_dir() == checkout / "data" / "results"
-    assert paths.controllers_dir() == checkout / "data" / "controllers"
+    assert outputs.results_dir() == checkout / "data" / "results"
+    assert outputs.controllers_dir() == checkout / "data" / "controllers"

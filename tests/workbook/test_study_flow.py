@@ -3,7 +3,7 @@
 import pandas as pd
 
 from piezolib.workbook import pipeline, reproduce, study
-from piezolib.workbook.paths import notebooks_dir, runs_dir
+from piezolib.workbook.outputs import notebooks_dir, runs_dir
 
 
 def ours(table, quantity):

@@ -5,7 +5,7 @@ import pytest
 
 from piezolib import hysteresis as hy
 from piezolib import paper, signals
-from piezolib.problem import hysteresis as ph
+from piezolib.problem import hysteresis_fits as ph
 
 FS = paper.SAMPLING_FREQUENCY_HZ
 

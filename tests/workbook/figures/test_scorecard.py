@@ -5,7 +5,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from piezolib.workbook.figures import report as F
+from piezolib.workbook.figures import scorecard as F
 
 
 @pytest.fixture

@@ -280,7 +280,7 @@ def write_workbook_dahl():
     return write_dahl_model(fit.model, workbook_dahl_path(),
                             about="the workbook's Dahl feedforward model "
                                   f"{WORKBOOK_DAHL} fitted to the Case I loops of data/ "
-                                  "(piezolib.problem.hysteresis.write_workbook_dahl)")
+                                  "(piezolib.problem.hysteresis_fits.write_workbook_dahl)")
 
 
 _MODEL_FORMAT = 1

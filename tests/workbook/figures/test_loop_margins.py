@@ -4,7 +4,7 @@ import matplotlib.pyplot as plt
 import pytest
 
 from piezolib import paper
-from piezolib.workbook.figures import margins as F
+from piezolib.workbook.figures import loop_margins as F
 
 
 @pytest.fixture

@@ -7,7 +7,7 @@ from piezolib import hysteresis as hy
 from piezolib import paper
 from piezolib.problem.stage import VirtualStage
 from piezolib.workbook import experiments
-from piezolib.workbook.figures import experiments as F
+from piezolib.workbook.figures import tracking as F
 
 DAHL = hy.DahlModel(alpha1=200.0, alpha2=600.0, beta1=0.0, beta2=1.9, gamma_a=30.0,
                     g_a=1.12, form="bliman_sorine")
