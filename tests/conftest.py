@@ -6,14 +6,3 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 # interactive controls draw their static figure: no widget frontend in tests
 os.environ.setdefault("PIEZOLIB_STATIC", "1")
-
-import pytest  # noqa: E402
-
-
-@pytest.fixture(autouse=True)
-def _reference_study_outputs():
-    """Every test starts and ends writing to the reference study's folders."""
-    from piezolib.workbook import study
-
-    yield
-    study.use(study.REFERENCE)

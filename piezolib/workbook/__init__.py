@@ -9,8 +9,9 @@ plotting     the workbook's figure style and figure saving
 figures      one function per paper figure, grouped by notebook
 reproduce    headless run of the whole workbook (``python -m piezolib reproduce``)
 cli          the command line (``python -m piezolib {reproduce,data}``)
-outputs      where the workbook reads its inputs and writes its outputs
+outputs      where each study's outputs go
+session      the one call that starts a notebook: study, claim table, figure style
 interactive  the notebooks' interactive controls and the callbacks behind them
 """
 
-__all__ = ["loop", "experiments", "report", "plotting", "figures", "reproduce", "cli", "outputs"]
+__all__ = ["loop", "experiments", "report", "plotting", "figures", "reproduce", "cli", "outputs", "session"]

@@ -8,8 +8,8 @@ DK-iteration follows a path that depends on floating-point details).  It is
   with full precision): notebooks 04-06 use it, notebook 05 re-derives it and
   compares the mu values, so downstream numbers do not depend on the machine;
 * for any other study, derived on first use and cached on disk with joblib
-  (``runs/cache/``, keyed by the study's weights, design and loop choices and
-  by the library's source), and written to ``runs/<study>/artifacts/`` with
+  (``runs/cache/``, keyed by the study's weights, design and loop choices,
+  its uncertainty weight and the library's source), and written to ``runs/<study>/artifacts/`` with
   the choices it came from — so a change made for notebook 04 flows into 05,
   06 and 07, and re-running 06 does not redo the DK-iteration.
 
@@ -18,6 +18,7 @@ moves it.
 """
 
 import copyreg
+import functools
 import hashlib
 import json
 import logging
@@ -32,13 +33,14 @@ from piezolib.problem import paper
 from piezolib.problem.design import design_controller
 from piezolib.problem.hysteresis_fits import write_workbook_dahl
 from piezolib.records import atomic_write
-from piezolib.robust import export
+from piezolib.robust import export, frequency_grid
 from piezolib.robust.discrete import discretize
+from piezolib.uncertainty import fit_covering_weight, model_set, relative_error_envelope
 from piezolib.workbook import outputs
 from piezolib.workbook import study as studies
 
-__all__ = ["StudyControllers", "study_problem", "study_controllers", "derive_controllers",
-           "design_digest", "memory", "library_fingerprint", "reference_design_path",
+__all__ = ["StudyControllers", "study_problem", "study_uncertainty_weight",
+           "study_controllers", "derive_controllers", "design_choices", "design_digest", "memory", "library_fingerprint", "reference_design_path",
            "write_controllers", "read_controllers", "write_reference_design",
            "case_III_controllers", "discretized_controllers", "export_sections",
            "study_sections", "SECTION_FILES", "ArtifactError", "CACHE_ENV"]
@@ -116,7 +118,8 @@ copyreg.pickle(ct.StateSpace, _reduce_statespace)
 
 
 def study_problem(study):
-    """The design problem of ``study``: published G, H_m and K, the study's H_e and H_y.
+    """The design problem of ``study``: the published G and K, the study's H_m
+    (:func:`study_uncertainty_weight`), H_e and H_y.
 
     Returns
     -------
@@ -124,13 +127,47 @@ def study_problem(study):
     """
     study = studies.load(study)
     published = paper.problem()
-    return published._replace(H_e=paper.error_weight(study.weights.error),
+    return published._replace(H_m=study_uncertainty_weight(study),
+                              H_e=paper.error_weight(study.weights.error),
                               H_y=paper.output_weight(study.weights.output))
 
 
+def study_uncertainty_weight(study):
+    """The multiplicative uncertainty weight H_m of ``study`` (u_c -> y_Delta).
+
+    The paper's H_m (eq. 8) when ``study.uncertainty.weight`` is
+    ``"published"``; when ``"fitted"``, the covering weight of order
+    ``weight_order`` fitted to the relative-error envelope of the stable
+    members of the study's model set (spread, levels) around the published
+    G, on the log-spaced ``weight_grid`` [rad/s]
+    (:func:`piezolib.uncertainty.fit_covering_weight`).
+    """
+    return _uncertainty_weight(studies.load(study).uncertainty)
+
+
+@functools.lru_cache(maxsize=8)
+def _uncertainty_weight(choice):
+    # keyed by the frozen UncertaintyChoice: notebooks 02, 04-06 and 09 ask for it repeatedly
+    if choice.weight == "published":
+        return paper.uncertainty_weight()
+    omega = frequency_grid(*choice.weight_grid)
+    members = model_set(paper.plant(), choice.spread, choice.levels)
+    envelope = relative_error_envelope(members, omega, "stable")
+    return fit_covering_weight(omega, envelope, choice.weight_order, inputs="u_c",
+                               outputs="y_Delta", name="H_m")
+
+
+def design_choices(study):
+    """Every choice a controller design of ``study`` depends on: the weights,
+    design and loop sections, and what its H_m depends on."""
+    study = studies.load(study)
+    return {**study.choices(*_DESIGN_SECTIONS),
+            "uncertainty_weight": study.uncertainty.weight_choices()}
+
+
 def design_digest(study):
-    """Digest of the choices a controller design depends on (weights, design, loop)."""
-    return studies.load(study).digest(*_DESIGN_SECTIONS)
+    """Digest of :func:`design_choices`: two studies with the same digest share controllers."""
+    return studies.choices_digest(design_choices(study))
 
 
 def library_fingerprint():
@@ -155,15 +192,15 @@ def memory():
     return joblib.Memory(location=location, verbose=0)
 
 
-def _design_pair(weights, design, loop, fingerprint):
+def _design_pair(uncertainty, weights, design, loop, fingerprint):
     """Both designs for the given choices (the cached computation; ``fingerprint``
     only keys the cache)."""
-    choice = studies.Study().replace(name="cache_key", weights=weights, design=design, loop=loop)
+    choice = studies.Study().replace(name="cache_key", uncertainty=uncertainty, weights=weights,
+                                     design=design, loop=loop)
     G, H_m, H_e, H_y, _ = study_problem(choice)
     options = dict(order=choice.design.order, d_order=choice.design.d_order,
                    max_iter=choice.design.max_iter, fs=choice.loop.fs_hz)
-    logger.info("designing the delay-aware controllers (%s)", json.dumps(choice.choices(
-        *_DESIGN_SECTIONS)))
+    logger.info("designing the delay-aware controllers (%s)", json.dumps(design_choices(choice)))
     delay_aware = design_controller(G, H_m, H_e, H_y, delay_samples=choice.design.delay_samples,
                                     **options)
     logger.info("designing the no-delay controllers")
@@ -187,7 +224,11 @@ def derive_controllers(study, cache=True):
         With ``design`` and ``nodelay`` set.
     """
     study = studies.load(study)
-    args = (*(study.choices(s)[s] for s in _DESIGN_SECTIONS), library_fingerprint())
+    # the model set enters the cache key only when H_m is fitted to it
+    uncertainty = (study.choices("uncertainty")["uncertainty"]
+                   if study.uncertainty.weight == "fitted" else {})
+    args = (uncertainty, *(study.choices(s)[s] for s in _DESIGN_SECTIONS),
+            library_fingerprint())
     if cache:
         cached = memory().cache(_design_pair)
         hit = cached.check_call_in_cache(*args)
@@ -216,8 +257,8 @@ def study_controllers(study, cache=True):
 
     The reference study reads the committed artifact (:func:`reference_design_path`)
     and checks that it was designed for the reference's current choices.  Any
-    other study uses the same committed controllers when its weights, design
-    and loop choices equal the reference's (same :func:`design_digest`), and
+    other study uses the same committed controllers when its design choices
+    equal the reference's (same :func:`design_digest`), and
     derives them otherwise (:func:`derive_controllers`); either way they are
     written to ``runs/<study>/artifacts/controllers.json``.
 
@@ -241,7 +282,7 @@ def study_controllers(study, cache=True):
         return found
     path = reference_design_path()
     if path.is_file() and read_controllers(path).digest == design_digest(study):
-        # same weights, design and loop as the reference: its committed controllers, so
+        # the reference's design choices: its committed controllers, so
         # that the study differs from the reference only by what it changes
         found = read_controllers(path)
     else:
@@ -341,7 +382,7 @@ def write_controllers(controllers, path, study):
     """Write ``controllers`` as JSON (matrices with full float precision); return the path."""
     study = studies.load(study)
     doc = {"format": ARTIFACT_FORMAT, "study": study.name, "digest": controllers.digest,
-           "choices": study.choices(*_DESIGN_SECTIONS),
+           "choices": design_choices(study),
            "library": library_fingerprint(),
            "versions": {"numpy": np.__version__, "control": ct.__version__},
            "mu": controllers.mu,

@@ -1,8 +1,11 @@
 """One figure style for the workbook, one units rule, one way to save figures.
 
-Figures are named after the paper's numbering, ``figures/figNN_<what>.png``
-(e.g. ``fig04_chirp_validation.png``); figures with no counterpart in the
-paper are saved as ``figures/extra_<what>.png``.
+A figure function draws its figure and names it after the paper's numbering
+(:func:`name_figure`: ``figNN_<what>``, e.g. ``fig04_chirp_validation``, or
+``extra_<what>`` for a figure with no counterpart in the paper); whoever
+runs it decides where it goes: :func:`save_figure` writes
+``<directory>/<name>.png`` (a notebook's session passes its study's
+``figures/`` folder).
 
 Units rule
 ----------
@@ -20,7 +23,9 @@ boxes and wires of a diagram, or legends drawn over curves.
 """
 
 import io
+import os
 import re
+from pathlib import Path
 
 import matplotlib as mpl
 import matplotlib.image as mpimg
@@ -28,10 +33,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from piezolib.records import atomic_write
-from piezolib.workbook.outputs import figures_dir
 
 __all__ = ["STYLE", "use_style", "new_figure", "save_figure", "same_picture", "PIXEL_TOLERANCE",
-           "figure_path", "unit_text", "apply_unit_text", "db", "plot_magnitude", "block_diagram", "text_overlaps"]
+           "name_figure", "figure_name", "unit_text", "apply_unit_text", "db", "plot_magnitude", "block_diagram", "text_overlaps"]
 
 #: rcParams of the workbook's figures (print-sized, readable at 100 %).
 STYLE = {
@@ -123,20 +127,26 @@ def apply_unit_text(fig):
     return fig
 
 
-def figure_path(number, what):
-    """Path of figure ``number`` (paper numbering, or None) showing ``what``."""
+def figure_name(number, what):
+    """File stem of figure ``number`` (paper numbering, or None) showing ``what``.
+
+    Examples
+    --------
+    >>> figure_name(4, "chirp_validation"), figure_name(None, "rls_convergence")
+    ('fig04_chirp_validation', 'extra_rls_convergence')
+    """
     if not isinstance(what, str) or not _WHAT.match(what):
         raise ValueError("what must be a lower-case identifier such as "
                          f"'chirp_validation', got {what!r}")
     if number is None:
-        return figures_dir() / f"extra_{what}.png"
+        return f"extra_{what}"
     if isinstance(number, bool) or not isinstance(number, (int, np.integer)) or not 1 <= number <= 99:
         raise ValueError(f"number must be a paper figure number 1..99 or None, got {number!r}")
-    return figures_dir() / f"fig{int(number):02d}_{what}.png"
+    return f"fig{int(number):02d}_{what}"
 
 
-def save_figure(fig, number, what):
-    """Apply the units rule to ``fig``, save it as ``figures/figNN_<what>.png``, return the path.
+def name_figure(fig, number, what):
+    """Give ``fig`` its file name (:func:`figure_name`) as its label and return it.
 
     Parameters
     ----------
@@ -148,7 +158,39 @@ def save_figure(fig, number, what):
     """
     if not isinstance(fig, mpl.figure.Figure):
         raise TypeError(f"fig must be a matplotlib Figure, got {type(fig).__name__}")
-    path = figure_path(number, what)
+    fig.set_label(figure_name(number, what))
+    return fig
+
+
+def save_figure(fig, directory):
+    """Apply the units rule to ``fig`` and save it as ``<directory>/<name>.png``.
+
+    An existing file showing the same picture up to antialiasing
+    (:func:`same_picture`) is left as it is.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        A figure named by :func:`name_figure`.
+    directory : str or pathlib.Path
+        Folder of the figures (created if missing), e.g. a study's
+        :func:`piezolib.workbook.outputs.study_figures_dir`.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written or kept.
+    """
+    if not isinstance(fig, mpl.figure.Figure):
+        raise TypeError(f"fig must be a matplotlib Figure, got {type(fig).__name__}")
+    name = fig.get_label()
+    if not name or not _WHAT.match(name):
+        raise ValueError("fig has no file name: draw it with a figure function or call "
+                         f"name_figure(fig, number, what) first (its label is {name!r})")
+    if isinstance(directory, bool) or not isinstance(directory, (str, os.PathLike)):
+        raise TypeError(f"directory must be a path, got {type(directory).__name__}")
+    path = Path(directory) / f"{name}.png"
+    path.parent.mkdir(parents=True, exist_ok=True)
     apply_unit_text(fig)
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", metadata={"Software": None})

@@ -27,7 +27,7 @@ import pandas as pd
 from piezolib._checks import check_nonnegative
 from piezolib.records import atomic_write
 from piezolib.workbook import outputs
-from piezolib.workbook.outputs import REFERENCE_STUDY, results_dir
+from piezolib.workbook.outputs import REFERENCE_STUDY
 
 __all__ = ["COLUMNS", "REASONS", "NOTEBOOK_TABLES", "OTHER_TABLES", "SIGNIFICANT_DIGITS",
            "verdict", "ClaimTable", "save_results", "load_claims", "compare_studies",
@@ -85,12 +85,26 @@ def _interval(interval):
 
 
 class ClaimTable:
-    """Collects claims of one notebook and writes them as one CSV."""
+    """Collects claims of one notebook of one study and writes them as one CSV.
 
-    def __init__(self, name):
+    Parameters
+    ----------
+    name : str
+        File stem of the table, e.g. ``"tracking"``.
+    study : str
+        Name of the study whose run the claims come from: the table goes to
+        that study's results folder (:func:`piezolib.workbook.outputs.study_results_dir`),
+        and a claim of a study other than the reference that differs from
+        the paper gets the reason ``"study"`` unless it states one.
+    """
+
+    def __init__(self, name, study):
         if not isinstance(name, str) or not name.isidentifier():
             raise ValueError(f"name must be an identifier-like file stem, got {name!r}")
+        if not isinstance(study, str) or not study:
+            raise ValueError(f"study must be a study name, got {study!r}")
         self.name = name
+        self.study = study
         self.rows = []
 
     def add(self, section, quantity, paper, ours, *, unit="", rtol=0.0, atol=0.0,
@@ -142,7 +156,7 @@ class ClaimTable:
             result, tol = "not published", ""
         else:
             result, tol = verdict(paper, ours, rtol=rtol, atol=atol, interval=interval)
-        if result == "differs" and not reason and outputs.output_study() != REFERENCE_STUDY:
+        if result == "differs" and not reason and self.study != REFERENCE_STUDY:
             reason = "study"      # the study changed one of the paper's choices
         self.rows.append(dict(section=section, quantity=quantity, unit=unit,
                               paper=paper, ours=_plain(ours), low=low, high=high,
@@ -156,8 +170,8 @@ class ClaimTable:
         return pd.DataFrame(self.rows, columns=COLUMNS)
 
     def save(self):
-        """Write ``data/results/<name>.csv`` and return its path."""
-        return save_results(self.frame(), self.name)
+        """Write ``<name>.csv`` to the study's results folder and return its path."""
+        return save_results(self.frame(), self.name, self.study)
 
 
 #: Significant digits of the numbers in the committed tables (the reproducibility
@@ -165,19 +179,22 @@ class ClaimTable:
 SIGNIFICANT_DIGITS = 4
 
 
-def save_results(frame, name):
+def save_results(frame, name, study):
     """Write a DataFrame to ``<results>/<name>.csv`` atomically, floats rounded to
     :data:`SIGNIFICANT_DIGITS`; keep the file when it holds the same results.
 
     ``<results>`` is ``data/results/`` for the reference study and
-    ``runs/<study>/results/`` for any other (:func:`piezolib.workbook.outputs.results_dir`).
+    ``runs/<study>/results/`` for any other
+    (:func:`piezolib.workbook.outputs.study_results_dir` of the name ``study``).
     An existing file is left as it is when every row is the same result
     (:func:`same_result`): a rerun on another machine, whose rounding moves
     a value within its precision, leaves the committed table unchanged.
     """
     if not isinstance(frame, pd.DataFrame):
         raise TypeError(f"frame must be a pandas DataFrame, got {type(frame).__name__}")
-    path = results_dir() / f"{name}.csv"
+    directory = outputs.study_results_dir(study)
+    directory.mkdir(parents=True, exist_ok=True)
+    path = directory / f"{name}.csv"
     # object columns mix numbers and text; round their floats like the rest
     frame = frame.apply(lambda col: col.map(_rounded) if col.dtype == object else col)
     text = frame.to_csv(index=False, float_format=f"%.{SIGNIFICANT_DIGITS}g", lineterminator="\n")
@@ -265,7 +282,7 @@ OTHER_TABLES = {
 }
 
 
-def load_claims(names=None, study=None):
+def load_claims(names=None, study=REFERENCE_STUDY):
     """Concatenate the comparison tables written by the notebooks.
 
     Parameters
@@ -274,8 +291,7 @@ def load_claims(names=None, study=None):
         Table names (keys of :data:`NOTEBOOK_TABLES` or :data:`OTHER_TABLES`);
         default all of :data:`NOTEBOOK_TABLES`.
     study : str, optional
-        Name of the study whose tables to read (default: the study this
-        process writes, :func:`piezolib.workbook.outputs.output_study`).  A
+        Name of the study whose tables to read (default: the reference).  A
         table the study has not written yet is read from the reference
         study's ``data/results/``, and the ``study`` column says so.
 
@@ -292,7 +308,6 @@ def load_claims(names=None, study=None):
     """
     names = list(NOTEBOOK_TABLES) if names is None else list(names)
     tables = {**NOTEBOOK_TABLES, **OTHER_TABLES}
-    study = outputs.output_study() if study is None else study
     frames = []
     for name in names:
         if name not in tables:

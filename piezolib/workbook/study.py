@@ -9,10 +9,11 @@ any other study is a TOML file in ``studies/`` or is derived in code::
     wide = study.load("reference").replace(name="wide_He", weights={"omega_e": 2.5e3})
 
 Each notebook starts with a cell tagged ``parameters`` that names the study
-(``study = "reference"``) and calls :func:`use`, which makes the workbook
-write the study's figures and tables to its own folder: ``figures/`` and
-``data/results/`` for the reference study, ``runs/<name>/`` (git-ignored) for
-any other, so exploring never overwrites the committed results.
+(``study = "reference"``) and passes it to
+:func:`piezolib.workbook.session.start`, whose session writes the study's
+figures and tables to its own folder: ``figures/`` and ``data/results/`` for
+the reference study, ``runs/<name>/`` (git-ignored) for any other, so
+exploring never overwrites the committed results.
 """
 
 import dataclasses
@@ -29,8 +30,8 @@ from piezolib.workbook import outputs
 from piezolib.workbook.loop import COMPUTATION_DELAY_SAMPLES
 
 __all__ = ["Study", "UncertaintyChoice", "WeightChoice", "DesignChoice", "LoopChoice",
-           "ExperimentChoice", "StudyError", "REFERENCE", "load", "list_studies", "use",
-           "active", "studies_dir"]
+           "ExperimentChoice", "StudyError", "REFERENCE", "UNCERTAINTY_WEIGHTS", "load",
+           "list_studies", "from_dict", "studies_dir", "choices_digest"]
 
 #: Name of the paper's reproduction; only this study writes the committed outputs.
 REFERENCE = outputs.REFERENCE_STUDY
@@ -40,9 +41,15 @@ class StudyError(ValueError):
     """A study file or a study change that cannot be used (names the field)."""
 
 
+#: The uncertainty weights a study can design with: the paper's H_m of eq. 8,
+#: or a covering weight fitted to the study's model set.
+UNCERTAINTY_WEIGHTS = ("published", "fitted")
+
+
 @dataclass(frozen=True)
 class UncertaintyChoice:
-    """The coefficient-uncertainty set of Sec. III-B (notebook 02).
+    """The coefficient-uncertainty set of Sec. III-B and the weight H_m that
+    stands for it in the design (notebooks 02, 04-06).
 
     Attributes
     ----------
@@ -50,14 +57,53 @@ class UncertaintyChoice:
         Relative spread of each denominator coefficient a0...a5 (0.05 = +-5 %).
     levels : int
         Values per coefficient in the model set (3 -> 3**6 = 729 members).
+    weight : str
+        ``"published"``: the paper's H_m (eq. 8), whatever the spread;
+        ``"fitted"``: a stable, minimum-phase covering weight of order
+        ``weight_order`` fitted to the relative-error envelope of the stable
+        members of this model set on ``weight_grid``
+        (:func:`piezolib.uncertainty.fit_covering_weight`).
+    weight_order : int
+        Order of the fitted weight (unused for the published one).
+    weight_grid : tuple of (float, float, int)
+        Lowest and highest frequency [rad/s] and number of log-spaced points
+        of the grid the fitted weight covers the envelope on.
     """
 
     spread: float = paper.UNCERTAINTY_SPREAD
     levels: int = paper.UNCERTAINTY_LEVELS
+    weight: str = "published"
+    weight_order: int = 5
+    weight_grid: tuple = (1.0, 1e6, 2000)
+
+    def __post_init__(self):
+        # TOML gives a list; a frozen study keeps a tuple so it stays hashable
+        if isinstance(self.weight_grid, list):
+            object.__setattr__(self, "weight_grid", tuple(self.weight_grid))
 
     def check(self):
         _positive("uncertainty.spread", self.spread, upper=1.0)
         _integer("uncertainty.levels", self.levels, 2, 6)
+        if self.weight not in UNCERTAINTY_WEIGHTS:
+            raise StudyError(f"uncertainty.weight must be one of {list(UNCERTAINTY_WEIGHTS)}, "
+                             f"got {self.weight!r}")
+        _integer("uncertainty.weight_order", self.weight_order, 1, 12)
+        grid = self.weight_grid
+        if not isinstance(grid, tuple) or len(grid) != 3:
+            raise StudyError("uncertainty.weight_grid must be [lowest rad/s, highest rad/s, "
+                             f"points], got {grid!r}")
+        _positive("uncertainty.weight_grid[0]", grid[0])
+        _positive("uncertainty.weight_grid[1]", grid[1])
+        if not grid[0] < grid[1]:
+            raise StudyError(f"uncertainty.weight_grid must rise, got {grid!r}")
+        _integer("uncertainty.weight_grid[2]", grid[2], 50, 100_000)
+
+    def weight_choices(self):
+        """The choices H_m depends on: the weight's name alone when published,
+        with the model set, order and grid when fitted."""
+        if self.weight == "published":
+            return {"weight": self.weight}
+        return dataclasses.asdict(self)
 
 
 @dataclass(frozen=True)
@@ -279,8 +325,7 @@ class Study:
         Two studies that agree on those sections have the same digest, so a
         stage's product can be shared between them.
         """
-        text = json.dumps(_canonical(self.choices(*sections)), sort_keys=True)
-        return hashlib.sha256(text.encode()).hexdigest()[:16]
+        return choices_digest(self.choices(*sections))
 
     def to_toml(self):
         """The study as TOML text (what :func:`load` reads back)."""
@@ -296,6 +341,16 @@ class Study:
         path = Path(path)
         path.write_text(self.to_toml(), encoding="utf-8")
         return path
+
+    @property
+    def results_dir(self):
+        """Folder of this study's paper-versus-reproduced tables."""
+        return outputs.study_results_dir(self.name)
+
+    @property
+    def figures_dir(self):
+        """Folder of this study's figures."""
+        return outputs.study_figures_dir(self.name)
 
     @property
     def is_reference(self):
@@ -369,26 +424,11 @@ def from_dict(data):
     return Study(name=data["name"], description=data.get("description", ""), **sections)
 
 
-# -- the study a notebook works on ------------------------------------------------
-_active = None
-
-
-def use(spec=REFERENCE):
-    """Make ``spec`` the study of this process and return it.
-
-    The workbook's figures, tables and controller exports then go to the
-    study's folder (:attr:`Study.output_dir`); the reference study keeps
-    writing the committed ``figures/`` and ``data/results/``.
-    """
-    global _active
-    _active = load(spec)
-    outputs.set_output_study(_active.name)
-    return _active
-
-
-def active():
-    """The study set by :func:`use` (the reference study if none was)."""
-    return _active if _active is not None else load(REFERENCE)
+def choices_digest(choices):
+    """Short SHA-256 (16 hex digits) of a dict of choices; numbers hash as floats,
+    so 2500 and 2500.0 give the same digest."""
+    text = json.dumps(_canonical(choices), sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
 # -- helpers ------------------------------------------------------------------

@@ -20,6 +20,33 @@ def test_study_problem_takes_the_study_weights():
     assert np.allclose(G.den[0][0], published.G.den[0][0])
 
 
+def test_the_uncertainty_weight_is_a_study_choice():
+    reference = study.load("reference")
+    published = pipeline.study_uncertainty_weight(reference)
+    omega = np.logspace(0, 6, 200)
+    np.testing.assert_allclose(published(1j * omega), paper.uncertainty_weight()(1j * omega))
+    assert pipeline.study_problem(reference).H_m is published
+    # a spread change alone keeps the published H_m, so the design (and its controllers) too
+    narrow = reference.replace(name="narrow", uncertainty={"spread": 0.03})
+    assert pipeline.design_digest(narrow) == pipeline.design_digest(reference)
+    fitted = reference.replace(name="fitted", uncertainty={"weight": "fitted", "weight_order": 3,
+                                                           "weight_grid": [1.0, 1e6, 400]})
+    H_m = pipeline.study_uncertainty_weight(fitted)
+    assert H_m.ninputs == H_m.noutputs == 1 and len(H_m.poles()) == 3
+    assert H_m.input_labels == ["u_c"] and H_m.output_labels == ["y_Delta"]
+    assert np.all(H_m.poles().real < 0) and np.all(H_m.zeros().real < 0)
+    # it covers the envelope of the set it was fitted to, on its grid
+    from piezolib import robust, uncertainty
+    grid = robust.frequency_grid(1.0, 1e6, 400)
+    envelope = uncertainty.relative_error_envelope(
+        uncertainty.model_set(paper.plant(), 0.05, 3), grid, "stable")
+    assert np.all(np.abs(np.ravel(H_m(1j * grid))) >= envelope * (1 - 1e-9))
+    # a fitted weight depends on the set: the spread now changes the design
+    digests = {pipeline.design_digest(s) for s in
+               (reference, fitted, fitted.replace(name="f2", uncertainty={"spread": 0.03}))}
+    assert len(digests) == 3
+
+
 def test_committed_reference_controllers_match_their_recorded_mu():
     found = pipeline.study_controllers("reference")
     assert found.digest == pipeline.design_digest(study.Study())

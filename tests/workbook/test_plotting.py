@@ -8,20 +8,27 @@ import pytest
 from piezolib.workbook import plotting
 
 
-def test_figure_names(tmp_path, monkeypatch):
-    monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
+def test_figures_are_named_then_saved_where_the_caller_says(tmp_path):
     fig, ax = plotting.new_figure()
     ax.plot([0, 1], [0, 1])
-    assert plotting.save_figure(fig, 10, "step_responses").name == "fig10_step_responses.png"
-    assert plotting.save_figure(fig, None, "extra_view").name == "extra_extra_view.png"
-    assert (tmp_path / "figures" / "fig10_step_responses.png").is_file()
+    with pytest.raises(ValueError, match="no file name"):
+        plotting.save_figure(fig, tmp_path)           # a figure no figure function named
+    assert plotting.name_figure(fig, 10, "step_responses") is fig
+    path = plotting.save_figure(fig, tmp_path / "figures")
+    assert path == tmp_path / "figures" / "fig10_step_responses.png" and path.is_file()
+    plotting.name_figure(fig, None, "view")
+    assert plotting.save_figure(fig, str(tmp_path)).name == "extra_view.png"
     plt.close(fig)
     with pytest.raises(ValueError, match="what"):
-        plotting.figure_path(4, "Bad Name")
+        plotting.figure_name(4, "Bad Name")
     with pytest.raises(ValueError, match="number"):
-        plotting.figure_path(0, "ok")
+        plotting.figure_name(0, "ok")
     with pytest.raises(TypeError, match="Figure"):
-        plotting.save_figure("figure", 1, "ok")
+        plotting.name_figure("figure", 1, "ok")
+    with pytest.raises(TypeError, match="Figure"):
+        plotting.save_figure("figure", tmp_path)
+    with pytest.raises(TypeError, match="directory"):
+        plotting.save_figure(fig, None)
 
 
 def test_style_and_helpers():
@@ -50,13 +57,12 @@ def test_unit_text_spells_units_once(plain, spelled):
         plotting.unit_text(3)
 
 
-def test_save_figure_applies_the_units_rule(tmp_path, monkeypatch):
-    monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
+def test_save_figure_applies_the_units_rule(tmp_path):
     fig, ax = plotting.new_figure()
     ax.plot([0, 1], [0, 1], label="+-1 um")
     ax.set(xlabel="x [um]", title="mu bound")
     ax.legend()
-    plotting.save_figure(fig, None, "units")
+    plotting.save_figure(plotting.name_figure(fig, None, "units"), tmp_path)
     assert ax.get_xlabel() == "x [µm]" and ax.get_title() == "μ bound"
     assert ax.get_legend().get_texts()[0].get_text() == "±1 µm"
     plt.close(fig)
@@ -122,8 +128,7 @@ def test_text_overlaps_finds_colliding_texts_wires_and_legends():
         plotting.text_overlaps("figure")
 
 
-def test_a_figure_is_rewritten_only_when_it_visibly_changed(tmp_path, monkeypatch):
-    monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
+def test_a_figure_is_rewritten_only_when_it_visibly_changed(tmp_path):
     x = np.linspace(0.0, 1.0, 50)
 
     def draw(shift):
@@ -131,7 +136,7 @@ def test_a_figure_is_rewritten_only_when_it_visibly_changed(tmp_path, monkeypatc
         ax.plot(x, x ** 2 + shift)
         ax.set_xlim(0, 1)
         ax.set_ylim(-0.1, 1.1)
-        path = plotting.save_figure(fig, None, "rewrite")
+        path = plotting.save_figure(plotting.name_figure(fig, None, "rewrite"), tmp_path)
         plt.close(fig)
         return path.read_bytes()
 

@@ -19,7 +19,7 @@ def test_verdict_relative_and_absolute():
 
 def test_claim_table_writes_csv(tmp_path, monkeypatch):
     monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
-    table = report.ClaimTable("unit_test")
+    table = report.ClaimTable("unit_test", "reference")
     assert table.add("IV-C", "||H_e S||", 0.81, 0.8077, rtol=0.01) is None   # no cell output
     table.add("IV-C", "bandwidth", None, 335.5, unit="Hz")
     assert list(table.frame().verdict) == ["agrees", "not published"]
@@ -32,23 +32,26 @@ def test_claim_table_writes_csv(tmp_path, monkeypatch):
 
 
 def test_reasons_are_kept_only_on_differing_rows():
-    table = report.ClaimTable("reasons")
+    table = report.ClaimTable("reasons", "reference")
     table.add("A", "agrees anyway", 1.0, 1.0, reason="method")
     table.add("B", "differs", 1.0, 2.0, reason="typo", note="printed 1")
     frame = table.frame()
     assert list(frame.columns) == report.COLUMNS
     assert frame.reason.tolist() == ["", "typo"]
     with pytest.raises(ValueError, match="identifier"):
-        report.ClaimTable("not a name")
+        report.ClaimTable("not a name", "reference")
+    with pytest.raises(ValueError, match="study"):
+        report.ClaimTable("audit", None)
 
 
 def test_saved_floats_have_four_significant_digits(tmp_path, monkeypatch):
     monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
     frame = pd.DataFrame({"x": [1.0 / 3.0], "mixed": [2.0 / 3.0]}).astype({"mixed": object})
-    text = report.save_results(frame, "digits").read_text().splitlines()
+    text = report.save_results(frame, "digits", "reference").read_text().splitlines()
+    assert (tmp_path / "data" / "results" / "digits.csv").is_file()
     assert report.SIGNIFICANT_DIGITS == 4 and text[1] == "0.3333,0.6667"
     with pytest.raises(TypeError, match="DataFrame"):
-        report.save_results([1, 2], "digits")
+        report.save_results([1, 2], "digits", "reference")
 
 
 def test_load_claims_and_reproduction_table(tmp_path, monkeypatch):
@@ -57,7 +60,7 @@ def test_load_claims_and_reproduction_table(tmp_path, monkeypatch):
         report.load_claims(["audit"])
     with pytest.raises(ValueError, match="unknown table"):
         report.load_claims(["nothing"])
-    table = report.ClaimTable("audit")
+    table = report.ClaimTable("audit", "reference")
     table.add("IV-C", "agrees", 0.81, 0.81)
     table.add("IV-C", "explained", 0.92, 0.98, rtol=0.02, reason="inconsistent parameters")
     table.add("IV-C", "unexplained", 0.48, 0.82, rtol=0.02)
@@ -79,7 +82,7 @@ def test_other_tables_load_only_by_name(tmp_path, monkeypatch):
     assert not set(report.OTHER_TABLES) & set(report.NOTEBOOK_TABLES)
     with pytest.raises(FileNotFoundError, match="reproduce 08"):
         report.load_claims(["own_stage"])
-    table = report.ClaimTable("own_stage")
+    table = report.ClaimTable("own_stage", "reference")
     table.add("own stage", "validation fit", None, 89.5, unit="%")
     table.save()
     claims = report.load_claims(["own_stage"])
@@ -91,23 +94,22 @@ def test_other_tables_load_only_by_name(tmp_path, monkeypatch):
 def test_study_tables_fall_back_to_the_reference_and_compare(tmp_path, monkeypatch):
     monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
     for name, value in (("reference", 0.80), ("other", 0.95)):
-        outputs.set_output_study(name)
-        table = report.ClaimTable("mu_synthesis")
+        table = report.ClaimTable("mu_synthesis", name)
         table.add("IV-B", "mu_RP", 0.71, value, rtol=0.05)
         table.add("IV-B", "order", 6, 6)
         table.save()
-    outputs.set_output_study("reference")
-    table = report.ClaimTable("weights")
+    table = report.ClaimTable("weights", "reference")
     table.add("eq. 15", "M_e", 2.0, 2.0)
     table.save()
     assert (tmp_path / "runs" / "other" / "results" / "mu_synthesis.csv").is_file()
     assert (tmp_path / "data" / "results" / "mu_synthesis.csv").is_file()
-    outputs.set_output_study("other")
-    changed = report.ClaimTable("x")
+    changed = report.ClaimTable("x", "other")
     changed.add("IV-B", "unexplained in a study", 0.71, 0.9, rtol=0.05)
     changed.add("IV-B", "explained", 0.71, 0.9, rtol=0.05, reason="method")
     assert changed.frame().reason.tolist() == ["study", "method"]
-    outputs.set_output_study("reference")
+    unexplained = report.ClaimTable("x", "reference")
+    unexplained.add("IV-B", "unexplained in the reproduction", 0.71, 0.9, rtol=0.05)
+    assert unexplained.frame().reason.tolist() == [""]
     claims = report.load_claims(["mu_synthesis", "weights"], study="other")
     assert dict(zip(claims.quantity, claims.study)) == {"mu_RP": "other", "order": "other",
                                                         "M_e": "reference"}
@@ -144,7 +146,7 @@ def test_verdict_on_an_interval_needs_the_whole_interval_outside_the_band():
 
 
 def test_claim_rows_carry_interval_and_precision():
-    table = report.ClaimTable("stats")
+    table = report.ClaimTable("stats", "reference")
     table.add("T", "mean", 1.0, 1.15, atol=0.1, interval=(1.08, 1.2))
     table.add("T", "residual", 0.0, 2e-10, atol=1e-7, precision=1e-7)
     table.add("T", "plain", 2.0, 2.5)
@@ -162,7 +164,7 @@ def test_a_rerun_within_precision_leaves_the_table_as_it_is(tmp_path, monkeypatc
     monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
 
     def write(residual, mean, verdict_paper=1.0, note=""):
-        table = report.ClaimTable("rerun")
+        table = report.ClaimTable("rerun", "reference")
         table.add("T", "residual", 0.0, residual, atol=1e-7, precision=1e-7)
         table.add("T", "mean", verdict_paper, mean, atol=0.1, interval=(mean - 0.04, mean + 0.04))
         table.add("T", "value", 3.0, 3.14159, rtol=0.1, note=note)

@@ -162,4 +162,4 @@ def test_every_workbook_notebook_has_a_parameters_cell_naming_the_study():
         nb = nbformat.read(path, as_version=4)
         tagged = [c for c in nb.cells if "parameters" in c.metadata.get("tags", [])]
         assert len(tagged) == 1 and 'study = "reference"' in tagged[0].source, path.name
-        assert "studies.use(study)" in "".join(c.source for c in nb.cells), path.name
+        assert "session.start(study" in "".join(c.source for c in nb.cells), path.name

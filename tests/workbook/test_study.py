@@ -70,13 +70,29 @@ def test_bad_studies_name_the_field(checkout):
         study.load("typo")
 
 
-def test_use_sends_outputs_to_the_study_folder(checkout):
-    assert outputs.figures_dir() == checkout / "figures"
-    s = study.use(study.Study().replace(name="explore", uncertainty={"spread": 0.03}))
-    assert study.active() is s
-    assert outputs.figures_dir() == checkout / "runs" / "explore" / "figures"
-    assert outputs.results_dir() == checkout / "runs" / "explore" / "results"
-    assert outputs.controllers_dir() == checkout / "runs" / "explore" / "controllers"
-    study.use("reference")
-    assert outputs.results_dir() == checkout / "data" / "results"
-    assert outputs.controllers_dir() == checkout / "data" / "controllers"
+def test_the_uncertainty_weight_choice_is_checked(checkout):
+    ref = study.load("reference")
+    assert ref.uncertainty.weight == "published"
+    for change, field in (({"weight": "exact"}, "uncertainty.weight"),
+                          ({"weight_order": 0}, "uncertainty.weight_order"),
+                          ({"weight_grid": [1e6, 1.0, 100]}, "uncertainty.weight_grid"),
+                          ({"weight_grid": [1.0, 1e6]}, "uncertainty.weight_grid"),
+                          ({"weight_grid": [1.0, 1e6, 10]}, r"uncertainty.weight_grid\[2\]")):
+        with pytest.raises(study.StudyError, match=field):
+            ref.replace(name="bad", uncertainty=change)
+    fitted = ref.replace(name="fitted", uncertainty={"weight": "fitted", "weight_grid": [1, 1e5, 300]})
+    assert fitted.uncertainty.weight_grid == (1, 1e5, 300)
+    assert study.load(fitted.save(checkout / "studies" / "fitted.toml")) == fitted
+
+
+def test_each_study_has_its_own_output_folders(checkout):
+    reference = study.load("reference")
+    assert reference.figures_dir == checkout / "figures"
+    assert reference.results_dir == checkout / "data" / "results"
+    assert outputs.study_controllers_dir("reference") == checkout / "data" / "controllers"
+    s = study.Study().replace(name="explore", uncertainty={"spread": 0.03})
+    assert s.figures_dir == checkout / "runs" / "explore" / "figures"
+    assert s.results_dir == checkout / "runs" / "explore" / "results"
+    assert outputs.study_controllers_dir("explore") == checkout / "runs" / "explore" / "controllers"
+    with pytest.raises(ValueError, match="name"):
+        outputs.study_results_dir("")

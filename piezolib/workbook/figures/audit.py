@@ -46,7 +46,7 @@ def fig10_step_responses(loop, t=None):
     axes[1, 0].set_ylabel("amplitude [V/V] (log beyond +-1)")
     for ax in axes[1]:
         ax.set_xlabel("time [ms]")
-    plotting.save_figure(fig, 10, "step_responses")
+    plotting.name_figure(fig, 10, "step_responses")
     return fig
 
 
@@ -67,12 +67,12 @@ def fig11_sensitivity_templates(loop, H_e, H_y, omega=None):
         Saved as ``fig11_sensitivity_templates.png``.
     """
     fig = sensitivity_templates_figure({None: loop}, H_e, H_y, omega)
-    plotting.save_figure(fig, 11, "sensitivity_templates")
+    plotting.name_figure(fig, 11, "sensitivity_templates")
     return fig
 
 
 def sensitivity_templates_figure(loops, H_e, H_y, omega=None, template_color=None):
-    """The two panels of Fig. 11, drawn but not saved: |S| and |T| of each loop
+    """The two panels of Fig. 11, drawn but not named: |S| and |T| of each loop
     under their templates 1/|H_e| and 1/|H_y| (dotted).
 
     Parameters

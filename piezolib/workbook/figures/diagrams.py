@@ -3,7 +3,7 @@
 Signals carry the names and units of the units table of :mod:`piezolib.problem.paper`
 (u_c, u_f, u_b, v_a, v_y, v_r, v_e in V; x, x_r in um), blocks name the
 equations of the paper they stand for.  Every function draws with
-:func:`piezolib.workbook.plotting.block_diagram`, saves the figure under the
+:func:`piezolib.workbook.plotting.block_diagram`, names the figure after the
 paper's number and returns it.  Notebook 00 draws Fig. 1, 2 and 9, notebook
 01 Fig. 3 and notebook 02 Fig. 5.
 """
@@ -46,7 +46,7 @@ def fig01_control_loop():
          {"via": [(17.2, -1.6), (5.6, -1.6)], "dot": True, "sign": "-"}),
     ]
     fig = plotting.block_diagram(blocks, wires)
-    plotting.save_figure(fig, 1, "control_loop")
+    plotting.name_figure(fig, 1, "control_loop")
     return fig
 
 
@@ -79,7 +79,7 @@ def fig02_experimental_loop():
         ("ad", "pc", "v_y [V]", {"via": [(2.2, -3.2)]}),
     ]
     fig = plotting.block_diagram(blocks, wires)
-    plotting.save_figure(fig, 2, "experimental_loop")
+    plotting.name_figure(fig, 2, "experimental_loop")
     return fig
 
 
@@ -107,7 +107,7 @@ def fig03_identification_steps():
          {"via": [(16.0, -2.0), (6.8, -2.0)], "side": "below"}),
     ]
     fig = plotting.block_diagram(blocks, wires)
-    plotting.save_figure(fig, 3, "identification_steps")
+    plotting.name_figure(fig, 3, "identification_steps")
     return fig
 
 
@@ -135,7 +135,7 @@ def fig05_uncertain_plant():
     ]
     frames = [(1.6, -0.9, 13.8, 3.35, "G_Delta(s) = G(s) (1 + H_m(s) Delta(s))")]
     fig = plotting.block_diagram(blocks, wires, frames=frames)
-    plotting.save_figure(fig, 5, "uncertain_plant")
+    plotting.name_figure(fig, 5, "uncertain_plant")
     return fig
 
 
@@ -164,5 +164,5 @@ def fig09_general_configuration():
                                         "side": "below"}),
     ]
     fig = plotting.block_diagram(blocks, wires)
-    plotting.save_figure(fig, 9, "general_configuration")
+    plotting.name_figure(fig, 9, "general_configuration")
     return fig

@@ -84,7 +84,7 @@ def extra_dahl_published_audit(published, record, x_ranges):
     axes[2].set(xlabel="stroke of x [x-units]", ylabel="hysteresis % (eq. 26)",
                 title="(c) loop width vs stroke length", ylim=(1e-6, 1e4))
     axes[2].legend(fontsize=7, loc="center right", bbox_to_anchor=(1.0, 0.3))
-    plotting.save_figure(fig, None, "dahl_published_audit")
+    plotting.name_figure(fig, None, "dahl_published_audit")
     return fig
 
 
@@ -122,7 +122,7 @@ def fig07_dahl_fit(loops, workbook, paper_form, amplitudes):
         ax.legend(fontsize=7, loc="upper left")
     fig.suptitle("Fig. 7: joint fit to the four Case I loops (periods 2-3); workbook model = "
                  "Bliman-Sorine, offset x0, from rest", fontsize=9)
-    plotting.save_figure(fig, 7, "dahl_fit")
+    plotting.name_figure(fig, 7, "dahl_fit")
     return fig
 
 
@@ -161,7 +161,7 @@ def fig08_feedforward_on_model(t, x_r, x_plain, x_comp):
     else:
         axes[1].plot(t, error_nm)
     axes[1].set(xlabel="time [s]", ylabel="x - x_r [nm]", title="(b) compensation error")
-    plotting.save_figure(fig, 8, "feedforward_on_model")
+    plotting.name_figure(fig, 8, "feedforward_on_model")
     return fig
 
 
@@ -198,7 +198,7 @@ def extra_case2_loops(loops, case_I, runs, case_II):
         axes[1, k].set_xlabel("10 x reference [V]")
     axes[0, 0].set_ylabel("x = 3 v_y [um]")
     axes[1, 0].set_ylabel("x = 3 v_y [um]")
-    plotting.save_figure(fig, None, "case2_loops")
+    plotting.name_figure(fig, None, "case2_loops")
     return fig
 
 
@@ -229,7 +229,7 @@ def extra_case2_residual(runs, percents):
     axes[0].set_ylabel("x - x_r [um]")
     fig.suptitle("Case II, workbook model: residual x - x_r against the reference "
                  "(eq. 26 reads the gap at the grey line)", fontsize=9)
-    plotting.save_figure(fig, None, "case2_residual")
+    plotting.name_figure(fig, None, "case2_residual")
     return fig
 
 
@@ -273,5 +273,5 @@ def extra_model_validation(records, models, scores):
     axes[1, 0].set_ylabel("model - stage [um]")
     fig.suptitle("Validation on virtual-stage records no model was fitted to "
                   "(all fitted to the Case I loops)", fontsize=9)
-    plotting.save_figure(fig, None, "model_validation")
+    plotting.name_figure(fig, None, "model_validation")
     return fig

@@ -1,7 +1,7 @@
 """Figures of notebook 01: the virtual stage and the identification (Sec. II, III-A).
 
 Each ``figNN_*`` / ``extra_*`` function draws one figure from computed
-results, saves it with :func:`piezolib.workbook.plotting.save_figure` (paper
+results, names it with :func:`piezolib.workbook.plotting.name_figure` (paper
 number or ``extra_``) and returns the figure.  :func:`bode_overlay` is the
 Bode plot of several models (and data) that the last figure is built on.
 """
@@ -12,7 +12,7 @@ import numpy as np
 from piezolib import identification
 from piezolib._checks import check_finite_array, check_signals, check_siso
 from piezolib.robust.lti import frequency_grid, realize
-from piezolib.workbook.plotting import db, new_figure, save_figure
+from piezolib.workbook.plotting import db, new_figure, name_figure
 
 __all__ = [
     "bode_overlay", "extra_stage_case_i_loops", "fig13_hysteresis_measure",
@@ -97,7 +97,7 @@ def extra_stage_case_i_loops(loops, percent, paper_percent):
     np.atleast_1d(axes)[0].set_ylabel("displacement 3 um/V * v_y [um]")
     fig.suptitle("Table 4, Case I: the recorded loops of data/hysteresis_loop_*.csv (3 periods "
                  "each, all measured); notebook 06 reruns Case I with its own noise", fontsize=8)
-    save_figure(fig, None, "stage_case_i_loops")
+    name_figure(fig, None, "stage_case_i_loops")
     return fig
 
 
@@ -154,7 +154,7 @@ def fig13_hysteresis_measure(v, x, measure, amplitude_V):
            title=f"{amplitude_V:g} V loop: hysteresis = |X_UP - X_LO| / (X_MAX - X_MIN) "
                  f"x 100 = {measure.percent:.2f} %  (eq. 26)")
     ax.legend(loc="lower right")
-    save_figure(fig, 13, "hysteresis_measure")
+    name_figure(fig, 13, "hysteresis_measure")
     return fig
 
 
@@ -178,7 +178,7 @@ def extra_identification_chirp(record):
     ax_y.set_ylabel("v_y [V]")
     ax_y.set_xlabel("time [s]")
     ax_u.set_title("identification chirp: ramp, hold, logarithmic sweep")
-    save_figure(fig, None, "identification_chirp")
+    name_figure(fig, None, "identification_chirp")
     return fig
 
 
@@ -217,7 +217,7 @@ def extra_rls_convergence(model, fs, sweep_start):
     ax_b.set_ylim(-0.4, 0.4)
     ax_b.set_xlabel("time [s] (dashed: start of the sweep)")
     ax_a.set_title("parameter convergence of the final RLS pass (eq. 1–3)")
-    save_figure(fig, None, "rls_convergence")
+    name_figure(fig, None, "rls_convergence")
     return fig
 
 
@@ -282,7 +282,7 @@ def fig04_chirp_validation(y, y_sim, sweep_start, fs, zoom_s=(0.55, 0.57), windo
     ax_res.plot(t[zoom], 1e3 * (y[zoom] - y_sim[zoom]), lw=0.7, color="0.3")
     ax_res.set(title="(c) residual: measured − simulated", xlim=zoom_s,
                xlabel="time since the start of the sweep [s]", ylabel="residual [mV]")
-    save_figure(fig, 4, "chirp_validation")
+    name_figure(fig, 4, "chirp_validation")
     return fig
 
 
@@ -305,7 +305,7 @@ def extra_residual_whiteness(white):
     ax.set_ylabel("R(i) / R(0)")
     ax.set_title(f"residual autocorrelation, validation chirp (Ljung–Box p = {white.p_value:.2f})")
     ax.legend()
-    save_figure(fig, None, "residual_whiteness")
+    name_figure(fig, None, "residual_whiteness")
     return fig
 
 
@@ -337,5 +337,5 @@ def extra_bode_identified_vs_published(identified, published, u, y, fs, f_max_Hz
          "identified, ZOH-sampled (what data see)": sampled},
         omega, measured=(w_data[in_sweep], h_data[in_sweep]))
     axes[0].set_title("identified vs published G, and the validation data")
-    save_figure(fig, None, "bode_identified_vs_published")
+    name_figure(fig, None, "bode_identified_vs_published")
     return fig

@@ -71,5 +71,5 @@ def extra_margins(G, controllers, fs, delays=(0, 1, 2, 3), omega=None):
     bx.set_ylabel("spectral radius of the sampled loop")
     bx.set_title(f"(b) sampled loop at {fs / 1e3:g} kHz (unstable above 1)")
     bx.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0.0, -0.14))
-    plotting.save_figure(fig, None, "margins")
+    plotting.name_figure(fig, None, "margins")
     return fig

@@ -87,5 +87,5 @@ def extra_mixed_mu(omega, real_upper, real_lower, complex_upper, complex_lower, 
     ax_zoom.set_xlim(*zoom)
     ax_zoom.set_ylim(0.0, 1.15 * top)
     ax_zoom.set_title("(b) near the peak; μ = 1 is the stability limit")
-    plotting.save_figure(fig, None, "mixed_mu")
+    plotting.name_figure(fig, None, "mixed_mu")
     return fig

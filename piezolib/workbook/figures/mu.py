@@ -35,7 +35,7 @@ def extra_d_scaling_fit(mu_run):
                             label=f"order-{order} fit used in the last K-step", ls="--")
     ax.set_ylabel("|d| [dB]")
     ax.legend()
-    plotting.save_figure(fig, None, "d_scaling_fit")
+    plotting.name_figure(fig, None, "d_scaling_fit")
     return fig
 
 
@@ -60,7 +60,7 @@ def extra_hankel_singular_values(hsv, order=6):
     ax.axvline(order + 0.5, color="k", ls=":", lw=1)
     ax.set_xlabel("state (balanced)")
     ax.set_ylabel("G S-weighted Hankel singular value")
-    plotting.save_figure(fig, None, "hankel_singular_values")
+    plotting.name_figure(fig, None, "hankel_singular_values")
     return fig
 
 
@@ -103,7 +103,7 @@ def fig10_step_responses_designs(G, controllers, t=None):
     for ax in axes[1]:
         ax.set_xlabel("time [ms]")
     axes[0, 1].legend(loc="lower right")
-    plotting.save_figure(fig, 10, "step_responses_designs")
+    plotting.name_figure(fig, 10, "step_responses_designs")
     return fig
 
 
@@ -135,7 +135,7 @@ def fig12_mu_bounds(results):
         ax.set_title(title)
     ax_rs.set_ylabel("μ")
     ax_rp.legend(fontsize=7, loc="lower left", ncol=2)
-    plotting.save_figure(fig, 12, "mu_bounds")
+    plotting.name_figure(fig, 12, "mu_bounds")
     return fig
 
 
@@ -182,6 +182,6 @@ def extra_delay_aware_design(omega, mu_results, controllers, rolloff=None, lower
     ax_k.set_ylabel("|K| [dB]")
     ax_k.set_title("(b) controller gain")
     ax_k.legend(fontsize=7, loc="lower left")
-    plotting.save_figure(fig, None, "delay_aware_design")
+    plotting.name_figure(fig, None, "delay_aware_design")
     return fig
 

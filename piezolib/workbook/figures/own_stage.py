@@ -3,7 +3,7 @@ mu verification and the Tables 4-5-style experiment.
 
 Every function takes the computed results with their units spelled out by
 the caller (nothing here assumes the paper's 3 um/V or x10 amplifier), draws
-one figure, saves it as ``figures/extra_own_stage_<what>.png`` and returns it.
+one figure, names it ``extra_own_stage_<what>`` and returns it.
 """
 
 import numpy as np
@@ -60,7 +60,7 @@ def extra_own_stage_records(records, marks=None):
         ax.set_title(f"{label}: {len(rec)} samples at {rec.fs:g} Hz", fontsize=9,
                      pad=14 if mine else 6)
     axes[-1, 0].set_xlabel("time [s]")
-    plotting.save_figure(fig, None, "own_stage_records")
+    plotting.name_figure(fig, None, "own_stage_records")
     return fig
 
 
@@ -123,7 +123,7 @@ def extra_own_stage_identification(t, y, y_model, models, omega, measured=None, 
     bode_overlay(models, omega, measured=measured, axes=(axes[0, 1], axes[1, 1]))
     axes[0, 1].set_title("(c) frequency response")
     axes[0, 1].legend(fontsize=7)
-    plotting.save_figure(fig, None, "own_stage_identification")
+    plotting.name_figure(fig, None, "own_stage_identification")
     return fig
 
 
@@ -167,7 +167,7 @@ def extra_own_stage_uncertainty(omega, envelope, weight, spread, true_error=None
     ax.set(xlabel="frequency [rad/s]", ylabel="relative error",
            title="Uncertainty weight of the identified model")
     ax.legend(fontsize=7)
-    plotting.save_figure(fig, None, "own_stage_uncertainty")
+    plotting.name_figure(fig, None, "own_stage_uncertainty")
     return fig
 
 
@@ -216,7 +216,7 @@ def extra_own_stage_hysteresis(v, x, models, scores, first=0, input_scale=1.0,
            title="(b) model error along the loop")
     ax.legend(fontsize=7)
     bx.legend(fontsize=7)
-    plotting.save_figure(fig, None, "own_stage_hysteresis")
+    plotting.name_figure(fig, None, "own_stage_hysteresis")
     return fig
 
 
@@ -263,7 +263,7 @@ def extra_own_stage_mu(omega, mu_bounds, loops, omega_loops, H_e, H_y):
     bx.set(xlabel="frequency [rad/s]", ylabel="magnitude [dB]", ylim=(-80, 20),
            title="(b) sensitivity and complementary sensitivity")
     bx.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.02, 0.5))
-    plotting.save_figure(fig, None, "own_stage_mu")
+    plotting.name_figure(fig, None, "own_stage_mu")
     return fig
 
 
@@ -302,5 +302,5 @@ def extra_own_stage_experiments(table4, table5, extra4=None, feedforward="feedfo
            title="(b) Table 5-style: tracking")
     fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center",
                ncol=min(4, len(ax.get_lines())), fontsize=7)
-    plotting.save_figure(fig, None, "own_stage_experiments")
+    plotting.name_figure(fig, None, "own_stage_experiments")
     return fig

@@ -74,5 +74,5 @@ def extra_reproduction_scorecard(table, seed=0):
     ax.set_title(f"{len(numeric)} of {len(table)} published claims are nonzero numbers and "
                  "drawn; a dot agrees when it lies on its grey band")
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7)
-    plotting.save_figure(fig, None, "reproduction_scorecard")
+    plotting.name_figure(fig, None, "reproduction_scorecard")
     return fig

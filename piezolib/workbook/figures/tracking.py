@@ -22,8 +22,8 @@ def fig14_hysteresis_cases(result, frequency_hz=None, controller="our 6th-order 
     Returns
     -------
     matplotlib.figure.Figure
-        x = 3 um/V v_y [um] against 10 x reference [V]; saved as
-        ``fig14_hysteresis_cases.png``.
+        x = 3 um/V v_y [um] against 10 x reference [V]; named
+        ``fig14_hysteresis_cases``.
     """
     frequency_hz = paper.HYSTERESIS_TEST["frequency_Hz"] if frequency_hz is None else frequency_hz
     amplitudes = list(result.table.columns)
@@ -45,7 +45,7 @@ def fig14_hysteresis_cases(result, frequency_hz=None, controller="our 6th-order 
                  f"III feedforward + {controller}\n(every case run here in the loop and measured "
                  "after the first period: Case I differs slightly from the recorded data files)"
                  + _seeds_note(result))
-    plotting.save_figure(fig, 14, "hysteresis_cases")
+    plotting.name_figure(fig, 14, "hysteresis_cases")
     return fig
 
 
@@ -65,8 +65,8 @@ def fig15_tracking_error(ours, published=None, fs=None):
     Returns
     -------
     matplotlib.figure.Figure
-        e = x_r - 3 um/V v_y [um] against t / period; saved as
-        ``fig15_tracking_error.png``.
+        e = x_r - 3 um/V v_y [um] against t / period; named
+        ``fig15_tracking_error``.
     """
     fs = paper.SAMPLING_FREQUENCY_HZ if fs is None else fs
     frequencies = list(ours.table.columns)
@@ -92,7 +92,7 @@ def fig15_tracking_error(ours, published=None, fs=None):
     axes[-1, 0].legend(fontsize=7, loc="lower left")
     fig.suptitle("Fig. 15: tracking error of 12 um triangles over one steady-state period"
                  + _seeds_note(ours))
-    plotting.save_figure(fig, 15, "tracking_error")
+    plotting.name_figure(fig, 15, "tracking_error")
     return fig
 
 

@@ -66,7 +66,7 @@ def fig06_relative_error(omega, errors, envelope, H_m, W_fit, spread, peak=None)
            xlabel="frequency [rad/s]", ylabel="magnitude [-]",
            title=f"Relative errors of the +-{spread:.0%} set (Fig. 6)")
     ax.legend(loc="lower left", fontsize=7)
-    plotting.save_figure(fig, 6, "relative_error")
+    plotting.name_figure(fig, 6, "relative_error")
     return fig
 
 
@@ -110,5 +110,5 @@ def extra_parametric_margin(omega, gauge, gauge_open, margin, spread, small_gain
            ylim=(1.0, 300),
            title="Zero exclusion: exact robust-stability margin against the coefficient spread")
     ax.legend(loc="center right", fontsize=7)       # right of the curves, above the lines
-    plotting.save_figure(fig, None, "parametric_margin")
+    plotting.name_figure(fig, None, "parametric_margin")
     return fig

@@ -45,7 +45,7 @@ def extra_weight_templates(error_params, output_params, omega=None,
     # the empty corners: 1/|H_e| rises to M_e at high frequency, 1/|H_y| falls from M_y
     axes[0].legend(loc="lower right")
     axes[1].legend(loc="lower left")
-    plotting.save_figure(fig, None, "weight_templates")
+    plotting.name_figure(fig, None, "weight_templates")
     return fig
 
 
@@ -67,5 +67,5 @@ def fig11_sensitivity_templates_designs(loops, H_e, H_y, omega=None):
         Saved as ``fig11_sensitivity_templates_designs.png``.
     """
     fig = sensitivity_templates_figure(loops, H_e, H_y, omega, template_color="k")
-    plotting.save_figure(fig, 11, "sensitivity_templates_designs")
+    plotting.name_figure(fig, 11, "sensitivity_templates_designs")
     return fig

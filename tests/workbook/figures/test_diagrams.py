@@ -35,7 +35,7 @@ EXPECTED = {
 def test_diagram_is_saved_with_its_signals_and_nothing_collides(figures_dir, name):
     fig = getattr(F, name)()
     file, texts = EXPECTED[name]
-    assert (figures_dir / file).is_file()
+    assert plotting.save_figure(fig, figures_dir) == figures_dir / file
     drawn = {t.get_text() for t in fig.axes[0].texts}
     assert texts <= drawn, texts - drawn
     assert not any("um]" in t or " mu" in t for t in drawn)      # one spelling of the units

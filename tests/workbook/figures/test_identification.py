@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from piezolib import identification, paper
+from piezolib.workbook import plotting
 from piezolib.workbook.figures import identification as F
 
 FS = paper.SAMPLING_FREQUENCY_HZ
@@ -35,7 +36,7 @@ def test_fig04_is_saved_under_the_paper_number(figures_dir):
     y = identification.zoh_simulate(paper.plant(), u, FS)
     y_sim = y + 1e-4 * np.random.default_rng(1).standard_normal(len(y))
     fig = F.fig04_chirp_validation(y, y_sim, 1000, FS, zoom_s=(0.2, 0.22))
-    assert (figures_dir / "fig04_chirp_validation.png").is_file()
+    assert plotting.save_figure(fig, figures_dir) == figures_dir / "fig04_chirp_validation.png"
     fit = identification.fit_percent(y[1000:], y_sim[1000:])
     ax_full, ax_zoom, ax_res = fig.axes
     assert ax_full.get_title().endswith(f"fit {fit:.1f} %")
@@ -59,7 +60,7 @@ def test_fig13_marks_the_quantities_of_eq_25_26(figures_dir):
     x = 0.3 * v + np.where(rising, -0.4, 0.4) * np.sin(np.pi * v / 20)  # a loop 0.8 um wide
     measure = hysteresis_measure(v, x)
     fig = F.fig13_hysteresis_measure(v, x, measure, 20.0)
-    assert (figures_dir / "fig13_hysteresis_measure.png").is_file()
+    assert plotting.save_figure(fig, figures_dir) == figures_dir / "fig13_hysteresis_measure.png"
     ax = fig.axes[0]
     assert f"{measure.percent:.2f} %" in ax.get_title()
     dots = [line for line in ax.lines if line.get_marker() == "o"][0]
@@ -72,5 +73,5 @@ def test_fig13_marks_the_quantities_of_eq_25_26(figures_dir):
 def test_residual_whiteness_figure(figures_dir):
     white = identification.whiteness(np.random.default_rng(2).standard_normal(5000))
     fig = F.extra_residual_whiteness(white)
-    assert (figures_dir / "extra_residual_whiteness.png").is_file()
+    assert plotting.save_figure(fig, figures_dir) == figures_dir / "extra_residual_whiteness.png"
     assert f"p = {white.p_value:.2f}" in fig.axes[0].get_title()

@@ -4,6 +4,7 @@ import matplotlib.pyplot as plt
 import pytest
 
 from piezolib import paper
+from piezolib.workbook import plotting
 from piezolib.workbook.figures import loop_margins as F
 
 
@@ -16,7 +17,7 @@ def figures_dir(tmp_path, monkeypatch):
 def test_extra_margins(figures_dir):
     G, _, _, _, K = paper.problem()
     fig = F.extra_margins(G, {"published": K, "2 K": 2 * K}, paper.SAMPLING_FREQUENCY_HZ)
-    assert (figures_dir / "extra_margins.png").exists()
+    assert plotting.save_figure(fig, figures_dir) == figures_dir / "extra_margins.png"
     a, b = fig.axes
     # one Nyquist curve (+ its disk) per controller besides the unit circle; one radius line each
     assert len(b.get_lines()) == 3                  # two controllers + the level 1

@@ -24,7 +24,7 @@ def _curves():
 def test_saves_and_draws_the_bounds(figures_dir):
     omega, ru, rl, cu, cl = _curves()
     fig = F.extra_mixed_mu(omega, ru, rl, cu, cl, 0.05, exact=rl)
-    assert (figures_dir / "extra_mixed_mu.png").is_file()
+    assert plotting.save_figure(fig, figures_dir) == figures_dir / "extra_mixed_mu.png"
     ax_all, ax_zoom = fig.axes
     assert len(ax_all.get_lines()) == 6           # four bounds, the exact curve, mu = 1
     np.testing.assert_array_equal(ax_all.get_lines()[2].get_ydata(), ru)

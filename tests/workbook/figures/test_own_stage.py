@@ -33,7 +33,7 @@ def _record(n=400, fs=1000.0):
 def test_records_one_panel_per_record_with_marks(figures_dir):
     fig = F.extra_own_stage_records({"a": _record(), "b": _record(200)},
                                     marks={"a": [(0.1, "window"), (0.2, "")]})
-    assert (figures_dir / "extra_own_stage_records.png").exists()
+    assert plotting.save_figure(fig, figures_dir) == figures_dir / "extra_own_stage_records.png"
     main = [ax for ax in fig.axes if ax.get_title()]
     assert [ax.get_title().split(":")[0] for ax in main] == ["a", "b"]
     assert len(main[0].get_lines()) == 3 and len(main[1].get_lines()) == 1   # signal + 2 marks
@@ -56,7 +56,7 @@ def test_identification_panels_and_zoom(figures_dir, plant):
     fig = F.extra_own_stage_identification(t, y, y + 0.01, {"model": plant}, omega,
                                            y_truth=y - 0.01, output_label="v_y [V]",
                                            zoom_s=(0.02, 0.05))
-    assert (figures_dir / "extra_own_stage_identification.png").exists()
+    assert plotting.save_figure(fig, figures_dir) == figures_dir / "extra_own_stage_identification.png"
     a, magnitude, errors, phase = fig.axes
     assert a.get_xlim() == pytest.approx((0.02, 0.05))
     assert len(errors.get_lines()) == 2               # model and truth errors
@@ -74,7 +74,7 @@ def test_uncertainty_draws_weight_on_grid(figures_dir):
     W = ct.tf([1, 10], [0.1, 100])
     fig = F.extra_own_stage_uncertainty(omega, np.full(60, 0.05), W, 0.02,
                                         true_error=np.full(60, 0.01))
-    assert (figures_dir / "extra_own_stage_uncertainty.png").exists()
+    assert plotting.save_figure(fig, figures_dir) == figures_dir / "extra_own_stage_uncertainty.png"
     lines = fig.axes[0].get_lines()
     assert len(lines) == 3
     assert np.allclose(lines[1].get_ydata(), np.abs(np.ravel(W(1j * omega))))
@@ -92,7 +92,7 @@ def test_hysteresis_scales_axes_and_errors(figures_dir):
     scores = pd.DataFrame({"RMS %": [1.23]}, index=index)
     fig = F.extra_own_stage_hysteresis(v, x, {"PI": model}, scores, input_scale=10.0,
                                        output_scale=3.0, input_label="V", output_label="um")
-    assert (figures_dir / "extra_own_stage_hysteresis.png").exists()
+    assert plotting.save_figure(fig, figures_dir) == figures_dir / "extra_own_stage_hysteresis.png"
     a, b = fig.axes
     assert "1.23 %" in a.get_lines()[1].get_label()
     assert np.allclose(a.get_lines()[0].get_xdata(), 10 * v)
@@ -106,7 +106,7 @@ def test_mu_and_loop_functions(figures_dir, plant):
     lf = robust.loop_functions(plant, ct.tf([0.5], [1]))
     H = ct.tf([1, 10], [1, 1])
     fig = F.extra_own_stage_mu(omega, {"design": bounds}, {"plant": lf}, omega, H, H)
-    assert (figures_dir / "extra_own_stage_mu.png").exists()
+    assert plotting.save_figure(fig, figures_dir) == figures_dir / "extra_own_stage_mu.png"
     a, b = fig.axes
     assert len(a.get_lines()) == 3                   # upper, lower, the level 1
     assert np.allclose(a.get_lines()[0].get_ydata(), 0.9)
@@ -122,7 +122,7 @@ def test_experiments_cases_and_extra_rows(figures_dir):
                       columns=pd.Index([1.0], name="frequency_Hz"))
     fig = F.extra_own_stage_experiments(t4, t5, {"II: PI": pd.Series({10.0: 0.3, 20.0: 0.4})},
                                         feedforward="Dahl feedforward")
-    assert (figures_dir / "extra_own_stage_experiments.png").exists()
+    assert plotting.save_figure(fig, figures_dir) == figures_dir / "extra_own_stage_experiments.png"
     a, b = fig.axes
     labels = [line.get_label() for line in a.get_lines()]
     assert labels == ["I: open loop", "II: Dahl feedforward",

@@ -5,6 +5,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from piezolib.workbook import plotting
 from piezolib.workbook.figures import scorecard as F
 
 
@@ -23,7 +24,7 @@ TABLE = pd.DataFrame({"source": ["00_a", "00_a", "05_b", "05_b", "05_b"],
 
 def test_scorecard_one_dot_and_one_band_per_numeric_claim(figures_dir):
     fig = F.extra_reproduction_scorecard(TABLE)
-    assert (figures_dir / "extra_reproduction_scorecard.png").is_file()
+    assert plotting.save_figure(fig, figures_dir) == figures_dir / "extra_reproduction_scorecard.png"
     ax = fig.axes[0]
     bands, agrees, differs = ax.collections
     assert len(agrees.get_offsets()) == 2 and len(differs.get_offsets()) == 1

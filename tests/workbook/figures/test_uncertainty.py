@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from piezolib import paper
+from piezolib.workbook import plotting
 from piezolib.workbook.figures import uncertainty as F
 
 
@@ -27,7 +28,7 @@ def test_fig06_log_axes_refined_peak_and_weight_excess(figures_dir):
     W_fit = ct.tf([0.2, 20.0], [1e-4, 200.0])          # 0.1 at DC, 2000 at high frequency
     fig = F.fig06_relative_error(omega, errors, envelope, H_m, W_fit, 0.05,
                                  peak=(497.0, 5774.0))
-    assert (figures_dir / "fig06_relative_error.png").is_file()
+    assert plotting.save_figure(fig, figures_dir) == figures_dir / "fig06_relative_error.png"
     ax = fig.axes[0]
     assert ax.get_xscale() == "log" and ax.get_yscale() == "log"
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
