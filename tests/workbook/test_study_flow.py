@@ -1,6 +1,7 @@
 """A changed study flows from notebook 04 through 05, 06 and 07, headless, into runs/<study>/."""
 
 import pandas as pd
+import pytest
 
 from piezolib.workbook import pipeline, reproduce, study
 from piezolib.workbook.outputs import notebooks_dir, runs_dir
@@ -10,6 +11,7 @@ def ours(table, quantity):
     return float(table.set_index("quantity").loc[quantity, "ours"])
 
 
+@pytest.mark.slow
 def test_changed_weights_reach_the_controller_numbers_of_05_06_07(tmp_path):
     # a small study: wider error weight, a short DK-iteration with low-order D-fits
     small = study.load("reference").replace(

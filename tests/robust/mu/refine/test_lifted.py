@@ -229,6 +229,7 @@ def test_cuts_of_the_full_repeated_scalar_weight_close_a_gap_the_relaxation_leav
     assert not certificate_holds(Mb, MIXED, mult, bound * (1 - 1e-4))
 
 
+@pytest.mark.slow
 def test_a_point_whose_centres_stall_gets_more_rounds_of_cuts():
     # a D-balanced 15 x 15 matrix of the benchmark's seed-1 ``complex <= 8`` case 13 (five
     # repeated scalars, two scalars) and the lower bound mussv found there along frequency;
@@ -292,6 +293,7 @@ def test_refine_on_a_frequency_response_keeps_every_bound_valid():
     np.testing.assert_array_equal(refined.upper[untouched], plain.upper[untouched])
 
 
+@pytest.mark.slow
 @settings(max_examples=15, deadline=None)
 @given(base=st.sampled_from([9, 59, 195, 210]), seed=st.integers(0, 2 ** 32 - 1),
        size=st.floats(0, 0.03), spread=st.floats(0, 3))
@@ -336,6 +338,7 @@ def structure_similarity(g, blk, spread):
     return sla.block_diag(*left), sla.block_diag(*right)
 
 
+@pytest.mark.slow
 @settings(max_examples=15, deadline=None)
 @given(base=st.sampled_from([5, 14, 52]), seed=st.integers(0, 2 ** 32 - 1),
        size=st.floats(0, 0.05), spread=st.floats(0, 3))
