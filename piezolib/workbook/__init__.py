@@ -5,13 +5,15 @@ pipeline     the pipeline's products, computed once per study and reused
 loop         the 10 kHz loop of Fig. 1 on the virtual stage
 experiments  Cases I-III of Sec. V: the Table 4 and Table 5 experiments
 report       paper-versus-reproduced comparison tables
-plotting     the workbook's figure style and figure saving
+style        the workbook's figure style: rcParams, named colours, the units rule
+plotting     saving figures under the paper's numbering
 figures      one function per paper figure, grouped by notebook
 reproduce    headless run of the whole workbook (``python -m piezolib reproduce``)
 cli          the command line (``python -m piezolib {reproduce,data}``)
 outputs      where each study's outputs go
 session      the one call that starts a notebook: study, claim table, figure style
-interactive  the notebooks' interactive controls and the callbacks behind them
+interactive  the notebooks' interactive controls (one module per control) and their callbacks
 """
 
-__all__ = ["loop", "experiments", "report", "plotting", "figures", "reproduce", "cli", "outputs", "session"]
+__all__ = ["study", "pipeline", "loop", "experiments", "report", "style", "plotting", "figures",
+           "reproduce", "cli", "outputs", "session", "interactive"]

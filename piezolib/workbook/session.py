@@ -18,7 +18,7 @@ import time
 
 import pandas as pd
 
-from piezolib.workbook import plotting, report
+from piezolib.workbook import plotting, report, style
 from piezolib.workbook import study as studies
 
 __all__ = ["Session", "start"]
@@ -98,7 +98,7 @@ def start(study=studies.REFERENCE, claims=None):
     Session
     """
     session = Session(study, claims)
-    plotting.use_style()
+    style.use_style()
     for option, value in DISPLAY_OPTIONS.items():
         pd.set_option(option, value)
     return session

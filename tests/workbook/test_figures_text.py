@@ -1,5 +1,5 @@
 """No text of a workbook figure collides: with another text, a diagram's wires and boxes, or a
-curve under a legend (renderer-based: :func:`piezolib.workbook.plotting.text_overlaps`).
+curve under a legend (renderer-based: :func:`figure_checks.text_overlaps`).
 
 Each case draws one figure function on small inputs of the notebook's kind (the committed
 experiment files and result tables where the figure needs them) and checks the saved figure.
@@ -12,6 +12,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
+from figure_checks import text_overlaps
 from piezolib import hysteresis, identification, paper, robust
 from piezolib.problem import stage_data
 from piezolib.workbook import plotting, report
@@ -22,6 +23,7 @@ from piezolib.workbook.figures import mu as mu_figures
 from piezolib.workbook.figures import scorecard as report_figures
 from piezolib.workbook.figures import uncertainty as unc_figures
 from piezolib.workbook.figures import weights
+from piezolib.workbook.style import unit_text
 
 FS = paper.SAMPLING_FREQUENCY_HZ
 # read from the repository before any test points PIEZOLIB_ROOT elsewhere
@@ -97,7 +99,7 @@ CASES = {
 def test_no_text_collides(name, figures_dir):
     fig = CASES[name]()
     plotting.save_figure(fig, figures_dir)          # the texts as saved, through the units rule
-    assert plotting.text_overlaps(fig) == []
+    assert text_overlaps(fig) == []
 
 
 def test_every_saved_label_follows_the_units_rule(figures_dir):
@@ -105,7 +107,7 @@ def test_every_saved_label_follows_the_units_rule(figures_dir):
     plotting.save_figure(fig, figures_dir)
     texts = [t.get_text() for t in fig.findobj(plt.Text)]
     assert any("µm" in t for t in texts)
-    assert not any(plotting.unit_text(t) != t for t in texts)
+    assert not any(unit_text(t) != t for t in texts)
 
 
 def test_fig08_says_exact_to_round_off_only_when_it_is():

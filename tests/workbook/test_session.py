@@ -5,6 +5,7 @@ import pandas as pd
 import pytest
 
 from piezolib.workbook import plotting, session
+from piezolib.workbook.style import new_figure
 from piezolib.workbook import study as studies
 
 
@@ -16,7 +17,7 @@ def checkout(tmp_path, monkeypatch):
 
 
 def _named_figure():
-    fig, ax = plotting.new_figure()
+    fig, ax = new_figure()
     ax.plot([0, 1], [1, 0])
     return plotting.name_figure(fig, 4, "chirp_validation")
 

@@ -9,6 +9,7 @@ import numpy as np
 
 from piezolib.robust.lti import frequency_grid
 from piezolib.workbook import plotting
+from piezolib.workbook.style import new_figure, plot_magnitude
 
 __all__ = ["fig10_step_responses", "fig11_sensitivity_templates",
            "sensitivity_templates_figure", "STEP_TITLES"]
@@ -34,7 +35,7 @@ def fig10_step_responses(loop, t=None):
         Saved as ``fig10_step_responses.png``.
     """
     t = np.linspace(0, 0.01, 2001) if t is None else t
-    fig, axes = plotting.new_figure(2, 2, figsize=(8, 5), sharex=True)
+    fig, axes = new_figure(2, 2, figsize=(8, 5), sharex=True)
     for ax, title, sys in zip(axes.flat, STEP_TITLES.values(), loop):
         resp = ct.step_response(sys, T=t)
         ax.plot(1e3 * resp.time, np.ravel(resp.outputs))
@@ -92,14 +93,14 @@ def sensitivity_templates_figure(loops, H_e, H_y, omega=None, template_color=Non
     """
     omega = frequency_grid(1e0, 1e7, 3000) if omega is None else omega
     s = 1j * omega
-    fig, (ax_s, ax_t) = plotting.new_figure(1, 2, figsize=(9, 3.6), sharey=True)
+    fig, (ax_s, ax_t) = new_figure(1, 2, figsize=(9, 3.6), sharey=True)
     style = {"ls": ":"} if template_color is None else {"ls": ":", "color": template_color}
     for name, loop in loops.items():
         suffix = "" if name is None else f", {name}"
-        plotting.plot_magnitude(ax_s, omega, np.ravel(loop.S(s)), label=f"|S|{suffix}")
-        plotting.plot_magnitude(ax_t, omega, np.ravel(loop.T(s)), label=f"|T|{suffix}")
-    plotting.plot_magnitude(ax_s, omega, 1 / np.ravel(H_e(s)), label="1/|H_e|", **style)
-    plotting.plot_magnitude(ax_t, omega, 1 / np.ravel(H_y(s)), label="1/|H_y|", **style)
+        plot_magnitude(ax_s, omega, np.ravel(loop.S(s)), label=f"|S|{suffix}")
+        plot_magnitude(ax_t, omega, np.ravel(loop.T(s)), label=f"|T|{suffix}")
+    plot_magnitude(ax_s, omega, 1 / np.ravel(H_e(s)), label="1/|H_e|", **style)
+    plot_magnitude(ax_t, omega, 1 / np.ravel(H_y(s)), label="1/|H_y|", **style)
     ax_s.set_title("(a) output sensitivity S and its template")
     ax_t.set_title("(b) complementary sensitivity T and its template")
     ax_s.set_ylim(-80, 30)

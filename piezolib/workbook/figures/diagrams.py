@@ -3,13 +3,14 @@
 Signals carry the names and units of the units table of :mod:`piezolib.problem.paper`
 (u_c, u_f, u_b, v_a, v_y, v_r, v_e in V; x, x_r in um), blocks name the
 equations of the paper they stand for.  Every function draws with
-:func:`piezolib.workbook.plotting.block_diagram`, names the figure after the
+:func:`piezolib.workbook.figures.block_diagram.block_diagram`, names the figure after the
 paper's number and returns it.  Notebook 00 draws Fig. 1, 2 and 9, notebook
 01 Fig. 3 and notebook 02 Fig. 5.
 """
 
 from piezolib.problem import paper
 from piezolib.workbook import plotting
+from piezolib.workbook.figures.block_diagram import block_diagram
 
 __all__ = ["fig01_control_loop", "fig02_experimental_loop", "fig03_identification_steps",
            "fig05_uncertain_plant", "fig09_general_configuration"]
@@ -45,7 +46,7 @@ def fig01_control_loop():
         ((17.2, 0.0), "sum_e", f"v_y [V]   (x = {um_per_v:g} um/V * v_y)",
          {"via": [(17.2, -1.6), (5.6, -1.6)], "dot": True, "sign": "-"}),
     ]
-    fig = plotting.block_diagram(blocks, wires)
+    fig = block_diagram(blocks, wires)
     plotting.name_figure(fig, 1, "control_loop")
     return fig
 
@@ -78,7 +79,7 @@ def fig02_experimental_loop():
         ("sensor", "ad", "v_y [V]"),
         ("ad", "pc", "v_y [V]", {"via": [(2.2, -3.2)]}),
     ]
-    fig = plotting.block_diagram(blocks, wires)
+    fig = block_diagram(blocks, wires)
     plotting.name_figure(fig, 2, "experimental_loop")
     return fig
 
@@ -106,7 +107,7 @@ def fig03_identification_steps():
         ("IV", "II", "no: change the structure",
          {"via": [(16.0, -2.0), (6.8, -2.0)], "side": "below"}),
     ]
-    fig = plotting.block_diagram(blocks, wires)
+    fig = block_diagram(blocks, wires)
     plotting.name_figure(fig, 3, "identification_steps")
     return fig
 
@@ -134,7 +135,7 @@ def fig05_uncertain_plant():
         ("G", (16.2, 0.0), "v_y [V]"),
     ]
     frames = [(1.6, -0.9, 13.8, 3.35, "G_Delta(s) = G(s) (1 + H_m(s) Delta(s))")]
-    fig = plotting.block_diagram(blocks, wires, frames=frames)
+    fig = block_diagram(blocks, wires, frames=frames)
     plotting.name_figure(fig, 5, "uncertain_plant")
     return fig
 
@@ -163,6 +164,6 @@ def fig09_general_configuration():
         ("K", (left, -1.1), "u_b [V]", {"via": [(2.6, -3.1), (2.6, -1.1)], "segment": 2,
                                         "side": "below"}),
     ]
-    fig = plotting.block_diagram(blocks, wires)
+    fig = block_diagram(blocks, wires)
     plotting.name_figure(fig, 9, "general_configuration")
     return fig

@@ -9,6 +9,7 @@ import numpy as np
 from piezolib.problem import paper
 from piezolib.hysteresis import dahl_hysteresis, feedforward, hysteresis_percent
 from piezolib.workbook import plotting
+from piezolib.workbook.style import PALETTE, new_figure
 from piezolib.workbook.experiments import table4_reference
 
 __all__ = ["extra_dahl_published_audit", "fig07_dahl_fit", "fig08_feedforward_on_model",
@@ -17,7 +18,7 @@ __all__ = ["extra_dahl_published_audit", "fig07_dahl_fit", "fig08_feedforward_on
 GAIN, UM = paper.AMPLIFIER_GAIN, paper.UM_PER_VOLT
 #: Samples per period of the 10 Hz Table 4 triangle at the DAQ rate.
 PERIOD = int(paper.SAMPLING_FREQUENCY_HZ / paper.HYSTERESIS_TEST["frequency_Hz"])
-_FORM_COLORS = {"printed": "#1f4e79", "bliman_sorine": "#c0504d"}
+_FORM_COLORS = {"printed": PALETTE.primary, "bliman_sorine": PALETTE.contrast}
 
 
 def _loop_width(v, x):
@@ -46,7 +47,7 @@ def extra_dahl_published_audit(published, record, x_ranges):
     matplotlib.figure.Figure
         Saved as ``extra_dahl_published_audit.png``.
     """
-    fig, axes = plotting.new_figure(1, 3, figsize=(10.5, 3.3))
+    fig, axes = new_figure(1, 3, figsize=(10.5, 3.3))
     t, x_path = table4_reference(40.0, periods=2)
     x_um = x_path * x_ranges["x [um]"] / x_path.max()
     for form, style, width in (("bliman_sorine", "--", 1.3), ("printed", "-", 2.6)):
@@ -80,7 +81,7 @@ def extra_dahl_published_audit(published, record, x_ranges):
                     rotation=90)
     tags.minorticks_off()
     tags.set_xlabel("40 V stroke in each unit", fontsize=7)
-    axes[2].axhspan(6, 13, color="#4f8f3a", alpha=0.2, label="Table 4, Case I")
+    axes[2].axhspan(6, 13, color=PALETTE.agreement, alpha=0.2, label="Table 4, Case I")
     axes[2].set(xlabel="stroke of x [x-units]", ylabel="hysteresis % (eq. 26)",
                 title="(c) loop width vs stroke length", ylim=(1e-6, 1e4))
     axes[2].legend(fontsize=7, loc="center right", bbox_to_anchor=(1.0, 0.3))
@@ -106,16 +107,17 @@ def fig07_dahl_fit(loops, workbook, paper_form, amplitudes):
     matplotlib.figure.Figure
         Saved as ``fig07_dahl_fit.png``.
     """
-    fig, axes = plotting.new_figure(2, 2, figsize=(8.5, 6.4))
+    fig, axes = new_figure(2, 2, figsize=(8.5, 6.4))
     for ax, (k, A) in zip(axes.flat, enumerate(amplitudes)):
         u, v_y = loops[k]
         late = slice(PERIOD, None)
         ax.plot(GAIN * u[late], UM * v_y[late], color="0.55", lw=1.8,
                 label="virtual stage (measured)")
-        ax.plot(GAIN * u[late], UM * workbook.x_model[k][late], "-", lw=1.0, color="#c0504d",
+        ax.plot(GAIN * u[late], UM * workbook.x_model[k][late], "-", lw=1.0,
+                color=PALETTE.contrast,
                 label=f"workbook model (RMS {workbook.rms_percent[k]:.1f} %)")
         ax.plot(GAIN * u[late], UM * paper_form.x_model[k][late], "--", lw=1.0,
-                color="#1f4e79",
+                color=PALETTE.primary,
                 label=f"eq. 10-13 as printed (RMS {paper_form.rms_percent[k]:.1f} %)")
         ax.set(title=f"({'abcd'[k]}) {A:.0f} V", xlabel="actuator voltage [V]",
                ylabel="displacement [um]")
@@ -143,7 +145,7 @@ def fig08_feedforward_on_model(t, x_r, x_plain, x_comp):
     matplotlib.figure.Figure
         Saved as ``fig08_feedforward_on_model.png``.
     """
-    fig, axes = plotting.new_figure(1, 2, figsize=(8.5, 3.4))
+    fig, axes = new_figure(1, 2, figsize=(8.5, 3.4))
     axes[0].plot(UM * x_r, UM * x_plain, label="u = (x_r - x0) / g_a (no compensation)")
     axes[0].plot(UM * x_r, UM * x_comp, "--", label="u = u_f (eq. 14)")
     axes[0].set(xlabel="desired displacement x_r [um]", ylabel="model displacement x [um]",
@@ -153,7 +155,7 @@ def fig08_feedforward_on_model(t, x_r, x_plain, x_comp):
     stroke_nm = UM * np.ptp(x_r) * 1e3
     if np.max(np.abs(error_nm)) <= 1e-9 * stroke_nm:
         # an identity up to floating-point round-off: say so rather than plot 1e-10 nm noise
-        axes[1].axhline(0.0, color="#1f4e79")
+        axes[1].axhline(0.0, color=PALETTE.primary)
         axes[1].set_ylim(-1, 1)
         axes[1].text(0.5, 0.6, "exact to round-off:\n"
                      f"max |x - x_r| = {np.max(np.abs(error_nm)):.0e} nm",
@@ -185,7 +187,7 @@ def extra_case2_loops(loops, case_I, runs, case_II):
         Saved as ``extra_case2_loops.png``.
     """
     amplitudes = list(loops)
-    fig, axes = plotting.new_figure(2, len(amplitudes), figsize=(11, 5.2), sharex="col")
+    fig, axes = new_figure(2, len(amplitudes), figsize=(11, 5.2), sharex="col")
     for k, A in enumerate(amplitudes):
         rec = loops[A]
         axes[0, k].plot(GAIN * rec.u_c_V[PERIOD:], UM * rec.v_y_V[PERIOD:], color="0.5", lw=0.8)
@@ -219,7 +221,7 @@ def extra_case2_residual(runs, percents):
         grey line (mid-input).
     """
     amplitudes = list(runs)
-    fig, axes = plotting.new_figure(1, len(amplitudes), figsize=(11, 2.8))
+    fig, axes = new_figure(1, len(amplitudes), figsize=(11, 2.8))
     for k, A in enumerate(amplitudes):
         run = runs[A]
         late = slice(PERIOD, None)
@@ -251,14 +253,13 @@ def extra_model_validation(records, models, scores):
         Saved as ``extra_model_validation.png``.
     """
     labels = list(records)
-    fig, axes = plotting.new_figure(2, len(labels), figsize=(11.5, 5.6), sharex="col")
+    fig, axes = new_figure(2, len(labels), figsize=(11.5, 5.6), sharex="col")
     styles = ("-", "--", ":")
-    colors = ("#1f77b4", "#c0504d", "#4f8f3a")
     for k, label in enumerate(labels):
         u, v_y, first = records[label]
         late = slice(first, None)
         axes[0, k].plot(GAIN * u[late], UM * v_y[late], color="0.6", lw=2.0, label="stage")
-        for (name, model), style, color in zip(models.items(), styles, colors):
+        for (name, model), style, color in zip(models.items(), styles, PALETTE.peers):
             x = model.simulate(u)
             rms = scores.loc[(name, label), "RMS %"]
             axes[0, k].plot(GAIN * u[late], UM * x[late], style, lw=0.9, color=color,

@@ -12,7 +12,8 @@ import numpy as np
 from piezolib import identification
 from piezolib._checks import check_finite_array, check_signals, check_siso
 from piezolib.robust.lti import frequency_grid, realize
-from piezolib.workbook.plotting import db, new_figure, name_figure
+from piezolib.workbook.plotting import name_figure
+from piezolib.workbook.style import PALETTE, db, new_figure
 
 __all__ = [
     "bode_overlay", "extra_stage_case_i_loops", "fig13_hysteresis_measure",
@@ -129,21 +130,21 @@ def fig13_hysteresis_measure(v, x, measure, amplitude_V):
     v_min, v_max = float(v.min()), float(v.max())
     fig, ax = new_figure(figsize=(6.4, 4.6))
     ax.plot(v, x, color="0.45", lw=0.8, label="measured loop (virtual stage)")
-    ax.axvline(measure.v_mid, color="#1f4e79", lw=1.0, ls="--")
+    ax.axvline(measure.v_mid, color=PALETTE.primary, lw=1.0, ls="--")
     for level in (measure.x_max, measure.x_min):
         ax.axhline(level, color="0.6", lw=0.8, ls=":")
-    ax.plot([measure.v_mid] * 2, [x_up, x_lo], "o", color="#c0504d", ms=5, zorder=3)
+    ax.plot([measure.v_mid] * 2, [x_up, x_lo], "o", color=PALETTE.contrast, ms=5, zorder=3)
     ax.annotate("", xy=(measure.v_mid, x_lo), xytext=(measure.v_mid, x_up),
-                arrowprops=dict(arrowstyle="<->", color="#c0504d", lw=1.2, shrinkA=4,
+                arrowprops=dict(arrowstyle="<->", color=PALETTE.contrast, lw=1.2, shrinkA=4,
                                 shrinkB=4))
     span = v_max - v_min
     # X_UP up-left and X_LO down-right of their points: both away from the branches
-    ax.text(measure.v_mid - 0.03 * span, x_up, "X_UP", color="#c0504d", va="bottom",
+    ax.text(measure.v_mid - 0.03 * span, x_up, "X_UP", color=PALETTE.contrast, va="bottom",
             ha="right", fontsize=8)
-    ax.text(measure.v_mid + 0.03 * span, x_lo, "X_LO", color="#c0504d", va="top",
+    ax.text(measure.v_mid + 0.03 * span, x_lo, "X_LO", color=PALETTE.contrast, va="top",
             ha="left", fontsize=8)
     ax.text(measure.v_mid + 0.01 * span, measure.x_max + 0.04 * (measure.x_max - measure.x_min),
-            "V_M = (V_MAX - V_MIN)/2 + V_MIN", color="#1f4e79", ha="left", va="bottom",
+            "V_M = (V_MAX - V_MIN)/2 + V_MIN", color=PALETTE.primary, ha="left", va="bottom",
             fontsize=7.5)
     ax.text(v_min, measure.x_max, "X_MAX", va="bottom", ha="left", fontsize=7.5, color="0.35")
     ax.text(v_max, measure.x_min, "X_MIN", va="top", ha="right", fontsize=7.5, color="0.35")
@@ -260,8 +261,8 @@ def fig04_chirp_validation(y, y_sim, sweep_start, fs, zoom_s=(0.55, 0.57), windo
     t_env = t[sweep_start:sweep_start + m * n].reshape(m, n).mean(axis=1)
     fig, (ax_full, ax_zoom, ax_res) = new_figure(3, 1, figsize=(7.0, 7.0),
                                                  height_ratios=(1.3, 1.0, 0.7))
-    styles = (("measured (virtual stage)", dict(color="#7fa7cf", lw=2.2)),
-              ("simulated (identified model)", dict(color="#7a1f1f", lw=0.9, ls="--")))
+    styles = (("measured (virtual stage)", dict(color=PALETTE.measured, lw=2.2)),
+              ("simulated (identified model)", dict(color=PALETTE.signal, lw=0.9, ls="--")))
     for (label, style), trace in zip(styles, (y, y_sim)):
         blocks = trace[sweep_start:sweep_start + m * n].reshape(m, n)
         ax_full.plot(t_env, blocks.max(axis=1), label=label, **style)

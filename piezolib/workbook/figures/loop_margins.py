@@ -6,6 +6,7 @@ from piezolib.robust.discrete import discretize
 from piezolib.robust.lti import frequency_grid, realize
 from piezolib.robust.margins import delay_tolerance, loop_margins
 from piezolib.workbook import plotting
+from piezolib.workbook.style import new_figure
 
 __all__ = ["extra_margins"]
 
@@ -32,7 +33,7 @@ def extra_margins(G, controllers, fs, delays=(0, 1, 2, 3), omega=None):
         Saved as ``extra_margins.png``.
     """
     omega = frequency_grid(1.0, 1e6, 4000) if omega is None else np.asarray(omega, float)
-    fig, (ax, bx) = plotting.new_figure(1, 2, figsize=(10, 5.4))
+    fig, (ax, bx) = new_figure(1, 2, figsize=(10, 5.4))
     # designs often coincide: wide solid, medium dashed, thin dotted keep each one visible
     styles = [dict(ls="-", lw=3.0, alpha=0.55, marker="o", ms=9),
               dict(ls="--", lw=1.6, alpha=1.0, marker="s", ms=6),

@@ -4,6 +4,7 @@ with the coefficients as real blocks and as complex ones."""
 import numpy as np
 
 from piezolib.workbook import plotting
+from piezolib.workbook.style import new_figure
 
 __all__ = ["extra_mixed_mu"]
 
@@ -62,7 +63,7 @@ def extra_mixed_mu(omega, real_upper, real_lower, complex_upper, complex_lower, 
         w_peak = omega[int(np.argmax(curves["complex_upper"]))]
         zoom = (w_peak / 1.6, w_peak * 1.6)
 
-    fig, (ax_all, ax_zoom) = plotting.new_figure(1, 2, figsize=(10, 4.4))
+    fig, (ax_all, ax_zoom) = new_figure(1, 2, figsize=(10, 4.4))
     for ax in (ax_all, ax_zoom):
         ax.semilogx(omega, curves["complex_upper"], color="C1", lw=2.4, alpha=0.5,
                     label="complex blocks, upper")

@@ -6,6 +6,7 @@ import numpy as np
 
 from piezolib.robust.lti import loop_functions
 from piezolib.workbook import plotting
+from piezolib.workbook.style import new_figure, plot_magnitude
 from piezolib.workbook.figures.audit import STEP_TITLES
 
 __all__ = ["extra_d_scaling_fit", "extra_hankel_singular_values", "extra_delay_aware_design",
@@ -27,11 +28,11 @@ def extra_d_scaling_fit(mu_run):
     """
     omega = mu_run.omega
     s = 1j * omega
-    fig, ax = plotting.new_figure(figsize=(6.5, 3.4))
-    plotting.plot_magnitude(ax, omega, mu_run.mu.d[:, 0], label="optimal d(omega) for the final K")
+    fig, ax = new_figure(figsize=(6.5, 3.4))
+    plot_magnitude(ax, omega, mu_run.mu.d[:, 0], label="optimal d(omega) for the final K")
     fit = mu_run.d_scalings[0]
     order = len(ct.poles(fit))
-    plotting.plot_magnitude(ax, omega, np.ravel(fit(s)),
+    plot_magnitude(ax, omega, np.ravel(fit(s)),
                             label=f"order-{order} fit used in the last K-step", ls="--")
     ax.set_ylabel("|d| [dB]")
     ax.legend()
@@ -55,7 +56,7 @@ def extra_hankel_singular_values(hsv, order=6):
         Saved as ``extra_hankel_singular_values.png``.
     """
     hsv = np.asarray(hsv)
-    fig, ax = plotting.new_figure(figsize=(6.5, 3.2))
+    fig, ax = new_figure(figsize=(6.5, 3.2))
     ax.semilogy(np.arange(1, hsv.size + 1), hsv, "o-")
     ax.axvline(order + 0.5, color="k", ls=":", lw=1)
     ax.set_xlabel("state (balanced)")
@@ -83,7 +84,7 @@ def fig10_step_responses_designs(G, controllers, t=None):
         K(inf)) is on a symmetric log axis.
     """
     t = np.linspace(0, 0.01, 2001) if t is None else t
-    fig, axes = plotting.new_figure(2, 2, figsize=(9, 5.5), sharex=True)
+    fig, axes = new_figure(2, 2, figsize=(9, 5.5), sharex=True)
     # overlapping designs stay visible: wide solid first, thinner dashed/dotted on top
     styles = [dict(ls="-", lw=2.6), dict(ls="--", lw=1.8), dict(ls="-.", lw=1.4),
               dict(ls=":", lw=1.8), dict(ls=(0, (5, 1, 1, 1)), lw=1.1)]
@@ -120,7 +121,7 @@ def fig12_mu_bounds(results):
     matplotlib.figure.Figure
         Saved as ``fig12_mu_bounds.png``.
     """
-    fig, (ax_rs, ax_rp) = plotting.new_figure(1, 2, figsize=(10, 3.8), sharey=True)
+    fig, (ax_rs, ax_rp) = new_figure(1, 2, figsize=(10, 3.8), sharey=True)
     for name, a in results.items():
         line, = ax_rs.semilogx(a.omega, a.mu_RS_curve, label=name)
         ax_rp.semilogx(a.omega, a.mu_RP_upper, color=line.get_color(), lw=2.4, alpha=0.45,
@@ -161,7 +162,7 @@ def extra_delay_aware_design(omega, mu_results, controllers, rolloff=None, lower
         Saved as ``extra_delay_aware_design.png``.
     """
     omega = np.asarray(omega, float)
-    fig, (ax_mu, ax_k) = plotting.new_figure(1, 2, figsize=(11, 4.0))
+    fig, (ax_mu, ax_k) = new_figure(1, 2, figsize=(11, 4.0))
     for name, res in mu_results.items():
         line, = ax_mu.semilogx(omega, res.upper, label=f"{name}, upper")
         ax_mu.semilogx(omega, res.lower, ls=":", lw=2.2, color=line.get_color(),
@@ -175,9 +176,9 @@ def extra_delay_aware_design(omega, mu_results, controllers, rolloff=None, lower
     ax_mu.set_title("(a) mu_RP of the delay-aware problem")
     ax_mu.legend(fontsize=7, loc="lower left")
     for name, K in controllers.items():
-        plotting.plot_magnitude(ax_k, omega, np.ravel(K(1j * omega)), label=name)
+        plot_magnitude(ax_k, omega, np.ravel(K(1j * omega)), label=name)
     if rolloff is not None:
-        plotting.plot_magnitude(ax_k, omega, 1 / np.ravel(rolloff(1j * omega)), color="k",
+        plot_magnitude(ax_k, omega, 1 / np.ravel(rolloff(1j * omega)), color="k",
                                 ls="--", lw=0.9, label="1 / |W_u| (roll-off allowance)")
     ax_k.set_ylabel("|K| [dB]")
     ax_k.set_title("(b) controller gain")

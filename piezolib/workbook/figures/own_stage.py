@@ -11,14 +11,12 @@ import numpy as np
 from piezolib._checks import check_finite_array, check_signals, check_positive
 from piezolib.records import Record
 from piezolib.workbook import plotting
+from piezolib.workbook.style import PALETTE, db, new_figure
 from piezolib.workbook.figures.identification import bode_overlay
 
 __all__ = ["extra_own_stage_records", "extra_own_stage_identification",
            "extra_own_stage_uncertainty", "extra_own_stage_hysteresis",
            "extra_own_stage_mu", "extra_own_stage_experiments"]
-
-_COLORS = ("#1f77b4", "#c0504d", "#4f8f3a", "#8064a2")
-
 
 def extra_own_stage_records(records, marks=None):
     """The raw records as loaded: input and output against time, one panel per record.
@@ -43,14 +41,14 @@ def extra_own_stage_records(records, marks=None):
             raise TypeError(f"records[{label!r}] must be a piezolib.records.Record, "
                             f"got {type(rec).__name__}")
     marks = {} if marks is None else dict(marks)
-    fig, axes = plotting.new_figure(len(records), 1, figsize=(9.0, 2.3 * len(records)),
+    fig, axes = new_figure(len(records), 1, figsize=(9.0, 2.3 * len(records)),
                                     squeeze=False)
     for ax, (label, rec) in zip(axes[:, 0], records.items()):
-        ax.plot(rec.time, rec.input, lw=0.7, color=_COLORS[0])
-        ax.set_ylabel(f"{rec.input_name} [{rec.input_unit}]", color=_COLORS[0])
+        ax.plot(rec.time, rec.input, lw=0.7, color=PALETTE.peer)
+        ax.set_ylabel(f"{rec.input_name} [{rec.input_unit}]", color=PALETTE.peer)
         right = ax.twinx()
-        right.plot(rec.time, rec.output, lw=0.7, color=_COLORS[1])
-        right.set_ylabel(f"{rec.output_name} [{rec.output_unit}]", color=_COLORS[1])
+        right.plot(rec.time, rec.output, lw=0.7, color=PALETTE.contrast)
+        right.set_ylabel(f"{rec.output_name} [{rec.output_unit}]", color=PALETTE.contrast)
         mine = list(marks.get(label, ()))
         for t, text in mine:
             ax.axvline(t, color="0.3", ls="--", lw=0.8)
@@ -96,14 +94,14 @@ def extra_own_stage_identification(t, y, y_model, models, omega, measured=None, 
         Saved as ``extra_own_stage_identification.png``.
     """
     t, y, y_model = check_signals(2, t=t, y=y, y_model=y_model)
-    fig, axes = plotting.new_figure(2, 2, figsize=(11.0, 5.6))
+    fig, axes = new_figure(2, 2, figsize=(11.0, 5.6))
     axes[0, 0].plot(t, y, color="0.6", lw=1.2, label="measured (held out)")
-    axes[0, 0].plot(t, y_model, lw=0.8, color=_COLORS[0], label="identified model")
-    axes[1, 0].plot(t, y_model - y, lw=0.7, color=_COLORS[0], label="identified - measured")
+    axes[0, 0].plot(t, y_model, lw=0.8, color=PALETTE.peer, label="identified model")
+    axes[1, 0].plot(t, y_model - y, lw=0.7, color=PALETTE.peer, label="identified - measured")
     if y_truth is not None:
         t, y_truth = check_signals(2, t=t, y_truth=y_truth)
-        axes[0, 0].plot(t, y_truth, "--", lw=0.8, color=_COLORS[2], label="true plant")
-        axes[1, 0].plot(t, y_truth - y, lw=0.7, color=_COLORS[2], alpha=0.7,
+        axes[0, 0].plot(t, y_truth, "--", lw=0.8, color=PALETTE.agreement, label="true plant")
+        axes[1, 0].plot(t, y_truth - y, lw=0.7, color=PALETTE.agreement, alpha=0.7,
                         label="true plant - measured (noise)")
     axes[0, 0].set(ylabel=output_label, xlabel="time [s]",
                    title="(a) held-out part of the record" + ("" if zoom_s is None else ", zoom"))
@@ -153,16 +151,16 @@ def extra_own_stage_uncertainty(omega, envelope, weight, spread, true_error=None
     if envelope.shape != omega.shape:
         raise ValueError("envelope must have the shape of omega")
     spread = check_positive("spread", spread)
-    fig, ax = plotting.new_figure(figsize=(7.5, 4.0))
+    fig, ax = new_figure(figsize=(7.5, 4.0))
     ax.loglog(omega, envelope, color="0.55", lw=1.5,
               label=f"E_m: coefficients +-{100 * spread:g} % (stable members)")
-    ax.loglog(omega, np.abs(np.ravel(weight(1j * omega))), color=_COLORS[0],
+    ax.loglog(omega, np.abs(np.ravel(weight(1j * omega))), color=PALETTE.peer,
               label="covering weight |W|")
     if true_error is not None:
         true_error = np.asarray(true_error, dtype=float)
         if true_error.shape != omega.shape:
             raise ValueError("true_error must have the shape of omega")
-        ax.loglog(omega, true_error, "--", color=_COLORS[1],
+        ax.loglog(omega, true_error, "--", color=PALETTE.contrast,
                   label="|G_true / G_identified - 1| (known here)")
     ax.set(xlabel="frequency [rad/s]", ylabel="relative error",
            title="Uncertainty weight of the identified model")
@@ -201,9 +199,9 @@ def extra_own_stage_hysteresis(v, x, models, scores, first=0, input_scale=1.0,
     if not models:
         raise ValueError("models must hold at least one model")
     late = slice(int(first), None)
-    fig, (ax, bx) = plotting.new_figure(1, 2, figsize=(10.5, 4.0))
+    fig, (ax, bx) = new_figure(1, 2, figsize=(10.5, 4.0))
     ax.plot(input_scale * v[late], output_scale * x[late], color="0.6", lw=2.0, label="measured")
-    for (name, model), color in zip(models.items(), _COLORS):
+    for (name, model), color in zip(models.items(), PALETTE.peers):
         x_model = np.asarray(model.simulate(v), dtype=float)
         rms = float(scores.xs(name, level=0)["RMS %"].iloc[0]) if scores.index.nlevels > 1 \
             else float(scores.loc[name, "RMS %"])
@@ -243,22 +241,22 @@ def extra_own_stage_mu(omega, mu_bounds, loops, omega_loops, H_e, H_y):
     """
     omega = check_finite_array("omega", omega, ndim=1, min_length=2)
     omega_loops = check_finite_array("omega_loops", omega_loops, ndim=1, min_length=2)
-    fig, (ax, bx) = plotting.new_figure(1, 2, figsize=(11.0, 4.2))
-    for (label, res), color in zip(mu_bounds.items(), _COLORS):
+    fig, (ax, bx) = new_figure(1, 2, figsize=(11.0, 4.2))
+    for (label, res), color in zip(mu_bounds.items(), PALETTE.peers):
         ax.semilogx(omega, res.upper, color=color, label=f"{label}: upper")
         ax.semilogx(omega, res.lower, ":", color=color, lw=2.0, label=f"{label}: lower")
     ax.axhline(1.0, color="0.3", lw=0.8)
     ax.set(xlabel="frequency [rad/s]", ylabel="mu_RP", title="(a) mu bounds, robust performance")
     ax.legend(fontsize=7)
     s = 1j * omega_loops
-    bx.semilogx(omega_loops, plotting.db(1 / np.ravel(H_e(s))), color="0.5", ls="--",
+    bx.semilogx(omega_loops, db(1 / np.ravel(H_e(s))), color="0.5", ls="--",
                 label="1/|H_e|")
-    bx.semilogx(omega_loops, plotting.db(1 / np.ravel(H_y(s))), color="0.5", ls=":",
+    bx.semilogx(omega_loops, db(1 / np.ravel(H_y(s))), color="0.5", ls=":",
                 label="1/|H_y|")
-    for (label, lf), color in zip(loops.items(), _COLORS):
-        bx.semilogx(omega_loops, plotting.db(np.ravel(lf.S(s))), color=color,
+    for (label, lf), color in zip(loops.items(), PALETTE.peers):
+        bx.semilogx(omega_loops, db(np.ravel(lf.S(s))), color=color,
                     label=f"|S|, {label}")
-        bx.semilogx(omega_loops, plotting.db(np.ravel(lf.T(s))), color=color, ls="-.",
+        bx.semilogx(omega_loops, db(np.ravel(lf.T(s))), color=color, ls="-.",
                     label=f"|T|, {label}")
     bx.set(xlabel="frequency [rad/s]", ylabel="magnitude [dB]", ylim=(-80, 20),
            title="(b) sensitivity and complementary sensitivity")
@@ -288,13 +286,13 @@ def extra_own_stage_experiments(table4, table5, extra4=None, feedforward="feedfo
     matplotlib.figure.Figure
         Saved as ``extra_own_stage_experiments.png``.
     """
-    fig, (ax, bx) = plotting.new_figure(1, 2, figsize=(10.5, 4.0))
+    fig, (ax, bx) = new_figure(1, 2, figsize=(10.5, 4.0))
     labels = {"case_I": "I: open loop", "case_II": f"II: {feedforward}",
               "case_III": f"III: {feedforward} + mu controller"}
-    for (row, label), color in zip(labels.items(), _COLORS):
+    for (row, label), color in zip(labels.items(), PALETTE.peers):
         ax.plot(table4.columns.astype(float), table4.loc[row], "o-", color=color, label=label)
         bx.plot(table5.columns.astype(float), table5.loc[row], "o-", color=color, label=label)
-    for (label, series), color in zip((extra4 or {}).items(), _COLORS[3:] + _COLORS):
+    for (label, series), color in zip((extra4 or {}).items(), PALETTE.peers[3:] + PALETTE.peers):
         ax.plot(series.index.astype(float), series.values, "s--", color=color, label=label)
     ax.set(xlabel="actuator amplitude [V]", ylabel="hysteresis [%]", yscale="log",
            title="(a) Table 4-style: 10 Hz triangles")

@@ -4,6 +4,7 @@ import numpy as np
 import pandas as pd
 
 from piezolib.workbook import plotting
+from piezolib.workbook.style import PALETTE, new_figure
 
 __all__ = ["extra_reproduction_scorecard"]
 
@@ -54,13 +55,13 @@ def extra_reproduction_scorecard(table, seed=0):
     ratio = (numeric.our_value / numeric.paper_value).clip(1e-2, 1e2)
     bands = np.array([_ratio_band(p, t) for p, t in zip(numeric.paper_value, numeric.tolerance)])
     sources = list(dict.fromkeys(table.source))
-    fig, ax = plotting.new_figure(figsize=(9.5, 4.2))
+    fig, ax = new_figure(figsize=(9.5, 4.2))
     rng = np.random.default_rng(seed)
     y = numeric.source.map(sources.index).to_numpy() + rng.uniform(-0.3, 0.3, len(numeric))
     if len(numeric):
         ax.hlines(y, np.clip(bands[:, 0], 1e-2, 1e2), np.clip(bands[:, 1], 1e-2, 1e2),
                   color="0.55", lw=2.2, alpha=0.6, label="agreement band of each claim")
-    for verdict, colour in (("agrees", "#4f8f3a"), ("differs", "#c0504d")):
+    for verdict, colour in (("agrees", PALETTE.agreement), ("differs", PALETTE.contrast)):
         pick = (numeric.verdict == verdict).to_numpy()
         total = int((table.verdict == verdict).sum())
         ax.scatter(ratio[pick], y[pick], s=14, color=colour, zorder=3,

@@ -2,6 +2,7 @@
 
 from piezolib.problem import paper
 from piezolib.workbook import plotting
+from piezolib.workbook.style import new_figure
 from piezolib.workbook.experiments import CASES
 
 __all__ = ["fig14_hysteresis_cases", "fig15_tracking_error"]
@@ -27,7 +28,7 @@ def fig14_hysteresis_cases(result, frequency_hz=None, controller="our 6th-order 
     """
     frequency_hz = paper.HYSTERESIS_TEST["frequency_Hz"] if frequency_hz is None else frequency_hz
     amplitudes = list(result.table.columns)
-    fig, axes = plotting.new_figure(len(CASES), len(amplitudes), figsize=(10, 7.2), sharex="col",
+    fig, axes = new_figure(len(CASES), len(amplitudes), figsize=(10, 7.2), sharex="col",
                                     squeeze=False)
     letters = "abcdefghijklmnopqrstuvwxyz"
     for k, A in enumerate(amplitudes):
@@ -70,7 +71,7 @@ def fig15_tracking_error(ours, published=None, fs=None):
     """
     fs = paper.SAMPLING_FREQUENCY_HZ if fs is None else fs
     frequencies = list(ours.table.columns)
-    fig, axes = plotting.new_figure(len(CASES), len(frequencies), figsize=(11, 5.6), sharey="row",
+    fig, axes = new_figure(len(CASES), len(frequencies), figsize=(11, 5.6), sharey="row",
                                     squeeze=False)
     letters = "abcdefghijklmnopqrstuvwxyz"
     for k, f in enumerate(frequencies):

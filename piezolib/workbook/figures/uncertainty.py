@@ -4,6 +4,7 @@ import numpy as np
 from matplotlib.collections import LineCollection
 
 from piezolib.workbook import plotting
+from piezolib.workbook.style import PALETTE, new_figure
 
 __all__ = ["fig06_relative_error", "extra_parametric_margin"]
 
@@ -43,7 +44,7 @@ def fig06_relative_error(omega, errors, envelope, H_m, W_fit, spread, peak=None)
     omega = np.asarray(omega, dtype=float)
     envelope = np.asarray(envelope, dtype=float)
     log_w = np.log10(omega)
-    fig, ax = plotting.new_figure(figsize=(7.0, 4.6))
+    fig, ax = new_figure(figsize=(7.0, 4.6))
     segments = [np.column_stack([omega, np.maximum(e, 1e-12)]) for e in errors]
     ax.add_collection(LineCollection(segments, colors="0.6", linewidths=0.4, linestyles=":",
                                      label=f"|G_k/G - 1|, {len(errors)} models (dotted)"))
@@ -52,14 +53,14 @@ def fig06_relative_error(omega, errors, envelope, H_m, W_fit, spread, peak=None)
     ax.loglog(omega, envelope, color="0.15", lw=0.9,
               label=f"E_m, stable members, on the {omega.size}-point grid "
                     f"(grid maximum {envelope.max():.0f})")
-    ax.loglog(omega, np.abs(np.ravel(H_m(1j * omega))), color="#c0504d", lw=1.8,
+    ax.loglog(omega, np.abs(np.ravel(H_m(1j * omega))), color=PALETTE.contrast, lw=1.8,
               label="published H_m (eq. 8)")
-    ax.loglog(omega, W_mag, color="#1f4e79", lw=1.6,
+    ax.loglog(omega, W_mag, color=PALETTE.primary, lw=1.6,
               label=f"fitted 5th-order weight: covers E_m, up to {excess:.0f}x "
                     f"({20 * np.log10(excess):.0f} dB) above it")
     if peak is not None:
         value, w_peak = float(peak[0]), float(peak[1])
-        ax.loglog(w_peak, value, "o", color="#d08a00", ms=5,
+        ax.loglog(w_peak, value, "o", color=PALETTE.highlight, ms=5,
                   label=f"refined peak of E_m: {value:.0f} at {w_peak:.0f} rad/s "
                         "(a resonance too narrow for the grid)")
     ax.set(xlim=(10 ** np.floor(log_w[0]), 10 ** np.ceil(log_w[-1])), ylim=(1e-5, 3e3),
@@ -95,7 +96,7 @@ def extra_parametric_margin(omega, gauge, gauge_open, margin, spread, small_gain
         Saved as ``extra_parametric_margin.png``.
     """
     omega = np.asarray(omega, dtype=float)
-    fig, ax = plotting.new_figure(figsize=(7.0, 3.8))
+    fig, ax = new_figure(figsize=(7.0, 3.8))
     ax.loglog(omega, 100 * gauge, label="closed loop with K")
     ax.loglog(omega, 100 * gauge_open, "--", label="open loop (members)")
     for value, style, text, shift in [
@@ -104,7 +105,7 @@ def extra_parametric_margin(omega, gauge, gauge_open, margin, spread, small_gain
             (weight_spread, (0, (1, 3)), "certified by the published H_m", 0.80)]:
         ax.axhline(100 * value, ls=style, color="0.3", lw=1)
         ax.text(1.2 * omega[0], 100 * value * shift, text, fontsize=7)
-    ax.plot(margin.omega, 100 * margin.spread, "o", color="#c0504d",
+    ax.plot(margin.omega, 100 * margin.spread, "o", color=PALETTE.contrast,
             label=f"delta* = {margin.spread:.2%} at {margin.omega:.0f} rad/s")
     ax.set(xlabel="frequency [rad/s]", ylabel="smallest spread putting 0\nin the value set [%]",
            ylim=(1.0, 300),

@@ -5,6 +5,7 @@ import numpy as np
 from piezolib.problem import paper
 from piezolib.robust.lti import frequency_grid
 from piezolib.workbook import plotting
+from piezolib.workbook.style import new_figure, plot_magnitude
 from piezolib.workbook.figures.audit import sensitivity_templates_figure
 
 __all__ = ["extra_weight_templates", "fig11_sensitivity_templates_designs"]
@@ -30,14 +31,14 @@ def extra_weight_templates(error_params, output_params, omega=None,
     """
     omega = frequency_grid(1e-1, 1e9, 3000) if omega is None else omega
     s = 1j * omega
-    fig, axes = plotting.new_figure(1, 2, figsize=(9, 3.6))
+    fig, axes = new_figure(1, 2, figsize=(9, 3.6))
     for factor in factors:
         He_f = paper.error_weight(error_params, omega_e=error_params.omega_e * factor)
-        plotting.plot_magnitude(axes[0], omega, 1 / np.ravel(He_f(s)),
+        plot_magnitude(axes[0], omega, 1 / np.ravel(He_f(s)),
                                 label=f"omega_e x {factor:g}", ls="-" if factor == 1 else "--")
     for factor in factors:
         Hy_f = paper.output_weight(output_params, omega_y=output_params.omega_y * factor)
-        plotting.plot_magnitude(axes[1], omega, 1 / np.ravel(Hy_f(s)),
+        plot_magnitude(axes[1], omega, 1 / np.ravel(Hy_f(s)),
                                 label=f"omega_y x {factor:g}", ls="-" if factor == 1 else "--")
     axes[0].set_title("template on S: 1/|H_e|")
     axes[1].set_title("template on T: 1/|H_y|")

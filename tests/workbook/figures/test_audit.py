@@ -4,9 +4,10 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
+from figure_checks import text_overlaps
 from piezolib import paper, robust
-from piezolib.workbook import plotting
 from piezolib.workbook.figures import audit as F
+from piezolib.workbook.style import unit_text
 
 
 @pytest.fixture
@@ -25,7 +26,7 @@ def test_fig10_draws_the_four_step_responses(figures_dir, loop):
     fig = F.fig10_step_responses(loop, t)
     assert plotting.save_figure(fig, figures_dir) == figures_dir / "fig10_step_responses.png"
     # titles as saved, through the units rule ("->" becomes an arrow)
-    assert [ax.get_title() for ax in fig.axes] == [plotting.unit_text(t)
+    assert [ax.get_title() for ax in fig.axes] == [unit_text(t)
                                                    for t in F.STEP_TITLES.values()]
     assert fig.axes[2].get_yscale() == "symlog"                 # KS: its spike is not clipped
     s_line = fig.axes[0].lines[0]
@@ -42,5 +43,5 @@ def test_fig11_draws_s_t_and_templates(figures_dir, loop):
     assert [line.get_label() for line in ax_s.lines] == ["|S|", "1/|H_e|"]
     np.testing.assert_allclose(ax_t.lines[0].get_ydata(),
                                20 * np.log10(np.abs(loop.T(1j * omega).ravel())))
-    assert plotting.text_overlaps(fig) == []                    # no legend over |S| or |T|
+    assert text_overlaps(fig) == []                             # no legend over |S| or |T|
     plt.close(fig)

@@ -3,7 +3,7 @@
 import matplotlib.pyplot as plt
 import pytest
 
-from piezolib.workbook import plotting
+from figure_checks import text_overlaps
 from piezolib.workbook.figures import diagrams as F
 
 
@@ -39,7 +39,7 @@ def test_diagram_is_saved_with_its_signals_and_nothing_collides(figures_dir, nam
     drawn = {t.get_text() for t in fig.axes[0].texts}
     assert texts <= drawn, texts - drawn
     assert not any("um]" in t or " mu" in t for t in drawn)      # one spelling of the units
-    assert plotting.text_overlaps(fig) == []
+    assert text_overlaps(fig) == []
     plt.close(fig)
 
 

@@ -4,7 +4,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
-from piezolib.workbook import plotting
+from figure_checks import text_overlaps
 from piezolib.workbook.figures import mixed_mu as F
 
 
@@ -32,7 +32,7 @@ def test_saves_and_draws_the_bounds(figures_dir):
     assert ax_all.get_yscale() == "log"
     lo, hi = ax_zoom.get_xlim()                     # zoom centred on the complex peak
     assert lo < 6.8e3 < hi and hi / lo == pytest.approx(1.6 ** 2, rel=0.05)
-    assert len(fig.legends) == 1 and plotting.text_overlaps(fig) == []
+    assert len(fig.legends) == 1 and text_overlaps(fig) == []
 
 
 def test_without_exact_and_with_zoom(figures_dir):

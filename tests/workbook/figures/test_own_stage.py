@@ -6,10 +6,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from figure_checks import text_overlaps
 from piezolib import robust
 from piezolib.hysteresis import PIModel
 from piezolib.records import Record
-from piezolib.workbook import plotting
 from piezolib.workbook.figures import own_stage as F
 
 
@@ -38,7 +38,7 @@ def test_records_one_panel_per_record_with_marks(figures_dir):
     assert [ax.get_title().split(":")[0] for ax in main] == ["a", "b"]
     assert len(main[0].get_lines()) == 3 and len(main[1].get_lines()) == 1   # signal + 2 marks
     assert main[0].get_ylabel() == "u_c [V]"
-    assert plotting.text_overlaps(fig) == []          # the marks' names stay off the curves
+    assert text_overlaps(fig) == []                   # the marks' names stay off the curves
     plt.close(fig)
 
 
@@ -128,5 +128,5 @@ def test_experiments_cases_and_extra_rows(figures_dir):
     assert labels == ["I: open loop", "II: Dahl feedforward",
                       "III: Dahl feedforward + mu controller", "II: PI"]
     assert np.allclose(b.get_lines()[2].get_ydata(), [0.5])
-    assert len(fig.legends) == 1 and plotting.text_overlaps(fig) == []
+    assert len(fig.legends) == 1 and text_overlaps(fig) == []
     plt.close(fig)
