@@ -1,13 +1,6 @@
-import os
+"""Fixtures of the unit tests (environment settings: ../conftest.py)."""
 
-# headless, and every kernel nbval starts inherits these settings
-os.environ.setdefault("MPLBACKEND", "Agg")
-# one BLAS thread: on 2 shared cores threaded small solves run many times slower
-os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-# interactive controls draw their static figure: no widget frontend in tests
-os.environ.setdefault("PIEZOLIB_STATIC", "1")
-
-import pytest  # noqa: E402
+import pytest
 
 
 @pytest.fixture(autouse=True)

@@ -31,7 +31,7 @@ import numpy as np
 from piezolib.problem import paper
 from piezolib.problem.design import design_controller
 from piezolib.problem.hysteresis_fits import write_workbook_dahl
-from piezolib.records import atomic_write
+from piezolib.files import atomic_write
 from piezolib.robust import export
 from piezolib.robust.discrete import discretize
 from piezolib.workbook import outputs
@@ -161,7 +161,7 @@ def _design_pair(weights, design, loop, fingerprint):
     choice = studies.Study().replace(name="cache_key", weights=weights, design=design, loop=loop)
     G, H_m, H_e, H_y, _ = study_problem(choice)
     options = dict(order=choice.design.order, d_order=choice.design.d_order,
-                   max_iter=choice.design.max_iter, fs=choice.loop.fs_hz)
+                   max_iter=choice.design.max_iter, fs=choice.loop.fs_Hz)
     logger.info("designing the delay-aware controllers (%s)", json.dumps(choice.choices(
         *_DESIGN_SECTIONS)))
     delay_aware = design_controller(G, H_m, H_e, H_y, delay_samples=choice.design.delay_samples,
@@ -288,7 +288,7 @@ def discretized_controllers(study, controllers=None):
     (:func:`piezolib.robust.discrete.discretize`), checked against the study's G."""
     study = studies.load(study)
     G = study_problem(study).G
-    return {stem: discretize(K, study.loop.fs_hz, G=G)
+    return {stem: discretize(K, study.loop.fs_Hz, G=G)
             for stem, (_, K) in case_III_controllers(study, controllers).items()}
 
 

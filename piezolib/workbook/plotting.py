@@ -27,7 +27,7 @@ import matplotlib.image as mpimg
 import matplotlib.pyplot as plt
 import numpy as np
 
-from piezolib.records import atomic_write
+from piezolib.files import atomic_write
 from piezolib.workbook.outputs import figures_dir
 
 __all__ = ["STYLE", "use_style", "new_figure", "save_figure", "same_picture", "PIXEL_TOLERANCE",
