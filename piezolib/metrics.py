@@ -174,8 +174,8 @@ def mean_interval(values, axis=0, confidence=0.95):
 
     Examples
     --------
-    >>> mean_interval([1.0, 2.0, 3.0])          # t(0.975, 2 dof) = 4.303
-    (2.0, -0.4841377..., 4.4841377...)
+    >>> [round(x, 6) for x in mean_interval([1.0, 2.0, 3.0])]   # t(0.975, 2 dof) = 4.303
+    [2.0, -0.484138, 4.484138]
     """
     from scipy import stats
 

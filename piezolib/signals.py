@@ -46,7 +46,7 @@ def time_vector(duration_s, fs):
     return np.arange(n) / fs
 
 
-def triangle(peak, frequency_hz, fs, periods=1, minimum=0.0):
+def triangle(peak, frequency_Hz, fs, periods=1, minimum=0.0):
     """Symmetric triangle wave rising from ``minimum`` to ``peak`` and back.
 
     The wave starts at ``minimum`` at t = 0, reaches ``peak`` at half a
@@ -58,10 +58,10 @@ def triangle(peak, frequency_hz, fs, periods=1, minimum=0.0):
     ----------
     peak : float
         Maximum value (any unit: V or um).
-    frequency_hz : float
+    frequency_Hz : float
         Triangle frequency [Hz].
     fs : float
-        Sampling frequency [Hz], at least 4 x ``frequency_hz``.
+        Sampling frequency [Hz], at least 4 x ``frequency_Hz``.
     periods : int, optional
         Number of full periods.
     minimum : float, optional
@@ -79,23 +79,23 @@ def triangle(peak, frequency_hz, fs, periods=1, minimum=0.0):
     ValueError
         For ``peak <= minimum``, a non-positive frequency or too low ``fs``.
     """
-    frequency_hz = check_positive("frequency_hz", frequency_hz)
+    frequency_Hz = check_positive("frequency_Hz", frequency_Hz)
     fs = check_positive("fs", fs)
     periods = check_integer("periods", periods, minimum=1)
     if not np.isfinite(peak) or not np.isfinite(minimum) or peak <= minimum:
         raise ValueError(f"peak ({peak}) must be finite and exceed minimum ({minimum})")
-    if fs < 4 * frequency_hz:
-        raise ValueError(f"fs ({fs} Hz) must be at least 4 x frequency_hz ({frequency_hz} Hz)")
-    n = int(round(periods * fs / frequency_hz)) + 1
+    if fs < 4 * frequency_Hz:
+        raise ValueError(f"fs ({fs} Hz) must be at least 4 x frequency_Hz ({frequency_Hz} Hz)")
+    n = int(round(periods * fs / frequency_Hz)) + 1
     t = np.arange(n) / fs
-    phase = (t * frequency_hz) % 1.0
+    phase = (t * frequency_Hz) % 1.0
     phase[-1] = 1.0 if phase[-1] < 0.5 else phase[-1]  # exact closure at the end
     shape = 1.0 - np.abs(2.0 * phase - 1.0)            # 0 -> 1 -> 0 per period
     return t, minimum + (peak - minimum) * shape
 
 
-def chirp(amplitude, f0_hz, f1_hz, duration_s, fs, method="logarithmic"):
-    """Cosine sweep ``amplitude * cos(phi(t))`` from ``f0_hz`` to ``f1_hz``.
+def chirp(amplitude, f0_Hz, f1_Hz, duration_s, fs, method="logarithmic"):
+    """Cosine sweep ``amplitude * cos(phi(t))`` from ``f0_Hz`` to ``f1_Hz``.
 
     The sweep starts at its crest (phase 0 at t = 0), so ``amplitude - y``
     starts at zero with zero slope: a sweep added to a held level enters
@@ -105,10 +105,10 @@ def chirp(amplitude, f0_hz, f1_hz, duration_s, fs, method="logarithmic"):
     ----------
     amplitude : float
         Peak value (any unit), > 0.
-    f0_hz, f1_hz : float
+    f0_Hz, f1_Hz : float
         Start and end frequencies [Hz], 0 < f0 < f1 < fs/2.
     duration_s : float
-        Length [s]; the instantaneous frequency reaches ``f1_hz`` at the end.
+        Length [s]; the instantaneous frequency reaches ``f1_Hz`` at the end.
     fs : float
         Sampling frequency [Hz].
     method : {"logarithmic", "linear"}, optional
@@ -124,16 +124,16 @@ def chirp(amplitude, f0_hz, f1_hz, duration_s, fs, method="logarithmic"):
     Raises
     ------
     ValueError
-        Unless 0 < ``f0_hz`` < ``f1_hz`` < ``fs``/2, or for an unknown ``method``.
+        Unless 0 < ``f0_Hz`` < ``f1_Hz`` < ``fs``/2, or for an unknown ``method``.
     """
     amplitude = check_positive("amplitude", amplitude)
-    f0_hz = check_positive("f0_hz", f0_hz)
-    f1_hz = check_positive("f1_hz", f1_hz)
+    f0_Hz = check_positive("f0_Hz", f0_Hz)
+    f1_Hz = check_positive("f1_Hz", f1_Hz)
     fs = check_positive("fs", fs)
-    if not f0_hz < f1_hz < fs / 2:
-        raise ValueError(f"need 0 < f0_hz < f1_hz < fs/2 = {fs / 2:g} Hz, "
-                         f"got f0_hz={f0_hz:g}, f1_hz={f1_hz:g}")
+    if not f0_Hz < f1_Hz < fs / 2:
+        raise ValueError(f"need 0 < f0_Hz < f1_Hz < fs/2 = {fs / 2:g} Hz, "
+                         f"got f0_Hz={f0_Hz:g}, f1_Hz={f1_Hz:g}")
     if method not in ("logarithmic", "linear"):
         raise ValueError(f"method must be 'logarithmic' or 'linear', got {method!r}")
     t = time_vector(duration_s, fs)
-    return t, amplitude * sg.chirp(t, f0_hz, duration_s, f1_hz, method=method, phi=0.0)
+    return t, amplitude * sg.chirp(t, f0_Hz, duration_s, f1_Hz, method=method, phi=0.0)

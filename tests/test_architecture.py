@@ -2,6 +2,9 @@
 the module index of docs/architecture.md kept true."""
 
 import ast
+import dataclasses
+import importlib
+import inspect
 import json
 import pathlib
 import re
@@ -15,7 +18,7 @@ import piezolib
 PACKAGE = pathlib.Path(piezolib.__file__).parent
 
 TOOLKIT = ("robust", "hysteresis", "uncertainty", "identification", "signals", "metrics",
-           "records", "_checks", "progress")
+           "records", "files", "_checks", "progress")
 PROBLEM = ("problem",)
 WORKBOOK = ("workbook", "__main__")
 # what each layer may not import (at any depth of the module)
@@ -127,6 +130,44 @@ def test_no_two_modules_share_a_name():
         if path.name != "__init__.py":
             by_name.setdefault(path.stem, []).append(str(path.relative_to(PACKAGE)))
     assert {name: where for name, where in by_name.items() if len(where) > 1} == {}
+
+
+# unit suffixes are SI symbols with their case (docs/architecture.md, "Naming conventions");
+# these lower-case spellings are never a signal name, so a name ending in one is a wrong unit
+LOWER_CASE_UNITS = {"hz": "Hz", "khz": "kHz", "mhz": "MHz", "mv": "mV", "kv": "kV"}
+
+
+def public_names_with_units():
+    """(where, name) for every parameter of a public function or method and every field of a
+    public dataclass defined in a piezolib module."""
+    found = []
+    for path in SOURCES:
+        module = importlib.import_module(_module_name(path))
+        for name, obj in vars(module).items():
+            if name.startswith("_") or getattr(obj, "__module__", None) != module.__name__:
+                continue
+            where = f"{module.__name__}.{name}"
+            functions = [(where, obj)] if inspect.isfunction(obj) else []
+            if inspect.isclass(obj):
+                # methods, static and class methods (their __func__), __init__ with them
+                functions += [(f"{where}.{attr}", getattr(member, "__func__", member))
+                              for attr, member in vars(obj).items()
+                              if not attr.startswith("_") or attr == "__init__"]
+                if dataclasses.is_dataclass(obj):
+                    found += [(where, f.name) for f in dataclasses.fields(obj)]
+            found += [(at, p) for at, function in functions if inspect.isfunction(function)
+                      for p in inspect.signature(function).parameters]
+    return found
+
+
+def test_unit_suffixes_keep_their_si_case():
+    names = public_names_with_units()
+    assert len(names) > 500                             # the walk did reach the library
+    wrong = sorted(f"{where}: {name} (-> {stem}_{LOWER_CASE_UNITS[suffix]})"
+                   for where, name in names
+                   for stem, _, suffix in [name.rpartition("_")]
+                   if stem and suffix in LOWER_CASE_UNITS)
+    assert not wrong, f"lower-case unit suffixes (docs/architecture.md): {wrong}"
 
 
 def test_lazy_subpackages_resolve():

@@ -108,7 +108,7 @@ CASES = {
                              {"omega": GRID, "magnitude": SIGNAL}),
     "robust.reduce_controller": (dict(K=K, order=1), {"K": LTI}),
     "robust.hankel_singular_values": (dict(K=K), {"K": LTI}),
-    "robust.discretize": (dict(K=K, fs=FS, check_hz=100.0), {"K": LTI, "fs": POSITIVE}),
+    "robust.discretize": (dict(K=K, fs=FS, check_Hz=100.0), {"K": LTI, "fs": POSITIVE}),
     "robust.loop_margins": (dict(G=G, K=K), {"G": LTI, "K": LTI}),
     # identification
     "identification.fit_arx": (dict(u=U, y=Y, fs=FS, na=2, nb=2),
@@ -123,10 +123,10 @@ CASES = {
                                                     {"u": SIGNAL, "y": SIGNAL, "fs": POSITIVE}),
     # signals and metrics
     "signals.time_vector": (dict(duration_s=1.0, fs=FS), {"duration_s": POSITIVE, "fs": POSITIVE}),
-    "signals.triangle": (dict(peak=1.0, frequency_hz=5.0, fs=FS),
-                         {"frequency_hz": POSITIVE, "fs": POSITIVE}),
-    "signals.chirp": (dict(amplitude=1.0, f0_hz=1.0, f1_hz=10.0, duration_s=1.0, fs=FS),
-                      {"f0_hz": POSITIVE, "f1_hz": POSITIVE, "duration_s": POSITIVE,
+    "signals.triangle": (dict(peak=1.0, frequency_Hz=5.0, fs=FS),
+                         {"frequency_Hz": POSITIVE, "fs": POSITIVE}),
+    "signals.chirp": (dict(amplitude=1.0, f0_Hz=1.0, f1_Hz=10.0, duration_s=1.0, fs=FS),
+                      {"f0_Hz": POSITIVE, "f1_Hz": POSITIVE, "duration_s": POSITIVE,
                        "fs": POSITIVE}),
     "metrics.tracking_error": (dict(x_r=U, x=Y), {"x_r": SIGNAL, "x": SIGNAL}),
     "metrics.tracking_error_percent": (dict(x_r=U, x=Y), {"x_r": SIGNAL, "x": SIGNAL}),

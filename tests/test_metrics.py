@@ -8,8 +8,8 @@ from piezolib import metrics, signals
 FS = 10_000.0
 
 
-def triangle_um(frequency_hz=10.0, periods=2, peak=12.0):
-    return signals.triangle(peak, frequency_hz, periods=periods, fs=FS)
+def triangle_um(frequency_Hz=10.0, periods=2, peak=12.0):
+    return signals.triangle(peak, frequency_Hz, periods=periods, fs=FS)
 
 
 def test_error_is_desired_minus_reached():
@@ -40,14 +40,14 @@ def test_offset_plus_ripple(offset, amplitude):
         100 * 2 * amplitude / 12.0, rel=1e-12)
 
 
-@pytest.mark.parametrize("frequency_hz, delay", [(1.0, 1), (10.0, 3), (50.0, 2)])
-def test_pure_delay_of_a_triangle(frequency_hz, delay):
+@pytest.mark.parametrize("frequency_Hz, delay", [(1.0, 1), (10.0, 3), (50.0, 2)])
+def test_pure_delay_of_a_triangle(frequency_Hz, delay):
     # x[k] = x_r[k - d]: on the ramps |e| = slope * d / fs with slope 2 R f,
     # so max|e| / R = 200 f d / fs percent (and the peak-to-peak is twice that)
-    t, x_r = triangle_um(frequency_hz, periods=3)
+    t, x_r = triangle_um(frequency_Hz, periods=3)
     x = np.r_[np.zeros(delay), x_r[:-delay]]
-    s = slice(int(FS / frequency_hz), None)          # whole periods after the first
-    want = 200 * frequency_hz * delay / FS
+    s = slice(int(FS / frequency_Hz), None)          # whole periods after the first
+    want = 200 * frequency_Hz * delay / FS
     assert metrics.tracking_error_percent(x_r[s], x[s], 12.0) == pytest.approx(want, rel=1e-9)
     assert metrics.peak_to_peak_error_percent(x_r[s], x[s], 12.0) == pytest.approx(2 * want,
                                                                                     rel=1e-9)

@@ -1,6 +1,4 @@
-"""Records: the loader's errors name file and line; helpers; atomic writes; manifests."""
-
-import os
+"""Records: the loader's errors name file and line; helpers."""
 
 import numpy as np
 import pytest
@@ -144,37 +142,3 @@ def test_split_and_detrend():
     assert np.array_equal(flat.input, rec.input)
     with pytest.raises(ValueError, match="which"):
         R.detrend(rec, which="time")
-
-
-def test_atomic_write_leaves_no_partial_file(tmp_path):
-    path = tmp_path / "out.csv"
-    R.atomic_write(path, "old\n")
-    with pytest.raises(RuntimeError):
-        with R.atomic_path(path) as tmp:
-            tmp.write_text("half of the new cont")
-            raise RuntimeError("writer died")
-    assert path.read_text() == "old\n"
-    assert os.listdir(tmp_path) == ["out.csv"]                       # temporary file removed
-    R.atomic_write(path, b"new\n")
-    assert path.read_bytes() == b"new\n" and os.listdir(tmp_path) == ["out.csv"]
-    assert oct(path.stat().st_mode & 0o777) != oct(0o600)            # not mkstemp's private mode
-    with pytest.raises(TypeError, match="data"):
-        R.atomic_write(path, 3)
-
-
-def test_manifest_detects_truncation_and_changes_with_the_line(tmp_path):
-    lines = good_lines(2500)
-    path = write(tmp_path / "m.csv", lines)
-    entry = R.manifest_entry(path, rows=2500, fs=FS)
-    R.verify_file(path, entry, rows=2500, fs=FS)                      # intact
-    write(path, lines[:1800])                                         # cut at a line end
-    with pytest.raises(R.RecordError, match="truncated") as info:
-        R.verify_file(path, entry)
-    assert info.value.line == 1801
-    write(path, lines[:1500] + [lines[1500].replace("0", "1", 1)] + lines[1501:])
-    with pytest.raises(R.RecordError, match="lines 1001-2000") as info:
-        R.verify_file(path, entry)
-    assert info.value.line == 1001
-    write(path, lines)
-    with pytest.raises(R.RecordError, match="rate"):
-        R.verify_file(path, entry, fs=10e3)

@@ -31,7 +31,7 @@ def test_triangle_rises_to_its_peak_and_closes_each_period():
 def test_chirp_starts_at_its_crest_and_checks_its_band():
     t, y = signals.chirp(0.5, 10.0, 1000.0, 0.5, FS)
     assert len(t) == 5000 and y[0] == 0.5 and np.max(np.abs(y)) <= 0.5
-    with pytest.raises(ValueError, match="f1_hz"):
+    with pytest.raises(ValueError, match="f1_Hz"):
         signals.chirp(0.5, 10.0, 6000.0, 0.5, FS)
     with pytest.raises(ValueError, match="method"):
         signals.chirp(0.5, 10.0, 100.0, 0.5, FS, method="quadratic")

@@ -24,7 +24,7 @@ from piezolib._checks import check_integer
 from piezolib.hysteresis.dahl import FORMS, STARTS, DahlModel
 from piezolib.hysteresis.fit import check_fit_options, fit_dahl, rescore_dahl
 from piezolib.problem.paths import data_dir
-from piezolib.records import atomic_write
+from piezolib.files import atomic_write
 from piezolib.hysteresis.pi import fit_pi
 
 __all__ = ["published_dahl", "CASE_I_CANDIDATES", "WORKBOOK_DAHL", "fit_case_I_loops",

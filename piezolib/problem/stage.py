@@ -448,11 +448,16 @@ class StageSimulation:
     for one period.  :meth:`step` applies u_c[k] and returns v_y[k+1], the
     measurement the controller uses for u_c[k+1]:
 
+    >>> def controller(v_e):            # any causal controller: here proportional
+    ...     return 1.0 + 0.5 * v_e
+    >>> reference = np.full(1000, 1.0)  # v_r [V], 0.1 s
     >>> sim = VirtualStage().start()
     >>> v_y = sim.v_y_V
     >>> for r_k in reference:
     ...     v_y = sim.step(controller(r_k - v_y))
     >>> record = sim.record()          # == stage.run(all u_c applied)
+    >>> len(record.t_s)
+    1000
 
     One step costs about 10-20 us.
     """
@@ -680,6 +685,8 @@ class StageBatch:
     >>> for k in range(1000):
     ...     v_y = sim.step(1.0 + 0.5 * (1.0 - v_y))
     >>> records = sim.records()
+    >>> len(records), len(records[0].t_s)
+    (3, 1000)
     """
 
     def __init__(self, stages):

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from piezolib import records, signals
+from piezolib import files, records, signals
 from piezolib.problem import paper
 from piezolib.problem.paths import data_dir
 from piezolib.problem.stage import (ADC_RANGE_V, RECORD_COLUMNS, Saturation, StageRecord,
@@ -231,7 +231,7 @@ def _write(path, record, stage, meta):
     body = io.StringIO()
     np.savetxt(body, np.column_stack(list(record.columns().values())),
                fmt=list(_FORMATS), delimiter=",")
-    return records.atomic_write(
+    return files.atomic_write(
         path, "\n".join(lines) + "\n" + ",".join(_COLUMNS) + "\n" + body.getvalue())
 
 
@@ -251,12 +251,12 @@ def _data_rows(path):
 
 def _write_manifest(paths, written, fs=paper.SAMPLING_FREQUENCY_HZ):
     directory = Path(written[0]).parent
-    entries = {Path(p).name: records.manifest_entry(p, _data_rows(p), fs)
+    entries = {Path(p).name: files.manifest_entry(p, _data_rows(p), fs)
                for p in written}
     doc = {"about": "row count, sampling rate and SHA-256 of every experiment file; written "
                     "by python -m piezolib data (piezolib.problem.stage_data)",
            "files": dict(sorted(entries.items()))}
-    return records.atomic_write(manifest_path(directory), json.dumps(doc, indent=1) + "\n")
+    return files.atomic_write(manifest_path(directory), json.dumps(doc, indent=1) + "\n")
 
 
 def read_manifest(directory=None):
@@ -342,7 +342,7 @@ def load_record(path):
     data, meta, lines = records.read_table(path, {c: c for c in _COLUMNS}, header=True)
     entry = read_manifest(path.parent).get(path.name)
     if entry is not None:
-        records.verify_file(path, entry, rows=len(lines), fs=meta.get("sample_rate_Hz"))
+        files.verify_file(path, entry, rows=len(lines), fs=meta.get("sample_rate_Hz"))
     if len(lines) < 2:
         raise records.RecordError(f"too short: {len(lines)} data row(s)", path,
                                   int(lines[-1]) if len(lines) else None)
@@ -473,5 +473,5 @@ def write_foreign_records(directory=None):
         table = np.column_stack((record.t_s, record.u_c_V, record.x_measured_um))
         body = io.StringIO()
         np.savetxt(body, table, fmt=list(FOREIGN_FORM["formats"]), delimiter=",")
-        written.append(records.atomic_write(paths[name], body.getvalue()))
+        written.append(files.atomic_write(paths[name], body.getvalue()))
     return written

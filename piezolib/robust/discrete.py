@@ -29,10 +29,10 @@ class DiscreteController:
         Sampling frequency [Hz].
     prewarp_frequency : float or None
         Pre-warping frequency [rad/s] used (None: plain Tustin).
-    check_hz : float
+    check_Hz : float
         Upper end of the frequency band compared [Hz].
     max_relative_error : float
-        max |K_d(e^{j omega T}) / K(j omega) - 1| for omega up to check_hz.
+        max |K_d(e^{j omega T}) / K(j omega) - 1| for omega up to check_Hz.
     omega_max_error : float
         Where that maximum occurs [rad/s].
     matches : bool
@@ -46,7 +46,7 @@ class DiscreteController:
     K: ct.StateSpace
     fs: float
     prewarp_frequency: float | None
-    check_hz: float
+    check_Hz: float
     max_relative_error: float
     omega_max_error: float
     matches: bool
@@ -70,7 +70,7 @@ def least_damped_frequency(K, omega_max):
     return float(np.abs(roots[np.argmin(damping)]))
 
 
-def discretize(K, fs, *, prewarp="auto", check_hz=1000.0, rtol=0.1, G=None, n_check=2000):
+def discretize(K, fs, *, prewarp="auto", check_Hz=1000.0, rtol=0.1, G=None, n_check=2000):
     """Tustin discretisation of a SISO controller with a frequency-response check.
 
     Parameters
@@ -81,9 +81,9 @@ def discretize(K, fs, *, prewarp="auto", check_hz=1000.0, rtol=0.1, G=None, n_ch
         Sampling frequency [Hz].
     prewarp : 'auto', float or None
         Pre-warping frequency [rad/s]; 'auto' uses
-        :func:`least_damped_frequency` below 1.5 * check_hz, None gives plain
+        :func:`least_damped_frequency` below 1.5 * check_Hz, None gives plain
         Tustin.
-    check_hz : float
+    check_Hz : float
         Compare the responses from 0 to this frequency [Hz].
     rtol : float
         Largest relative error for ``matches``.
@@ -100,7 +100,7 @@ def discretize(K, fs, *, prewarp="auto", check_hz=1000.0, rtol=0.1, G=None, n_ch
     Raises
     ------
     ValueError
-        A discrete-time K, ``check_hz`` or ``prewarp`` at or above the
+        A discrete-time K, ``check_Hz`` or ``prewarp`` at or above the
         Nyquist frequency, non-positive rates.
 
     Examples
@@ -115,13 +115,13 @@ def discretize(K, fs, *, prewarp="auto", check_hz=1000.0, rtol=0.1, G=None, n_ch
     if not K.isctime(strict=True):
         raise ValueError("K must be a continuous-time controller")
     fs = check_positive("fs", fs)
-    check_hz = check_positive("check_hz", check_hz)
+    check_Hz = check_positive("check_Hz", check_Hz)
     rtol = check_positive("rtol", rtol)
-    if check_hz >= fs / 2:
-        raise ValueError(f"check_hz ({check_hz}) must be below the Nyquist frequency {fs / 2}")
+    if check_Hz >= fs / 2:
+        raise ValueError(f"check_Hz ({check_Hz}) must be below the Nyquist frequency {fs / 2}")
     Ts = 1.0 / fs
     if prewarp == "auto":
-        w_pre = least_damped_frequency(K, 2 * np.pi * 1.5 * check_hz)
+        w_pre = least_damped_frequency(K, 2 * np.pi * 1.5 * check_Hz)
     elif prewarp is None:
         w_pre = None
     else:
@@ -132,7 +132,7 @@ def discretize(K, fs, *, prewarp="auto", check_hz=1000.0, rtol=0.1, G=None, n_ch
     Kc = realize(K)
     Kd = ct.c2d(ct.ss(Kc), Ts, method="tustin", prewarp_frequency=w_pre)
     Kd = with_signals(Kd, K.input_labels, K.output_labels, name=f"{K.name}_d")
-    omega = np.linspace(2 * np.pi * check_hz / n_check, 2 * np.pi * check_hz, n_check)
+    omega = np.linspace(2 * np.pi * check_Hz / n_check, 2 * np.pi * check_Hz, n_check)
     kc = np.ravel(Kc(1j * omega))
     kd = np.ravel(Kd(np.exp(1j * omega * Ts)))
     err = np.abs(kd / kc - 1)
@@ -144,7 +144,7 @@ def discretize(K, fs, *, prewarp="auto", check_hz=1000.0, rtol=0.1, G=None, n_ch
         loop = ct.feedback(Gd * Kd, 1)
         radius = float(np.max(np.abs(ct.poles(loop))))
         stable = bool(radius < 1)
-    return DiscreteController(K=Kd, fs=fs, prewarp_frequency=w_pre, check_hz=check_hz,
+    return DiscreteController(K=Kd, fs=fs, prewarp_frequency=w_pre, check_Hz=check_Hz,
                               max_relative_error=float(err[k]), omega_max_error=float(omega[k]),
                               matches=bool(err[k] <= rtol), loop_stable=stable,
                               loop_spectral_radius=radius)

@@ -112,7 +112,7 @@ def time_scale_of(*systems):
     Examples
     --------
     >>> import control as ct
-    >>> time_scale_of(ct.tf([1], [1, 101, 100]))     # poles -1 and -100
+    >>> round(time_scale_of(ct.tf([1], [1, 101, 100])), 6)    # poles -1 and -100
     10.0
     """
     mags = []

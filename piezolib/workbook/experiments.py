@@ -40,7 +40,7 @@ __all__ = ["table4_reference", "table4_measure",
            "hysteresis_test", "tracking_periods", "tracking_reference", "tracking_test"]
 
 
-def table4_reference(amplitude_V, periods=3, frequency_hz=None, fs=paper.SAMPLING_FREQUENCY_HZ,
+def table4_reference(amplitude_V, periods=3, frequency_Hz=None, fs=paper.SAMPLING_FREQUENCY_HZ,
                      amplifier_gain=paper.AMPLIFIER_GAIN):
     """Reference of the Table 4 experiments for one actuator amplitude.
 
@@ -55,7 +55,7 @@ def table4_reference(amplitude_V, periods=3, frequency_hz=None, fs=paper.SAMPLIN
         Actuator amplitude A [V] (Table 4: 10, 20, 30, 40 V).
     periods : int, optional
         Number of periods.
-    frequency_hz, fs : float, optional
+    frequency_Hz, fs : float, optional
         Triangle frequency (default 10 Hz) and sampling rate [Hz] (default
         the paper's 10 kHz).
     amplifier_gain : float, optional
@@ -70,11 +70,11 @@ def table4_reference(amplitude_V, periods=3, frequency_hz=None, fs=paper.SAMPLIN
     """
     amplitude_V = check_positive("amplitude_V", amplitude_V)
     gain = check_positive("amplifier_gain", amplifier_gain)
-    f = paper.HYSTERESIS_TEST["frequency_Hz"] if frequency_hz is None else frequency_hz
+    f = paper.HYSTERESIS_TEST["frequency_Hz"] if frequency_Hz is None else frequency_Hz
     return signals.triangle(amplitude_V / gain, f, periods=periods, fs=fs)
 
 
-def table4_measure(reference_V, v_y_V, discard_periods=1, frequency_hz=None,
+def table4_measure(reference_V, v_y_V, discard_periods=1, frequency_Hz=None,
                    fs=paper.SAMPLING_FREQUENCY_HZ, amplifier_gain=paper.AMPLIFIER_GAIN,
                    um_per_volt=paper.UM_PER_VOLT):
     """Hysteresis of one Table 4 loop, measured the same way in every case.
@@ -94,7 +94,7 @@ def table4_measure(reference_V, v_y_V, discard_periods=1, frequency_hz=None,
     v_y_V : array_like
         Measured sensor output [V], same length.
     discard_periods : int, optional
-    frequency_hz, fs : float, optional
+    frequency_Hz, fs : float, optional
         Triangle frequency (default 10 Hz) and sampling rate [Hz] (default
         the paper's 10 kHz).
     amplifier_gain : float, optional
@@ -111,8 +111,8 @@ def table4_measure(reference_V, v_y_V, discard_periods=1, frequency_hz=None,
     v_y_V = check_finite_array("v_y_V", v_y_V, ndim=1, min_length=8)
     check_same_length(reference_V=reference_V, v_y_V=v_y_V)
     discard_periods = check_integer("discard_periods", discard_periods, minimum=0)
-    f = paper.HYSTERESIS_TEST["frequency_Hz"] if frequency_hz is None else frequency_hz
-    start = int(round(discard_periods * check_positive("fs", fs) / check_positive("frequency_hz", f)))
+    f = paper.HYSTERESIS_TEST["frequency_Hz"] if frequency_Hz is None else frequency_Hz
+    start = int(round(discard_periods * check_positive("fs", fs) / check_positive("frequency_Hz", f)))
     if start >= reference_V.size - 8:
         raise ValueError(f"discarding {discard_periods} period(s) leaves no record "
                          f"({reference_V.size} samples)")
@@ -253,29 +253,29 @@ def _table4_triangle(amplitude_V, periods, fs):
 
 
 @functools.lru_cache(maxsize=64)
-def _table5_triangle(frequency_hz, periods, amplitude_um, fs):
-    return _read_only(*signals.triangle(amplitude_um / paper.UM_PER_VOLT, frequency_hz,
+def _table5_triangle(frequency_Hz, periods, amplitude_um, fs):
+    return _read_only(*signals.triangle(amplitude_um / paper.UM_PER_VOLT, frequency_Hz,
                                         periods=periods, fs=fs))
 
 
-def tracking_periods(frequency_hz, discard_periods=DISCARD_PERIODS,
+def tracking_periods(frequency_Hz, discard_periods=DISCARD_PERIODS,
                      min_measured_s=MIN_MEASURED_S):
     """Periods to simulate: ``discard_periods`` plus whole periods covering
     at least ``min_measured_s`` [s] (one period at least)."""
-    frequency_hz = check_positive("frequency_hz", frequency_hz)
+    frequency_Hz = check_positive("frequency_Hz", frequency_Hz)
     discard_periods = check_integer("discard_periods", discard_periods, minimum=0)
     min_measured_s = check_positive("min_measured_s", min_measured_s)
-    return discard_periods + max(1, math.ceil(min_measured_s * frequency_hz - 1e-9))
+    return discard_periods + max(1, math.ceil(min_measured_s * frequency_Hz - 1e-9))
 
 
-def tracking_reference(frequency_hz, periods, amplitude_um=None, fs=paper.SAMPLING_FREQUENCY_HZ):
+def tracking_reference(frequency_Hz, periods, amplitude_um=None, fs=paper.SAMPLING_FREQUENCY_HZ):
     """v_r [V] of the tracking test: a triangle from 0 to amplitude_um / (3 um/V).
 
     Built once per argument set and shared (the arrays are read-only).
 
     Parameters
     ----------
-    frequency_hz : float
+    frequency_Hz : float
         Triangle frequency [Hz].
     periods : int
         Number of periods.
@@ -292,7 +292,7 @@ def tracking_reference(frequency_hz, periods, amplitude_um=None, fs=paper.SAMPLI
         Reference [V].
     """
     amplitude_um = paper.TRACKING_TEST["amplitude_um"] if amplitude_um is None else amplitude_um
-    return _table5_triangle(check_positive("frequency_hz", frequency_hz),
+    return _table5_triangle(check_positive("frequency_Hz", frequency_Hz),
                             check_integer("periods", periods, minimum=1),
                             check_positive("amplitude_um", amplitude_um),
                             check_positive("fs", fs))

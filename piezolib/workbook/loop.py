@@ -182,22 +182,22 @@ class LoopResult:
         """Samples limited anywhere in the chain (sum over the three places)."""
         return sum(s.count for s in self.saturation)
 
-    def steady_state(self, frequency_hz, discard_periods=DISCARD_PERIODS):
+    def steady_state(self, frequency_Hz, discard_periods=DISCARD_PERIODS):
         """Slice of the samples after the first ``discard_periods`` periods."""
-        frequency_hz = check_positive("frequency_hz", frequency_hz)
+        frequency_Hz = check_positive("frequency_Hz", frequency_Hz)
         discard_periods = check_integer("discard_periods", discard_periods, minimum=0)
         fs = 1.0 / (self.t_s[1] - self.t_s[0])
-        start = int(round(discard_periods * fs / frequency_hz))
+        start = int(round(discard_periods * fs / frequency_Hz))
         if start >= len(self) - 2:
-            raise ValueError(f"discarding {discard_periods} period(s) of {frequency_hz:g} Hz "
+            raise ValueError(f"discarding {discard_periods} period(s) of {frequency_Hz:g} Hz "
                              f"leaves no samples of the {len(self)}-sample run")
         return slice(start, None)
 
-    def tracking_error_percent(self, frequency_hz, discard_periods=DISCARD_PERIODS,
+    def tracking_error_percent(self, frequency_Hz, discard_periods=DISCARD_PERIODS,
                                range_um=None):
         """Tracking error % (:func:`piezolib.metrics.tracking_error_percent`)
         over the steady state; ``range_um`` defaults to the reference's range."""
-        s = self.steady_state(frequency_hz, discard_periods)
+        s = self.steady_state(frequency_Hz, discard_periods)
         return tracking_error_percent(self.x_r_um[s], self.x_um[s], range_um)
 
 

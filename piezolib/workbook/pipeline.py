@@ -32,7 +32,7 @@ import numpy as np
 from piezolib.problem import paper
 from piezolib.problem.design import design_controller
 from piezolib.problem.hysteresis_fits import write_workbook_dahl
-from piezolib.records import atomic_write
+from piezolib.files import atomic_write
 from piezolib.robust import export, frequency_grid
 from piezolib.robust.discrete import discretize
 from piezolib.uncertainty import fit_covering_weight, model_set, relative_error_envelope
@@ -199,7 +199,7 @@ def _design_pair(uncertainty, weights, design, loop, fingerprint):
                                      design=design, loop=loop)
     G, H_m, H_e, H_y, _ = study_problem(choice)
     options = dict(order=choice.design.order, d_order=choice.design.d_order,
-                   max_iter=choice.design.max_iter, fs=choice.loop.fs_hz)
+                   max_iter=choice.design.max_iter, fs=choice.loop.fs_Hz)
     logger.info("designing the delay-aware controllers (%s)", json.dumps(design_choices(choice)))
     delay_aware = design_controller(G, H_m, H_e, H_y, delay_samples=choice.design.delay_samples,
                                     **options)
@@ -329,7 +329,7 @@ def discretized_controllers(study, controllers=None):
     (:func:`piezolib.robust.discrete.discretize`), checked against the study's G."""
     study = studies.load(study)
     G = study_problem(study).G
-    return {stem: discretize(K, study.loop.fs_hz, G=G)
+    return {stem: discretize(K, study.loop.fs_Hz, G=G)
             for stem, (_, K) in case_III_controllers(study, controllers).items()}
 
 

@@ -20,7 +20,7 @@ import matplotlib as mpl
 import matplotlib.image as mpimg
 import numpy as np
 
-from piezolib.records import atomic_write
+from piezolib.files import atomic_write
 from piezolib.workbook.style import apply_unit_text
 
 __all__ = ["name_figure", "figure_name", "save_figure", "same_picture", "PIXEL_TOLERANCE"]

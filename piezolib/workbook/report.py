@@ -25,7 +25,7 @@ import numpy as np
 import pandas as pd
 
 from piezolib._checks import check_nonnegative
-from piezolib.records import atomic_write
+from piezolib.files import atomic_write
 from piezolib.workbook import outputs
 from piezolib.workbook.outputs import REFERENCE_STUDY
 

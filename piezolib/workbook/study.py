@@ -166,18 +166,18 @@ class LoopChoice:
 
     Attributes
     ----------
-    fs_hz : float
+    fs_Hz : float
         Sampling rate [Hz] of the loop and of the discretised controllers.
     delay_samples : int
         Computation delay [samples] of the simulated loop (u_b applied this
         many ticks after v_y is read).
     """
 
-    fs_hz: float = paper.SAMPLING_FREQUENCY_HZ
+    fs_Hz: float = paper.SAMPLING_FREQUENCY_HZ
     delay_samples: int = COMPUTATION_DELAY_SAMPLES
 
     def check(self):
-        _positive("loop.fs_hz", self.fs_hz)
+        _positive("loop.fs_Hz", self.fs_Hz)
         _integer("loop.delay_samples", self.delay_samples, 0, 10)
 
 
@@ -438,6 +438,14 @@ def _section(section, values):
         raise StudyError(f"[{section}] must be a table of fields, got {values!r}")
     names = {f.name for f in fields(cls)}
     unknown = set(values) - names
+    # a unit suffix is spelled with its SI case (fs_Hz); a study file written before that
+    # convention (fs_hz) gets the new spelling named instead of a bare "unknown field"
+    by_case = {n.lower(): n for n in names}
+    respelled = {key: by_case[key.lower()] for key in sorted(unknown) if key.lower() in by_case}
+    if respelled:
+        raise StudyError(f"[{section}] " + ", ".join(
+            f"{old!r} is now spelled {new!r}" for old, new in respelled.items())
+            + " (unit suffixes keep their SI case: _Hz, _V, _s, _um)")
     if unknown:
         raise StudyError(f"unknown field(s) {sorted(unknown)} in [{section}]; "
                          f"expected some of {sorted(names)}")

@@ -18,8 +18,8 @@ def model(form="bliman_sorine", **overrides):
     return hy.DahlModel(**{**PARAMS, **overrides}, form=form)
 
 
-def triangle(peak, frequency_hz, periods):
-    return signals.triangle(peak, frequency_hz, fs=FS, periods=periods)
+def triangle(peak, frequency_Hz, periods):
+    return signals.triangle(peak, frequency_Hz, fs=FS, periods=periods)
 
 
 def minor_loop_reference(n=6001):

@@ -33,10 +33,10 @@ def test_sampling_rate_is_required_and_used():
     K = ct.tf([1, 2 * 0.05 * 3000, 3000 ** 2], [1, 2 * 0.7 * 3000, 3000 ** 2])
     with pytest.raises(TypeError, match="fs"):
         discretize(K)
-    slow = discretize(K, 4e3, check_hz=500.0)
+    slow = discretize(K, 4e3, check_Hz=500.0)
     assert slow.fs == 4e3 and slow.K.dt == pytest.approx(2.5e-4)
     # a slower rate warps more: the same check band matches less well
-    assert slow.max_relative_error > discretize(K, FS, check_hz=500.0).max_relative_error
+    assert slow.max_relative_error > discretize(K, FS, check_Hz=500.0).max_relative_error
 
 
 def test_sampled_loop_check():
@@ -51,7 +51,7 @@ def test_sampled_loop_check():
 
 def test_discretize_rejects_bad_input():
     with pytest.raises(ValueError, match="Nyquist"):
-        discretize(ct.tf([1], [1, 1]), FS, check_hz=6000)
+        discretize(ct.tf([1], [1, 1]), FS, check_Hz=6000)
     with pytest.raises(ValueError, match="continuous-time"):
         discretize(ct.tf([1], [1, 1], 1e-3), FS)
     with pytest.raises(ValueError, match="fs must be positive"):

@@ -72,8 +72,8 @@ def stage():
     return VirtualStage(seed=3)
 
 
-def reference(peak=3.0, frequency_hz=20.0, periods=2):
-    return signals.triangle(peak, frequency_hz, FS, periods=periods)[1]
+def reference(peak=3.0, frequency_Hz=20.0, periods=2):
+    return signals.triangle(peak, frequency_Hz, FS, periods=periods)[1]
 
 
 def test_default_feedforward_is_the_workbook_model(stage):

@@ -31,8 +31,8 @@ def linear_stage():
     return VirtualStage(seed=0, hysteresis=None, noise_rms_V=0.0, dac_bits=48, adc_bits=48)
 
 
-def reference(peak=3.0, frequency_hz=20.0, periods=2):
-    return signals.triangle(peak, frequency_hz, FS, periods=periods)[1]
+def reference(peak=3.0, frequency_Hz=20.0, periods=2):
+    return signals.triangle(peak, frequency_Hz, FS, periods=periods)[1]
 
 
 # --- K = 0 and no compensation: the open-loop stage run, exactly -------------------
@@ -53,7 +53,7 @@ def test_zero_controller_and_no_feedforward_applies_nothing(stage):
 
 
 def test_open_loop_path_equals_zero_controller_path(stage):
-    v = reference(frequency_hz=10.0)
+    v = reference(frequency_Hz=10.0)
     for ff in (1.0, DAHL):
         a = loop.run_loop(stage, v, feedforward=ff)
         b = loop.run_loop(stage, v, feedforward=ff, controller=ct.ss([], [], [], [[0.0]], 1 / FS))
@@ -79,7 +79,7 @@ def test_linear_stage_closed_loop_matches_lti_theory(linear_stage, which, delay)
         Kd = loop.discrete_controller(paper.controller())
     else:   # a slow discrete integrator, u_b[k] = u_b[k-1] + 40 T v_e[k]
         Kd = ct.ss(ct.tf([40 * Ts, 0], [1, -1], Ts))
-    v = reference(peak=2.0, frequency_hz=20.0, periods=2)
+    v = reference(peak=2.0, frequency_Hz=20.0, periods=2)
     g = 0.9
     got = loop.run_loop(linear_stage, v, feedforward=g, controller=Kd, delay_samples=delay)
     assert got.delay_samples == delay
@@ -121,7 +121,7 @@ def test_controller_forms():
 
 # --- saturation ------------------------------------------------------------------------
 def test_saturation_is_counted_and_warned(stage):
-    v = reference(peak=14.0, frequency_hz=10.0, periods=1)    # u_c up to 14 V > 12 V
+    v = reference(peak=14.0, frequency_Hz=10.0, periods=1)    # u_c up to 14 V > 12 V
     with pytest.warns(StageSaturationWarning):
         r = loop.run_loop(stage, v, feedforward=1.0, controller=0.0)
     n_over = int(np.count_nonzero(v > paper.AMPLIFIER_INPUT_RANGE_V[1]))
@@ -175,7 +175,7 @@ def test_bad_feedforward_tuple(stage):
 
 def test_default_delay_is_one_sample(stage):
     assert loop.COMPUTATION_DELAY_SAMPLES == 1
-    v = reference(frequency_hz=10.0)
+    v = reference(frequency_Hz=10.0)
     Kd = loop.discrete_controller(paper.controller())
     a = loop.run_loop(stage, v, feedforward=DAHL, controller=Kd)
     b = loop.run_loop(stage, v, feedforward=DAHL, controller=Kd, delay_samples=1)
@@ -188,7 +188,7 @@ def test_default_delay_is_one_sample(stage):
 
 def test_exported_sections_run_like_the_model(stage):
     from piezolib.robust.export import controller_sos
-    v = reference(frequency_hz=10.0)
+    v = reference(frequency_Hz=10.0)
     Kd = loop.discrete_controller(paper.controller())
     sos = controller_sos(Kd, "K_pub")
     model = loop.run_loop(stage, v, feedforward=DAHL, controller=Kd)
@@ -223,7 +223,7 @@ def assert_same_run(one, member):
 @pytest.mark.parametrize("delay", [0, 1, 2])
 @pytest.mark.parametrize("kind", ["sections float32", "sections float64", "state space"])
 def test_batched_closed_loop_member_is_the_single_run_with_its_seed(stage, kind, delay):
-    v = reference(frequency_hz=10.0)
+    v = reference(frequency_Hz=10.0)
     controller, dtype = ((loop.discrete_controller(paper.controller()), "float32")
                          if kind == "state space" else (sections(), kind.split()[1]))
     runs = loop.run_loop(stage, v, feedforward=DAHL, controller=controller,
@@ -254,7 +254,7 @@ def test_batched_open_loop_and_stage_batch_argument(stage):
 
 
 def test_batched_loop_counts_saturation_per_member_and_warns_once_per_place(stage):
-    v = reference(peak=14.0, frequency_hz=10.0, periods=1)    # u_c up to 14 V > 12 V
+    v = reference(peak=14.0, frequency_Hz=10.0, periods=1)    # u_c up to 14 V > 12 V
     with pytest.warns(StageSaturationWarning) as caught:
         runs = loop.run_loop(stage, v, feedforward=1.0, controller=0.0, seeds=SEEDS)
     n_over = int(np.count_nonzero(v > paper.AMPLIFIER_INPUT_RANGE_V[1]))

@@ -18,7 +18,7 @@ def test_reference_defaults_are_the_published_choices():
     assert ref.is_reference and ref.name == "reference"
     assert ref.uncertainty.spread == paper.UNCERTAINTY_SPREAD
     assert ref.weights.error == paper.ERROR_WEIGHT and ref.weights.output == paper.OUTPUT_WEIGHT
-    assert ref.loop.fs_hz == paper.SAMPLING_FREQUENCY_HZ
+    assert ref.loop.fs_Hz == paper.SAMPLING_FREQUENCY_HZ
     assert ref.experiments.frequencies_Hz == paper.TRACKING_TEST["frequencies_Hz"]
 
 
@@ -68,6 +68,10 @@ def test_bad_studies_name_the_field(checkout):
     (checkout / "studies" / "typo.toml").write_text("name = 'typo'\n[loop]\nfs = 5000.0\n")
     with pytest.raises(study.StudyError, match=r"typo.toml: unknown field.*\[loop\]"):
         study.load("typo")
+    # a unit suffix in its old lower case (before the _Hz convention): the new spelling is named
+    (checkout / "studies" / "old.toml").write_text("name = 'old'\n[loop]\nfs_hz = 5000.0\n")
+    with pytest.raises(study.StudyError, match=r"old.toml: \[loop\] 'fs_hz' is now spelled 'fs_Hz'"):
+        study.load("old")
 
 
 def test_the_uncertainty_weight_choice_is_checked(checkout):

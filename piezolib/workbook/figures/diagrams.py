@@ -59,10 +59,10 @@ def fig02_experimental_loop():
     matplotlib.figure.Figure
         Saved as ``fig02_experimental_loop.png``.
     """
-    fs_khz = paper.SAMPLING_FREQUENCY_HZ / 1e3
+    fs_kHz = paper.SAMPLING_FREQUENCY_HZ / 1e3
     lo, hi = paper.SENSOR_OUTPUT_RANGE_V
     blocks = {
-        "pc": (2.2, 0.0, f"host computer\nLabVIEW: K(s) and\nDahl feedforward,\n{fs_khz:g} kHz"),
+        "pc": (2.2, 0.0, f"host computer\nLabVIEW: K(s) and\nDahl feedforward,\n{fs_kHz:g} kHz"),
         "da": (7.0, 0.0, f"I/O module\nPXIe-6361\n{paper.DAQ_BITS}-bit D/A"),
         "amp": (11.6, 0.0, f"voltage amplifier\nE-505, gain {paper.AMPLIFIER_GAIN:g},\n"
                            f"{paper.AMPLIFIER_BANDWIDTH_HZ / 1e3:g} kHz"),

@@ -8,14 +8,14 @@ from piezolib.workbook.experiments import CASES
 __all__ = ["fig14_hysteresis_cases", "fig15_tracking_error"]
 
 
-def fig14_hysteresis_cases(result, frequency_hz=None, controller="our 6th-order mu controller"):
+def fig14_hysteresis_cases(result, frequency_Hz=None, controller="our 6th-order mu controller"):
     """Fig. 14: the steady-state loops of the hysteresis test, one panel per case and amplitude.
 
     Parameters
     ----------
     result : piezolib.workbook.experiments.ExperimentResult
         A :func:`~piezolib.workbook.experiments.hysteresis_test` result.
-    frequency_hz : float, optional
+    frequency_Hz : float, optional
         Triangle frequency [Hz]; default the paper's 10 Hz.
     controller : str
         Case III's controller, named in the title.
@@ -26,7 +26,7 @@ def fig14_hysteresis_cases(result, frequency_hz=None, controller="our 6th-order 
         x = 3 um/V v_y [um] against 10 x reference [V]; named
         ``fig14_hysteresis_cases``.
     """
-    frequency_hz = paper.HYSTERESIS_TEST["frequency_Hz"] if frequency_hz is None else frequency_hz
+    frequency_Hz = paper.HYSTERESIS_TEST["frequency_Hz"] if frequency_Hz is None else frequency_Hz
     amplitudes = list(result.table.columns)
     fig, axes = new_figure(len(CASES), len(amplitudes), figsize=(10, 7.2), sharex="col",
                                     squeeze=False)
@@ -34,7 +34,7 @@ def fig14_hysteresis_cases(result, frequency_hz=None, controller="our 6th-order 
     for k, A in enumerate(amplitudes):
         for i, case in enumerate(CASES):
             run = result.runs[case, A]
-            s = run.steady_state(frequency_hz)
+            s = run.steady_state(frequency_Hz)
             ax = axes[i, k]
             ax.plot(paper.AMPLIFIER_GAIN * run.v_r_V[s], run.x_um[s], lw=0.8)
             ax.set_title(f"({letters[len(amplitudes) * i + k]}) Case {case}, {A:.0f} V: "
@@ -42,7 +42,7 @@ def fig14_hysteresis_cases(result, frequency_hz=None, controller="our 6th-order 
             if k == 0:
                 ax.set_ylabel("x = 3 v_y [um]")
         axes[-1, k].set_xlabel("10 x reference [V]")
-    fig.suptitle(f"Fig. 14: loops at {frequency_hz:g} Hz; I open loop, II Dahl feedforward, "
+    fig.suptitle(f"Fig. 14: loops at {frequency_Hz:g} Hz; I open loop, II Dahl feedforward, "
                  f"III feedforward + {controller}\n(every case run here in the loop and measured "
                  "after the first period: Case I differs slightly from the recorded data files)"
                  + _seeds_note(result))

@@ -1,3 +1,6 @@
+"""Settings for every test path of pyproject.toml: tests/, the notebooks (nbval) and the
+doctests of piezolib/ (set here, at the root, so that each path run alone gets them too)."""
+
 import os
 
 # headless, and every kernel nbval starts inherits these settings
