@@ -112,6 +112,15 @@ class DahlModel:
         """1 / (a1/2): path length over which a transient decays by e [x-unit]."""
         return 2.0 / self.alpha1
 
+    @property
+    def static_part(self):
+        """(g_a, x0): the line x = g_a v + x0 of eq. 13 without its hysteretic term H.
+
+        The map a feedforward without hysteresis compensation inverts,
+        v = (x_r - x0) / g_a (Case I of the tracking test).
+        """
+        return self.g_a, self.x0
+
     def with_form(self, form):
         """The same parameters in another form."""
         return replace(self, form=form)

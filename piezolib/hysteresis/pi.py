@@ -109,6 +109,19 @@ class PIModel:
         """w_0 > 0 and every w_i >= 0: x rises strictly with v along every stroke."""
         return self.weights[0] > 0 and min(self.weights) >= 0
 
+    @property
+    def static_part(self):
+        """(W, x0) with W = sum_i w_i: the line x = W v + x0 the loops are centred on.
+
+        Each play stays within its threshold of the input (|F_r[v] - v| <= r),
+        so x = W v + x0 - sum_i w_i (v - F_{r_i}[v]) with a bounded,
+        direction-dependent hysteretic term: W is the slope of the loop's
+        branches once every play moves (strokes beyond 2 r_max), the
+        counterpart of the Dahl model's g_a, and x0 its offset.  The map a
+        feedforward without hysteresis compensation inverts, v = (x_r - x0) / W.
+        """
+        return float(np.sum(self.weights)), self.x0
+
     def initial_state(self, v0):
         """Play outputs before the first sample, for the first input ``v0`` [v-unit]."""
         r = np.asarray(self.thresholds)

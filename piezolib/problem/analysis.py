@@ -30,7 +30,8 @@ from piezolib.robust.discrete import discretize
 from piezolib.robust.lti import closed_loop_poles, hinf_norm, is_stable, loop_functions, realize
 from piezolib.robust.margins import delay_tolerance, loop_margins
 
-__all__ = ["RobustnessAnalysis", "analyze", "table3", "robust_performance_peak", "ANALYSIS_GRID",
+__all__ = ["RobustnessAnalysis", "analyze", "table3", "table3_peaks", "robust_performance_peak",
+           "ANALYSIS_GRID",
            "margins_table", "achievable_mu_lower_bound", "MARGIN_DELAYS"]
 
 #: Computation delays [samples] of the sampled-loop check in :func:`margins_table`.
@@ -198,11 +199,37 @@ def table3(*analyses, paper_values=None):
     if paper_values is not None:
         data["paper"] = [True, paper_values["norm_He_S"], paper_values["norm_Hy_T"],
                          paper_values["mu_RS"], paper_values["mu_RP"]]
-    for a in analyses:
-        if not isinstance(a, RobustnessAnalysis):
-            raise TypeError(f"table3 takes RobustnessAnalysis results, got {type(a).__name__}")
+    for a in _analyses("table3", analyses):
         data[a.name] = [a.nominal_stability, a.norm_He_S, a.norm_Hy_T, a.mu_RS, a.mu_RP]
     return pd.DataFrame(data, index=index)
+
+
+def table3_peaks(*analyses):
+    """Where the peaks of Table 3 lie, and the lower bound of the mu_RP peak, side by side.
+
+    Parameters
+    ----------
+    *analyses : RobustnessAnalysis
+
+    Returns
+    -------
+    pandas.DataFrame
+        Rows: the frequencies [rad/s] of the ||H_e S||, ||H_y T||, mu_RS and
+        mu_RP peaks, and the mu_RP lower bound; one column per controller.
+    """
+    return pd.DataFrame({a.name: {"omega of ||H_e S|| [rad/s]": a.omega_He_S,
+                                  "omega of ||H_y T|| [rad/s]": a.omega_Hy_T,
+                                  "omega of mu_RS peak [rad/s]": a.omega_RS,
+                                  "omega of mu_RP peak [rad/s]": a.omega_RP,
+                                  "mu_RP lower bound": a.mu_RP_lower}
+                         for a in _analyses("table3_peaks", analyses)})
+
+
+def _analyses(what, analyses):
+    for a in analyses:
+        if not isinstance(a, RobustnessAnalysis):
+            raise TypeError(f"{what} takes RobustnessAnalysis results, got {type(a).__name__}")
+    return analyses
 
 
 def margins_table(controllers, G, fs, *, delays=MARGIN_DELAYS):

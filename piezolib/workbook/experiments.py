@@ -8,12 +8,23 @@ I–III; the cases themselves are run by :func:`run_case` on the loop of
 the tables in the paper's layout.  What each case applies and why:
 ``docs/controller_design.md``.
 
+The feedforward of Cases II-III is any hysteresis model the loop can use
+(:class:`~piezolib.hysteresis.common.HysteresisModel`: the workbook's
+:class:`~piezolib.hysteresis.DahlModel` of eq. 14, or a
+:class:`~piezolib.hysteresis.PIModel` with its exact inverse); Case I
+applies the reference through the model's ``static_part``, the line
+x = g v + x0 without the hysteresis (Dahl: g_a and x0; PI: the sum of the
+play weights and x0), or through ``case_I_gain``.
+
 Case III's figures sit at the sensor-noise and ADC floor of the stage, so one
 noise draw moves them by 5-50 % between machines; with ``seeds`` both tests
 run every case for N noise seeds at once (the batched loop of
 :mod:`piezolib.workbook.loop`) and report the mean over the seeds with its
 95 % Student-t interval (:func:`piezolib.metrics.mean_interval`) and the
-noise-free table beside it.
+noise-free table beside it.  :class:`ExperimentResult` gives those
+statistics row by row and over columns (:meth:`ExperimentResult.over_seeds`),
+:func:`add_table_claims` turns a result into claims on the published table,
+one per cell, and :func:`design_goal_table` judges the goals of Sec. IV-B.
 """
 
 import functools
@@ -25,7 +36,7 @@ import pandas as pd
 
 from piezolib import signals
 from piezolib._checks import check_finite_array, check_integer, check_positive, check_same_length
-from piezolib.hysteresis.dahl import DahlModel
+from piezolib.hysteresis.common import HysteresisModel
 from piezolib.hysteresis.measure import hysteresis_measure
 from piezolib.metrics import improvement_percent, mean_interval
 from piezolib.problem import paper
@@ -34,10 +45,12 @@ from piezolib.problem.stage import StageBatch, VirtualStage, check_seeds
 from piezolib.robust.export import SOSController
 from piezolib.workbook.loop import (COMPUTATION_DELAY_SAMPLES, DISCARD_PERIODS,
                                     discrete_controller, run_loop)
+from piezolib.workbook.report import goal_verdict
 
 __all__ = ["table4_reference", "table4_measure",
            "CASES", "MIN_MEASURED_S", "run_case", "case_table", "ExperimentResult",
-           "hysteresis_test", "tracking_periods", "tracking_reference", "tracking_test"]
+           "hysteresis_test", "tracking_periods", "tracking_reference", "tracking_test",
+           "CLAIM_TOLERANCES", "add_table_claims", "design_goal_table"]
 
 
 def table4_reference(amplitude_V, periods=3, frequency_Hz=None, fs=paper.SAMPLING_FREQUENCY_HZ,
@@ -133,7 +146,7 @@ CASES = {
 MIN_MEASURED_S = 0.1
 
 
-def run_case(case, stage, v_r, dahl, controller=None, case_I_gain=None,
+def run_case(case, stage, v_r, model, controller=None, case_I_gain=None,
              delay_samples=COMPUTATION_DELAY_SAMPLES):
     """Run Case I, II or III of Sec. V on one reference.
 
@@ -144,15 +157,20 @@ def run_case(case, stage, v_r, dahl, controller=None, case_I_gain=None,
         A StageBatch runs the case on every member at once.
     v_r : array_like
         Reference [V].
-    dahl : DahlModel or None
-        The feedforward model (Cases II, III) whose g_a and x0 also map the
-        reference in Case I.  None: the workbook's shared model,
+    model : HysteresisModel or None
+        The feedforward model of Cases II and III, u_f = ``model.feedforward(v_r)``
+        (:class:`~piezolib.hysteresis.DahlModel`: eq. 14;
+        :class:`~piezolib.hysteresis.PIModel`: its exact inverse; any
+        :class:`~piezolib.hysteresis.common.HysteresisModel`).  None: the
+        workbook's shared Dahl model,
         :func:`piezolib.problem.hysteresis_fits.workbook_dahl_fit`.
     controller : see :func:`piezolib.workbook.loop.discrete_controller`
         Required for Case III, ignored otherwise.
     case_I_gain : float, optional
         g of Case I, applied without offset (u_c = v_r / g); default: the
-        static part of the Dahl model, u_c = (v_r - x0) / g_a.
+        model's ``static_part`` (g, x0), u_c = (v_r - x0) / g (Dahl: g_a and
+        x0; PI: the sum of its weights and x0).  A model without a
+        ``static_part`` needs it.
     delay_samples : int
         Computation delay of the feedback [samples] (Case III; default 1,
         :data:`piezolib.workbook.loop.COMPUTATION_DELAY_SAMPLES`).
@@ -161,22 +179,34 @@ def run_case(case, stage, v_r, dahl, controller=None, case_I_gain=None,
     -------
     piezolib.workbook.loop.LoopResult or list of LoopResult
         A list (one per member) for a StageBatch.
+
+    Raises
+    ------
+    TypeError
+        ``model`` is not a hysteresis model (no ``simulate`` and ``feedforward``).
+    ValueError
+        An unknown case, Case III without a controller, or Case I without
+        ``case_I_gain`` for a model without a ``static_part``.
     """
     if case not in CASES:
         raise ValueError(f"case must be one of {sorted(CASES)}, got {case!r}")
-    if dahl is None:
-        dahl = workbook_dahl_fit().model
-    if not isinstance(dahl, DahlModel):
-        raise TypeError(f"dahl must be a hysteresis.DahlModel, got {type(dahl).__name__}")
+    if model is None:
+        model = workbook_dahl_fit().model
+    if not isinstance(model, HysteresisModel):
+        raise TypeError("model must be a hysteresis model with simulate(v) and "
+                        f"feedforward(x_r) (DahlModel, PIModel), got {type(model).__name__}")
     if case == "I":
-        static = ((dahl.g_a, dahl.x0) if case_I_gain is None
-                  else check_positive("case_I_gain", case_I_gain))
-        return run_loop(stage, v_r, feedforward=static)
+        if case_I_gain is not None:
+            return run_loop(stage, v_r, feedforward=check_positive("case_I_gain", case_I_gain))
+        if not hasattr(model, "static_part"):
+            raise ValueError(f"case I needs case_I_gain: a {type(model).__name__} has no "
+                             "static_part (g, x0)")
+        return run_loop(stage, v_r, feedforward=tuple(model.static_part))
     if case == "II":
-        return run_loop(stage, v_r, feedforward=dahl)
+        return run_loop(stage, v_r, feedforward=model)
     if controller is None:
         raise ValueError("case III needs a controller")
-    return run_loop(stage, v_r, feedforward=dahl, controller=controller,
+    return run_loop(stage, v_r, feedforward=model, controller=controller,
                     delay_samples=delay_samples)
 
 
@@ -238,6 +268,157 @@ class ExperimentResult:
     noise_free: object = field(default=None, repr=False)
     per_seed: object = field(default=None, repr=False)
     seeds: object = None
+
+    def _seeded(self, what):
+        if self.seeds is None:
+            raise ValueError(f"{what} needs a result run with seeds (N >= 2 noise seeds)")
+
+    def statistics(self, row):
+        """Mean over the seeds, its 95 % interval and the noise-free value of one row.
+
+        Parameters
+        ----------
+        row : str
+            A row of :attr:`table`, e.g. ``"case_III"``.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Rows ``mean``, ``95 % low``, ``95 % high``, ``noise-free``; the
+            table's columns [%].
+        """
+        self._seeded("statistics")
+        return pd.DataFrame({"mean": self.table.loc[row], "95 % low": self.low.loc[row],
+                             "95 % high": self.high.loc[row],
+                             "noise-free": self.noise_free.loc[row]}).T
+
+    def interval(self, row, column):
+        """(low, high): the 95 % interval of the mean of one cell [%]."""
+        self._seeded("interval")
+        return float(self.low.loc[row, column]), float(self.high.loc[row, column])
+
+    def over_seeds(self, row, columns=None, how="max"):
+        """Mean over the seeds of one row reduced over columns seed by seed, with its interval.
+
+        Each seed's row is reduced first (its largest value, or its mean, over
+        ``columns``) and the N reduced values are then averaged: the largest
+        error over 1-10 Hz of one seed is a draw of its own, and the mean of
+        the per-column means would not be its mean.
+
+        Parameters
+        ----------
+        row : str
+            A row of :attr:`table`.
+        columns : sequence, optional
+            Columns to reduce over (default: all).
+        how : {"max", "mean"}
+            The reduction.
+
+        Returns
+        -------
+        mean, low, high : float
+            [%]; the interval of :func:`piezolib.metrics.mean_interval`.
+        """
+        self._seeded("over_seeds")
+        if how not in ("max", "mean"):
+            raise ValueError(f"how must be 'max' or 'mean', got {how!r}")
+        per_seed = self.per_seed.xs(row, level="row")
+        if columns is not None:
+            per_seed = per_seed[list(columns)]
+        return mean_interval(getattr(per_seed, how)(axis=1))
+
+
+# --------------------------------------------------------------------------- claims
+#: (atol, rtol) of a claim on one cell of Table 4 or 5: a case row agrees within
+#: max(0.1 points, 20 %), an improvement row (a ratio of two noisy rows) within 5 points.
+CLAIM_TOLERANCES = {"case": (0.1, 0.2), "improvement": (5.0, 0.0)}
+
+#: Note of an improvement row that ``notes`` leaves out.
+_IMPROVEMENT_NOTE = "from the case rows above"
+
+
+def add_table_claims(claims, section, published, result, quantity, *, rows=None, notes="",
+                     reason="virtual stage"):
+    """One claim per cell of a published Table 4/5 that a seeded result has.
+
+    Each claim is the mean over the noise seeds, judged on its 95 % interval
+    (:meth:`piezolib.workbook.report.ClaimTable.add`) with the tolerances of
+    :data:`CLAIM_TOLERANCES`; the claims are added row by row, column by
+    column, in the published table's order.
+
+    Parameters
+    ----------
+    claims : piezolib.workbook.report.ClaimTable
+    section : str
+        Paper location, e.g. ``"Table 4"``.
+    published : pandas.DataFrame
+        :func:`piezolib.problem.paper.table4` or ``table5``; only the
+        columns the result also has are claimed.
+    result : ExperimentResult
+        Run with seeds.
+    quantity : str
+        Format of the quantity with fields ``row`` and ``col``, e.g.
+        ``"hysteresis {row} at {col:g} V"``.
+    rows : sequence of str, optional
+        Rows to claim (default: all of ``published``).
+    notes : str or dict, optional
+        The note of every row, or {row: note}; an improvement row missing
+        from the dict gets "from the case rows above".
+    reason : str, optional
+        Why a row may differ (:data:`piezolib.workbook.report.REASONS`).
+    """
+    result._seeded("add_table_claims")
+    for row in published.index if rows is None else rows:
+        improvement = row.startswith("improvement")
+        atol, rtol = CLAIM_TOLERANCES["improvement" if improvement else "case"]
+        note = notes if isinstance(notes, str) else \
+            notes.get(row, _IMPROVEMENT_NOTE if improvement else "")
+        for col in published.columns.intersection(result.table.columns):
+            claims.add(section, quantity.format(row=row, col=col),
+                       float(published.loc[row, col]), float(result.table.loc[row, col]),
+                       interval=result.interval(row, col), unit="%", atol=atol, rtol=rtol,
+                       reason=reason, note=note)
+
+
+def design_goal_table(results, goals=None):
+    """The tracking goals of Sec. IV-B for seeded Table 5 results, judged on 95 % intervals.
+
+    Per result: the mean over the seeds of the largest Case III error over
+    the frequencies up to 10 Hz (each seed's largest, then averaged) and of
+    the error at 50 Hz (NaN without a 50 Hz column), their 95 % intervals,
+    and the verdict on each goal (:func:`piezolib.workbook.report.goal_verdict`:
+    met when the interval lies below the goal).
+
+    Parameters
+    ----------
+    results : dict
+        {name: ExperimentResult} of :func:`tracking_test` with seeds.
+    goals : dict, optional
+        ``peak_to_peak_error_pct_up_to_10Hz`` and
+        ``peak_to_peak_error_pct_at_50Hz`` [%]; default the paper's
+        :data:`piezolib.problem.paper.DESIGN_GOALS`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per result; columns the errors [%], their intervals and the two verdicts.
+    """
+    goals = paper.DESIGN_GOALS if goals is None else goals
+    goal_10 = goals["peak_to_peak_error_pct_up_to_10Hz"]
+    goal_50 = goals["peak_to_peak_error_pct_at_50Hz"]
+    rows = {}
+    for name, result in results.items():
+        columns = result.table.columns
+        m10, lo10, hi10 = result.over_seeds("case_III", [f for f in columns if f <= 10.0])
+        m50, lo50, hi50 = (result.over_seeds("case_III", [50.0]) if 50.0 in columns
+                           else (np.nan,) * 3)
+        rows[name] = {"max error up to 10 Hz [%]": m10, "up to 10 Hz, 95 % low": lo10,
+                      "up to 10 Hz, 95 % high": hi10,
+                      f"goal < {goal_10:g} % up to 10 Hz": goal_verdict(lo10, hi10, goal_10),
+                      "error at 50 Hz [%]": m50, "50 Hz, 95 % low": lo50,
+                      "50 Hz, 95 % high": hi50,
+                      f"goal < {goal_50:g} % at 50 Hz": goal_verdict(lo50, hi50, goal_50)}
+    return pd.DataFrame(rows).T
 
 
 # --------------------------------------------------------------------------- references
@@ -365,7 +546,7 @@ def _seeded_experiment(columns, run, measure, batch):
                             per_seed, tuple(seeds))
 
 
-def hysteresis_test(stage, dahl, controller, amplitudes_V=None, periods=4,
+def hysteresis_test(stage, model, controller, amplitudes_V=None, periods=4,
                     discard_periods=DISCARD_PERIODS, delay_samples=COMPUTATION_DELAY_SAMPLES,
                     seeds=None):
     """Table 4: hysteresis % of 10 Hz triangles, Cases I-III.
@@ -379,8 +560,9 @@ def hysteresis_test(stage, dahl, controller, amplitudes_V=None, periods=4,
     Parameters
     ----------
     stage : piezolib.problem.stage.VirtualStage
-    dahl : DahlModel or None
-        None: the workbook's shared model (:func:`run_case`).
+    model : HysteresisModel or None
+        The feedforward of Cases II-III (:func:`run_case`); None: the
+        workbook's shared Dahl model.
     controller : see :func:`piezolib.workbook.loop.run_loop`
         Case III's feedback (not None); an exported SOSController runs in float32.
     amplitudes_V : sequence of float, optional
@@ -408,7 +590,7 @@ def hysteresis_test(stage, dahl, controller, amplitudes_V=None, periods=4,
 
     def run(case, A):
         v_r = _table4_triangle(A, periods, stage.fs)[1]
-        return run_case(case, target, v_r, dahl, Kd, case_I_gain=1.0,
+        return run_case(case, target, v_r, model, Kd, case_I_gain=1.0,
                         delay_samples=delay_samples)
 
     def measure(result, A):
@@ -418,7 +600,7 @@ def hysteresis_test(stage, dahl, controller, amplitudes_V=None, periods=4,
     return _experiment(pd.Index(amplitudes_V, name="amplitude_V"), run, measure, batch)
 
 
-def tracking_test(stage, dahl, controller, frequencies_Hz=None, amplitude_um=None,
+def tracking_test(stage, model, controller, frequencies_Hz=None, amplitude_um=None,
                   discard_periods=DISCARD_PERIODS, min_measured_s=MIN_MEASURED_S,
                   delay_samples=COMPUTATION_DELAY_SAMPLES, seeds=None):
     """Table 5: tracking error % of 12 um triangles, Cases I-III.
@@ -432,8 +614,9 @@ def tracking_test(stage, dahl, controller, frequencies_Hz=None, amplitude_um=Non
     Parameters
     ----------
     stage : piezolib.problem.stage.VirtualStage
-    dahl : DahlModel or None
-        None: the workbook's shared model (:func:`run_case`).
+    model : HysteresisModel or None
+        The feedforward of Cases II-III (:func:`run_case`); None: the
+        workbook's shared Dahl model.
     controller : see :func:`piezolib.workbook.loop.run_loop`
         Case III's feedback (not None); an exported SOSController runs in float32.
     frequencies_Hz : sequence of float, optional
@@ -464,7 +647,7 @@ def tracking_test(stage, dahl, controller, frequencies_Hz=None, amplitude_um=Non
     def run(case, f):
         periods = tracking_periods(f, discard_periods, min_measured_s)
         v_r = tracking_reference(f, periods, amplitude_um, stage.fs)[1]
-        return run_case(case, target, v_r, dahl, Kd, delay_samples=delay_samples)
+        return run_case(case, target, v_r, model, Kd, delay_samples=delay_samples)
 
     def measure(result, f):
         return result.tracking_error_percent(f, discard_periods, range_um=amplitude_um)

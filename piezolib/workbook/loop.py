@@ -24,9 +24,9 @@ import numpy as np
 
 from piezolib.problem import paper
 from piezolib._checks import check_finite_array, check_integer, check_positive, check_proper, check_siso
+from piezolib.hysteresis.common import HysteresisModel
 from piezolib.hysteresis.dahl import DahlModel
-from piezolib.hysteresis.dahl import feedforward as dahl_feedforward
-from piezolib.metrics import tracking_error_percent
+from piezolib.metrics import peak_to_peak_error_percent, tracking_error_percent
 from piezolib.robust.discrete import DiscreteController, discretize
 from piezolib.robust.export import SectionFilter, SectionFilterBatch, SOSController
 
@@ -200,12 +200,26 @@ class LoopResult:
         s = self.steady_state(frequency_Hz, discard_periods)
         return tracking_error_percent(self.x_r_um[s], self.x_um[s], range_um)
 
+    def peak_to_peak_error_percent(self, frequency_Hz, discard_periods=DISCARD_PERIODS,
+                                   range_um=None):
+        """The literal reading, (max e - min e) / range % over the steady state
+        (:func:`piezolib.metrics.peak_to_peak_error_percent`); ``range_um`` as in
+        :meth:`tracking_error_percent`."""
+        s = self.steady_state(frequency_Hz, discard_periods)
+        return peak_to_peak_error_percent(self.x_r_um[s], self.x_um[s], range_um)
+
 
 def _feedforward_signal(feedforward, v_r):
     if feedforward is None:
         return np.zeros_like(v_r), "none"
-    if isinstance(feedforward, DahlModel):
-        return dahl_feedforward(feedforward, v_r), f"Dahl eq. 14 (g_a = {feedforward.g_a:.4g})"
+    if isinstance(feedforward, HysteresisModel):
+        name = f"{type(feedforward).__name__}.feedforward"
+        # a model of the user's own is held to what the loop needs: one finite u_f per sample
+        u_f = check_finite_array(f"{name}(v_r)", feedforward.feedforward(v_r), shape=v_r.shape,
+                                 real=True)
+        if isinstance(feedforward, DahlModel):
+            return u_f, f"Dahl eq. 14 (g_a = {feedforward.g_a:.4g})"
+        return u_f, name
     if isinstance(feedforward, Real) and not isinstance(feedforward, bool):
         g = check_positive("feedforward", feedforward)
         return v_r / g, f"static v_r / {g:.4g}"
@@ -217,8 +231,8 @@ def _feedforward_signal(feedforward, v_r):
             raise ValueError(f"feedforward offset must be finite, got {x0!r}")
         return (v_r - x0) / g, f"static (v_r - {x0:.4g}) / {g:.4g}"
     raise TypeError("feedforward must be None, a positive gain g (u_f = v_r / g), a pair "
-                    "(g, x0) (u_f = (v_r - x0) / g) or a hysteresis.DahlModel (eq. 14), "
-                    f"got {type(feedforward).__name__}")
+                    "(g, x0) (u_f = (v_r - x0) / g) or a hysteresis model with a "
+                    f"feedforward(x_r) method (DahlModel, PIModel), got {type(feedforward).__name__}")
 
 
 def run_loop(stage, v_r, *, feedforward=None, controller=None,
@@ -233,14 +247,16 @@ def run_loop(stage, v_r, *, feedforward=None, controller=None,
         member at once (as ``seeds`` does).
     v_r : array_like
         Reference voltage [V] at the stage's rate, 1-D (x_r = 3 um/V * v_r).
-    feedforward : None, float, (float, float) or DahlModel
+    feedforward : None, float, (float, float) or HysteresisModel
         ``None``: u_f = 0.  A positive number g: u_f = v_r / g (static map,
         no hysteresis compensation; g = 1 applies v_r itself).  A pair
-        (g, x0): u_f = (v_r - x0) / g.  A
-        :class:`~piezolib.hysteresis.DahlModel` in the workbook convention
-        (v = u_c, x = v_y, both in V): u_f = (x_r - x0 + H(x_r)) / g_a
-        (eq. 14, x0 = the model's offset) with x_r = v_r in sensor volts,
-        H from the model's start state.
+        (g, x0): u_f = (v_r - x0) / g.  A hysteresis model
+        (:class:`~piezolib.hysteresis.common.HysteresisModel`) in the
+        workbook convention (v = u_c, x = v_y, both in V): u_f =
+        ``model.feedforward(x_r)`` with x_r = v_r in sensor volts, from the
+        model's start state; for a :class:`~piezolib.hysteresis.DahlModel`
+        u_f = (x_r - x0 + H(x_r)) / g_a (eq. 14, x0 = the model's offset),
+        for a :class:`~piezolib.hysteresis.PIModel` its exact inverse.
     controller : None, float, control.LTI, DiscreteController or SOSController
         Feedback K on v_e = v_r - v_y (see :func:`discrete_controller`);
         ``None`` runs open loop.  An exported

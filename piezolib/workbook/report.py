@@ -30,7 +30,7 @@ from piezolib.workbook import outputs
 from piezolib.workbook.outputs import REFERENCE_STUDY
 
 __all__ = ["COLUMNS", "REASONS", "NOTEBOOK_TABLES", "OTHER_TABLES", "SIGNIFICANT_DIGITS",
-           "verdict", "ClaimTable", "save_results", "load_claims", "compare_studies",
+           "verdict", "goal_verdict", "side_by_side", "ClaimTable", "save_results", "load_claims", "compare_studies",
            "same_result", "reproduction_table", "inconsistent_verdicts", "verdict_counts"]
 
 COLUMNS = ["section", "quantity", "unit", "paper", "ours", "low", "high", "precision",
@@ -70,6 +70,39 @@ def verdict(paper, ours, rtol=0.0, atol=0.0, interval=None):
     if interval is not None:
         raise ValueError("interval is only meaningful for numeric claims")
     return ("agrees" if paper == ours else "differs"), "equal"
+
+
+def goal_verdict(low, high, goal):
+    """``"met"``, ``"missed"`` or ``"undecided"``: a statistic's 95 % interval against an upper goal.
+
+    Met when the whole interval lies below the goal, missed when it lies at
+    or above it; an interval that holds the goal cannot tell (a NaN interval
+    neither).
+
+    Examples
+    --------
+    >>> goal_verdict(0.8, 0.9, 1.0), goal_verdict(1.0, 1.2, 1.0), goal_verdict(0.9, 1.1, 1.0)
+    ('met', 'missed', 'undecided')
+    """
+    return "met" if high < goal else "missed" if low >= goal else "undecided"
+
+
+def side_by_side(published, ours):
+    """A published table and the workbook's, each column pair ``(column, "paper" | "ours")``.
+
+    Parameters
+    ----------
+    published, ours : pandas.DataFrame
+        Same rows; ``ours`` holds at least the published columns.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns in the published table's sorted order, the paper's value
+        before ours.
+    """
+    both = pd.concat({"paper": published, "ours": ours}, axis=1).swaplevel(axis=1)
+    return both[sorted(published.columns)]
 
 
 def _interval(interval):

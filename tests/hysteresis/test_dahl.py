@@ -175,6 +175,7 @@ def test_offset_only_shifts_the_output(form):
     np.testing.assert_allclose(shifted.H, plain.H, rtol=0, atol=1e-12)
     np.testing.assert_allclose(shifted.x + shifted.H, m.g_a * v - 0.15, rtol=0, atol=1e-12)
     assert model(form).x0 == 0.0                                          # eq. 13
+    assert m.with_offset(-0.15).static_part == (m.g_a, -0.15)            # x + H = g_a v + x0
 
 
 def test_rest_start_is_the_state_after_a_long_descending_stroke():

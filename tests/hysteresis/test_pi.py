@@ -50,6 +50,17 @@ def test_inverse_composed_with_model_is_the_identity(start):
     assert isinstance(m, hy.HysteresisModel)
 
 
+def test_static_part_is_the_line_the_major_loop_is_centred_on():
+    m = hy.PIModel(R, W, x0=0.3)
+    gain, offset = m.static_part
+    assert gain == pytest.approx(sum(W)) and offset == 0.3
+    # beyond 2 r_max every play moves: the branches are the line -+ sum w_i r_i
+    v = np.r_[np.linspace(0.0, 6.0, 601), np.linspace(6.0, 0.0, 601)[1:]]
+    x = m.simulate(v)
+    rising, falling = x[300], x[-301]                      # both at v = 3
+    assert (rising + falling) / 2 == pytest.approx(gain * 3.0 + offset, abs=1e-12)
+
+
 def test_not_invertible_and_bad_input_raise_clearly():
     flat = hy.PIModel(R, (0.0,) + W[1:])
     assert not flat.invertible

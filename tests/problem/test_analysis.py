@@ -65,6 +65,13 @@ def test_table3_side_by_side(models, published):
     assert table.loc["RP: peak mu(M)", "K"] == published.mu_RP
     with pytest.raises(TypeError, match="RobustnessAnalysis"):
         analysis.table3(published, "K")
+    peaks = analysis.table3_peaks(published, other)
+    assert list(peaks.columns) == ["K", "lag"]
+    assert peaks.loc["omega of mu_RP peak [rad/s]", "K"] == published.omega_RP
+    assert peaks.loc["mu_RP lower bound", "lag"] == other.mu_RP_lower
+    assert peaks.loc["omega of ||H_y T|| [rad/s]", "lag"] == other.omega_Hy_T
+    with pytest.raises(TypeError, match="table3_peaks takes RobustnessAnalysis"):
+        analysis.table3_peaks(published, "K")
 
 
 @pytest.mark.parametrize("change, error, match", [

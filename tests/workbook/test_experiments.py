@@ -6,11 +6,11 @@ import pandas as pd
 import pytest
 
 from piezolib import hysteresis as hy
-from piezolib import paper, signals
+from piezolib import metrics, paper, signals
 from piezolib.problem.hysteresis_fits import workbook_dahl_fit
 from piezolib.problem.stage import VirtualStage
 from piezolib.workbook import experiments as ex
-from piezolib.workbook import loop
+from piezolib.workbook import loop, report
 
 PARAMS = dict(alpha1=3.0, alpha2=4.0, beta1=0.0, beta2=0.2 * 4.0 / 30.0, gamma_a=30.0, g_a=0.95)
 
@@ -104,6 +104,43 @@ def test_cases_apply_what_the_module_says(stage):
     assert np.max(np.abs(III.record.u_c_V - III.u_c_requested_V)) <= lsb / 2 + 1e-15
 
 
+#: A Prandtl-Ishlinskii model in the same convention, invertible.
+PI = hy.PIModel((0.0, 0.3, 0.6), (0.8, 0.2, 0.1), x0=-0.05)
+
+
+def test_a_PI_model_runs_through_the_cases(stage):
+    v = reference()
+    I, II, III = (ex.run_case(c, stage, v, PI, controller=paper.controller())
+                  for c in ("I", "II", "III"))
+    np.testing.assert_allclose(I.u_f_V, (v + 0.05) / 1.1, rtol=0, atol=1e-15)   # static part
+    assert np.array_equal(II.u_f_V, PI.feedforward(v)) and np.all(II.u_b_V == 0)
+    assert np.array_equal(III.u_f_V, II.u_f_V) and np.any(III.u_b_V != 0)
+    h = ex.hysteresis_test(stage, PI, paper.controller(), amplitudes_V=[20.0])
+    assert h.runs[("II", 20.0)].feedforward == "PIModel.feedforward"
+    assert np.array_equal(h.runs[("I", 20.0)].u_f_V, h.runs[("I", 20.0)].v_r_V)    # g = 1
+    assert h.table.loc["case_III", 20.0] < h.table.loc["case_I", 20.0]
+
+
+def test_the_model_argument_is_checked_by_name(stage):
+    v = reference()
+    for bad in (object(), (1.0, 0.0), "dahl"):
+        with pytest.raises(TypeError, match=r"^model must be a hysteresis model .* got "):
+            ex.run_case("II", stage, v, bad)
+    with pytest.raises(TypeError, match="^model must be"):
+        ex.hysteresis_test(stage, object(), paper.controller(), amplitudes_V=[20.0])
+
+    class Plain:                       # a hysteresis model of one's own, without a static part
+        def simulate(self, v):
+            return v
+
+        def feedforward(self, x_r):
+            return np.asarray(x_r, dtype=float)
+    assert np.array_equal(ex.run_case("II", stage, v, Plain()).u_f_V, v)
+    with pytest.raises(ValueError, match="case I needs case_I_gain: a Plain has no static_part"):
+        ex.run_case("I", stage, v, Plain())
+    assert np.array_equal(ex.run_case("I", stage, v, Plain(), case_I_gain=2.0).u_f_V, v / 2.0)
+
+
 def test_tracking_periods_and_reference():
     assert ex.tracking_periods(1.0, discard_periods=2) == 3
     assert ex.tracking_periods(50.0, discard_periods=2) == 2 + 5
@@ -166,7 +203,7 @@ def test_bad_case_and_missing_controller(stage):
         ex.run_case("IV", stage, v, DAHL)
     with pytest.raises(ValueError, match="case III needs a controller"):
         ex.run_case("III", stage, v, DAHL)
-    with pytest.raises(TypeError, match="dahl must be"):
+    with pytest.raises(TypeError, match="model must be a hysteresis model"):
         ex.run_case("II", stage, v, paper.DAHL)
     with pytest.raises(ValueError, match="controller must be given"):
         ex.tracking_test(stage, DAHL, None)
@@ -236,3 +273,97 @@ def test_unseeded_experiment_has_no_statistics(stage):
     res = ex.tracking_test(stage, DAHL, paper.controller(), frequencies_Hz=[50.0])
     assert res.seeds is None and res.low is None and res.high is None
     assert res.noise_free is None and res.per_seed is None
+    for call in (lambda: res.statistics("case_III"), lambda: res.interval("case_III", 50.0),
+                 lambda: res.over_seeds("case_III"),
+                 lambda: ex.design_goal_table({"K": res})):
+        with pytest.raises(ValueError, match="needs a result run with seeds"):
+            call()
+
+
+# --- statistics, claims and goals of seeded results ------------------------------------
+def seeded_result(per_seed_rows, columns):
+    """An ExperimentResult whose per-seed tables are ``per_seed_rows`` (seed -> {row: values})."""
+    tables = {s: pd.DataFrame(rows, index=columns).T.reindex(paper.case_rows_index())
+              for s, rows in per_seed_rows.items()}
+    per_seed = pd.concat(tables, names=["seed"])
+    stack = np.stack([t.to_numpy() for t in tables.values()])
+    mean, low, high = metrics.mean_interval(stack, axis=0)
+
+    def like(data):
+        return pd.DataFrame(data, index=paper.case_rows_index(), columns=columns)
+    return ex.ExperimentResult(like(mean), {}, pd.DataFrame(), like(low), like(high),
+                               like(mean - 1.0), per_seed, tuple(tables))
+
+
+def tracking_like(case_III_by_seed, columns=(1.0, 10.0, 50.0)):
+    columns = pd.Index(columns, name="frequency_Hz")
+    rows = {s: {r: np.full(len(columns), 1.0 + s) for r in paper.case_rows_index()}
+            for s in case_III_by_seed}
+    for s, values in case_III_by_seed.items():
+        rows[s]["case_III"] = np.asarray(values, dtype=float)
+    return seeded_result(rows, columns)
+
+
+def test_statistics_interval_and_reductions_over_seeds():
+    res = tracking_like({0: [0.5, 0.9, 4.0], 1: [0.7, 0.8, 4.4], 2: [0.6, 1.0, 4.2]})
+    stats = res.statistics("case_III")
+    assert list(stats.index) == ["mean", "95 % low", "95 % high", "noise-free"]
+    np.testing.assert_allclose(stats.loc["mean"], [0.6, 0.9, 4.2])
+    np.testing.assert_allclose(stats.loc["noise-free"], stats.loc["mean"] - 1.0)
+    assert res.interval("case_III", 50.0) == (res.low.loc["case_III", 50.0],
+                                              res.high.loc["case_III", 50.0])
+    # each seed's largest error over 1-10 Hz, then the mean of those: not the max of the means
+    assert res.over_seeds("case_III", [1.0, 10.0]) == pytest.approx(
+        metrics.mean_interval([0.9, 0.8, 1.0]))
+    assert res.over_seeds("case_III", how="mean") == pytest.approx(
+        metrics.mean_interval([5.4 / 3, 5.9 / 3, 5.8 / 3]))
+    with pytest.raises(ValueError, match="how must be"):
+        res.over_seeds("case_III", how="median")
+
+
+def test_design_goals_are_judged_on_the_interval():
+    below = tracking_like({0: [0.5, 0.6, 4.0], 1: [0.5, 0.7, 4.1], 2: [0.6, 0.65, 4.05]})
+    above = tracking_like({0: [0.5, 1.2, 5.5], 1: [0.5, 1.3, 5.6], 2: [0.6, 1.25, 5.4]})
+    across = tracking_like({0: [0.5, 0.5, 4.0], 1: [0.5, 1.5, 6.0], 2: [0.6, 1.0, 5.0]})
+    no_50 = tracking_like({0: [0.5, 0.6], 1: [0.5, 0.7], 2: [0.6, 0.65]}, columns=(1.0, 10.0))
+    table = ex.design_goal_table({"below": below, "above": above, "across": across,
+                                  "no 50 Hz": no_50})
+    assert table["goal < 1 % up to 10 Hz"].tolist() == ["met", "missed", "undecided", "met"]
+    assert table["goal < 5 % at 50 Hz"].tolist() == ["met", "missed", "undecided", "undecided"]
+    assert table.loc["above", "max error up to 10 Hz [%]"] == pytest.approx(1.25)
+    assert np.isnan(table.loc["no 50 Hz", "error at 50 Hz [%]"])
+    loose = ex.design_goal_table({"above": above}, goals={
+        "peak_to_peak_error_pct_up_to_10Hz": 2.0, "peak_to_peak_error_pct_at_50Hz": 6.0})
+    assert loose.loc["above", "goal < 2 % up to 10 Hz"] == "met"
+
+
+def test_table_claims_one_per_published_cell_with_the_tolerances():
+    columns = pd.Index([1.0, 10.0, 15.0], name="frequency_Hz")      # 15 Hz: not published
+    published = paper.table5()
+    rows = {s: {r: published.reindex(columns=columns).loc[r].fillna(1.0).to_numpy() + 0.01 * s
+                for r in published.index} for s in range(3)}
+    res = seeded_result(rows, columns)
+    claims = report.ClaimTable("claims_test", "reference")
+    ex.add_table_claims(claims, "Table 5", published, res, "tracking error {row} at {col:g} Hz",
+                        notes={"case_I": "calibration"})
+    ex.add_table_claims(claims, "Table 5", published, res, "{row} at {col:g} Hz, published K",
+                        rows=["case_III"], notes="eq. 24 K", reason="")
+    frame = claims.frame()
+    assert frame.quantity.tolist()[:3] == ["tracking error case_I at 1 Hz",
+                                           "tracking error case_I at 10 Hz",
+                                           "tracking error case_II at 1 Hz"]
+    assert len(frame) == 6 * 2 + 2 and (frame.verdict == "agrees").all()
+    assert frame.note.tolist()[:2] == ["calibration"] * 2
+    assert set(frame.note[frame.quantity.str.contains("improvement")]) == {
+        "from the case rows above"}
+    assert set(frame.note[frame.quantity.str.contains("case_II ")]) == {""}
+    assert frame.quantity.iloc[-1] == "case_III at 10 Hz, published K"
+    assert frame.note.iloc[-1] == "eq. 24 K"
+    case_I = frame.set_index("quantity").loc["tracking error case_I at 1 Hz"]
+    assert case_I.tolerance == "+-20%"
+    assert case_I.low == pytest.approx(res.low.loc["case_I", 1.0])
+    improvement = frame.set_index("quantity").loc["tracking error improvement_II_vs_I at 1 Hz"]
+    assert improvement.tolerance == "+-5"
+    with pytest.raises(ValueError, match="needs a result run with seeds"):
+        ex.add_table_claims(claims, "Table 5", published,
+                            ex.ExperimentResult(res.table, {}, pd.DataFrame()), "{row}")

@@ -68,6 +68,28 @@ def test_feedforward_paths(stage):
     ff = loop.run_loop(stage, v, feedforward=DAHL).u_f_V
     step = hysteresis.DahlFeedforward(DAHL).run(v)                          # eq. 14
     assert np.allclose(ff, step, rtol=0, atol=1e-12)
+    pi = hysteresis.PIModel((0.0, 0.4), (0.9, 0.25))                       # any hysteresis model
+    run = loop.run_loop(stage, v, feedforward=pi)
+    assert np.array_equal(run.u_f_V, pi.feedforward(v)) and run.feedforward == "PIModel.feedforward"
+
+
+def test_a_model_feedforward_must_give_one_finite_input_per_sample(stage):
+    class Broken:
+        def simulate(self, v):
+            return v
+
+        def feedforward(self, x_r):
+            return x_r[:-1]
+    with pytest.raises(ValueError, match=r"Broken.feedforward\(v_r\)"):
+        loop.run_loop(stage, reference(), feedforward=Broken())
+
+
+def test_peak_to_peak_error_is_the_literal_reading_over_the_steady_state(stage):
+    run = loop.run_loop(stage, reference(periods=3), feedforward=1.0)
+    s = run.steady_state(20.0)
+    e = run.x_r_um[s] - run.x_um[s]
+    assert run.peak_to_peak_error_percent(20.0, range_um=12.0) == pytest.approx(
+        100 * np.ptp(e) / 12.0, rel=1e-12)
 
 
 # --- linear closed loop: the LTI theory, sample for sample ---------------------------

@@ -1,5 +1,6 @@
 """Paper-versus-reproduced claims: verdicts, the claim table and the reproduction table."""
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -185,3 +186,18 @@ def test_same_number_allows_one_unit_of_the_last_kept_digit():
     assert report.same_result(row, row.replace("0.1563", "0.1564"))
     assert not report.same_result(row, row.replace("0.1563", "0.1565"))
     assert not report.same_result(row, row.replace("q", "r"))
+
+
+def test_goal_verdict_needs_the_whole_interval_on_one_side():
+    assert report.goal_verdict(0.8, 0.99, 1.0) == "met"
+    assert report.goal_verdict(1.0, 1.2, 1.0) == "missed"           # at the goal is not below it
+    assert report.goal_verdict(0.9, 1.0, 1.0) == "undecided"
+    assert report.goal_verdict(np.nan, np.nan, 1.0) == "undecided"
+
+
+def test_side_by_side_pairs_each_published_column_with_ours():
+    published = pd.DataFrame({20.0: [1.0], 10.0: [2.0]}, index=["case_I"])
+    ours = pd.DataFrame({10.0: [2.5], 20.0: [1.5], 30.0: [9.0]}, index=["case_I"])
+    both = report.side_by_side(published, ours)
+    assert list(both.columns) == [(10.0, "paper"), (10.0, "ours"), (20.0, "paper"), (20.0, "ours")]
+    assert both.loc["case_I", (20.0, "ours")] == 1.5
