@@ -429,8 +429,9 @@ def _read_only(t, v_r):
 
 
 @functools.lru_cache(maxsize=64)
-def _table4_triangle(amplitude_V, periods, fs):
-    return _read_only(*table4_reference(amplitude_V, periods=periods, fs=fs))
+def _table4_triangle(amplitude_V, periods, fs, amplifier_gain):
+    return _read_only(*table4_reference(amplitude_V, periods=periods, fs=fs,
+                                        amplifier_gain=amplifier_gain))
 
 
 @functools.lru_cache(maxsize=64)
@@ -552,10 +553,10 @@ def hysteresis_test(stage, model, controller, amplitudes_V=None, periods=4,
     """Table 4: hysteresis % of 10 Hz triangles, Cases I-III.
 
     The reference of each amplitude A is :func:`table4_reference` (0 ...
-    A/10 V, built once); Case I applies it directly (g = 1, the actuator
-    voltage triangle of the paper), Cases II-III read it as x_r = v_r.  Each
-    loop is measured by :func:`table4_measure` (x = 3 um/V v_y against
-    10 v_r, first ``discard_periods`` left out).
+    A/g V with g the stage's amplifier gain, built once); Case I applies it
+    directly (the actuator voltage triangle of the paper), Cases II-III read
+    it as x_r = v_r.  Each loop is measured by :func:`table4_measure`
+    (x = 3 um/V v_y against g v_r, first ``discard_periods`` left out).
 
     Parameters
     ----------
@@ -589,13 +590,13 @@ def hysteresis_test(stage, model, controller, amplitudes_V=None, periods=4,
     target = stage if batch is None else batch
 
     def run(case, A):
-        v_r = _table4_triangle(A, periods, stage.fs)[1]
+        v_r = _table4_triangle(A, periods, stage.fs, stage.gain)[1]
         return run_case(case, target, v_r, model, Kd, case_I_gain=1.0,
                         delay_samples=delay_samples)
 
     def measure(result, A):
         return table4_measure(result.v_r_V, result.v_y_V, discard_periods=discard_periods,
-                              fs=stage.fs).percent
+                              fs=stage.fs, amplifier_gain=stage.gain).percent
 
     return _experiment(pd.Index(amplitudes_V, name="amplitude_V"), run, measure, batch)
 

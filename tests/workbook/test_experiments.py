@@ -188,6 +188,17 @@ def test_small_experiments_have_the_table_layout(stage):
             h.runs[(case, 20.0)].v_r_V, h.runs[(case, 20.0)].v_y_V, discard_periods=2).percent)
 
 
+def test_the_hysteresis_test_uses_the_stages_amplifier_gain():
+    # a stage with a x20 amplifier reaches the same actuator amplitude with half the input
+    stage = VirtualStage(seed=3, amplifier_gain=20.0)
+    h = ex.hysteresis_test(stage, DAHL, paper.controller(), amplitudes_V=[20.0], periods=2,
+                           discard_periods=1)
+    v_r = h.runs[("I", 20.0)].v_r_V
+    assert v_r.max() == pytest.approx(20.0 / 20.0)
+    assert h.table.loc["case_I", 20.0] == pytest.approx(ex.table4_measure(
+        v_r, h.runs[("I", 20.0)].v_y_V, discard_periods=1, amplifier_gain=20.0).percent)
+
+
 def test_case_table_layout():
     cols = pd.Index([1.0, 2.0], name="frequency_Hz")
     table = ex.case_table({"I": [10.0, 8.0], "II": [5.0, 4.0], "III": [1.0, 2.0]}, cols)
