@@ -30,11 +30,13 @@ from piezolib.workbook import outputs
 from piezolib.workbook.loop import COMPUTATION_DELAY_SAMPLES
 
 __all__ = ["Study", "UncertaintyChoice", "WeightChoice", "DesignChoice", "LoopChoice",
-           "ExperimentChoice", "StudyError", "REFERENCE", "UNCERTAINTY_WEIGHTS", "load",
-           "list_studies", "from_dict", "studies_dir", "choices_digest"]
+           "ExperimentChoice", "StudyError", "REFERENCE", "RESERVED_NAMES", "UNCERTAINTY_WEIGHTS",
+           "load", "list_studies", "from_dict", "studies_dir", "choices_digest"]
 
 #: Name of the paper's reproduction; only this study writes the committed outputs.
 REFERENCE = outputs.REFERENCE_STUDY
+#: Names no study may take, with what their folder under ``runs/`` already holds.
+RESERVED_NAMES = {"cache": "the pipeline's disk cache"}
 
 
 class StudyError(ValueError):
@@ -217,7 +219,10 @@ class ExperimentChoice:
         for name in ("amplitudes_V", "frequencies_Hz"):
             value = getattr(self, name)
             if isinstance(value, (list, tuple)):
-                object.__setattr__(self, name, tuple(float(v) for v in value))
+                # numbers become floats; anything else (true, "a") is left for check() to name
+                object.__setattr__(self, name, tuple(
+                    float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else v
+                    for v in value))
 
     def check(self):
         for name in ("amplitudes_V", "frequencies_Hz"):
@@ -264,8 +269,11 @@ class Study:
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not self.name or not all(
-                c.isalnum() or c in "_-" for c in self.name):
+                c.isascii() and (c.isalnum() or c in "_-") for c in self.name):
             raise StudyError(f"study name must be letters, digits, '_' or '-', got {self.name!r}")
+        if self.name in RESERVED_NAMES:
+            raise StudyError(f"study name {self.name!r} is reserved: runs/{self.name}/ holds "
+                             f"{RESERVED_NAMES[self.name]}")
         for section, cls in _SECTIONS.items():
             value = getattr(self, section)
             if not isinstance(value, cls):
@@ -405,9 +413,18 @@ def load(spec=REFERENCE):
     except tomllib.TOMLDecodeError as exc:
         raise StudyError(f"{path}: not valid TOML ({exc})") from None
     try:
-        return from_dict(data)
+        study = from_dict(data)
     except StudyError as exc:
         raise StudyError(f"{path}: {exc}") from None
+    # the name decides the output folder: a file must not write under another study's name
+    if study.name != path.stem:
+        raise StudyError(f"{path}: the study is named {study.name!r} but its file "
+                         f"{path.name!r}; name the file {study.name}.toml (outputs go to "
+                         "the folder of the study's name)")
+    if study.is_reference and study.choices() != Study().choices():
+        raise StudyError(f"{path}: a study named 'reference' must keep the paper's choices "
+                         "(it writes the committed results); give a changed study its own name")
+    return study
 
 
 def from_dict(data):

@@ -89,6 +89,35 @@ def test_the_uncertainty_weight_choice_is_checked(checkout):
     assert study.load(fitted.save(checkout / "studies" / "fitted.toml")) == fitted
 
 
+def test_a_study_file_cannot_pose_as_another_study(checkout):
+    studies = checkout / "studies"
+    # a file named reference.toml with a changed spread would overwrite the committed results
+    (studies / "reference.toml").write_text("name = 'reference'\n[uncertainty]\nspread = 0.03\n")
+    with pytest.raises(study.StudyError, match="must keep the paper's choices"):
+        study.load("reference")
+    (studies / "reference.toml").write_text(study.Study().to_toml())
+    assert study.load("reference") == study.Study()
+    # a name that differs from its file's writes into another study's folder
+    (studies / "mine.toml").write_text("name = 'theirs'\n")
+    with pytest.raises(study.StudyError, match="named 'theirs' but its file 'mine.toml'"):
+        study.load("mine")
+    with pytest.raises(study.StudyError, match="reserved"):
+        study.Study(name="cache")
+    (studies / "cache.toml").write_text("name = 'cache'\n")
+    with pytest.raises(study.StudyError, match="cache.toml: study name 'cache' is reserved"):
+        study.load("cache")
+    with pytest.raises(study.StudyError, match="letters, digits"):
+        study.Study(name="caf\u00e9")
+
+
+@pytest.mark.parametrize("values, shown", [("[10.0, true]", "True"), ('[10, "a"]', "'a'")])
+def test_a_list_of_numbers_names_the_field_of_a_bad_entry(checkout, values, shown):
+    (checkout / "studies" / "odd.toml").write_text(
+        f"name = 'odd'\n[experiments]\namplitudes_V = {values}\n")
+    with pytest.raises(study.StudyError, match=rf"odd.toml: experiments.amplitudes_V .*got {shown}"):
+        study.load("odd")
+
+
 def test_each_study_has_its_own_output_folders(checkout):
     reference = study.load("reference")
     assert reference.figures_dir == checkout / "figures"
