@@ -359,10 +359,16 @@ def achievable_range(lower, achieved, what="mu_RP"):
     Returns
     -------
     str
+        The bracket; when ``lower`` exceeds ``achieved`` there is none, and
+        the text says so instead of printing one.
     """
     lo = lower.value if isinstance(lower, LowerBound) else check_positive("lower", lower)
     achieved = check_positive("achieved", achieved)
     if not isinstance(what, str):
         raise TypeError(f"what must be a str (the quantity's name), got {what!r}")
+    if lo > achieved:
+        # no bracket: a peak read on a grid can miss the true one, or one of the two is wrong
+        return (f"achievable {what} >= {lo:.3f}, but ours is {achieved:.3f}, below that bound: "
+                "the design's peak was read on a grid that misses it, or a number is wrong")
     gap = achieved / lo - 1.0
     return f"achievable {what} in [{lo:.3f}, {achieved:.3f}] (ours within {100 * gap:.1f} % of the bound)"

@@ -17,7 +17,7 @@ def _parser():
         help="regenerate data, execute every notebook, write figures and tables")
     rep.add_argument("notebooks", nargs="*", metavar="NN",
                      help="only the notebooks whose names start with these prefixes")
-    rep.add_argument("--timeout", type=float, default=600,
+    rep.add_argument("--timeout", type=_positive_seconds, default=600,
                      help="per-cell time limit in seconds (default 600)")
     rep.add_argument("--jobs", type=_positive_int, default=None, metavar="N",
                      help="notebooks run side by side (default 2, 1 on a single core; "
@@ -46,6 +46,16 @@ def _parser():
     return parser
 
 
+def _positive_seconds(text):
+    try:
+        value = float(text)
+    except ValueError:
+        value = 0.0
+    if not 0.0 < value < float("inf"):
+        raise argparse.ArgumentTypeError(f"must be a positive number of seconds, got {text!r}")
+    return value
+
+
 def _positive_int(text):
     try:
         value = int(text)
@@ -57,12 +67,21 @@ def _positive_int(text):
 
 
 def _list_studies(stream):
+    """Every study file with its description; a broken file is listed with its error (status 1)."""
     from piezolib.workbook import study as studies
 
-    for name, s in studies.list_studies().items():
-        print(f"{name:<24s} {s.description}", file=stream)
+    broken = 0
+    paths = sorted(studies.studies_dir().glob("*.toml"), key=lambda p: p.stem != studies.REFERENCE)
+    for path in paths:
+        try:
+            s = studies.load(path)
+        except studies.StudyError as exc:
+            broken += 1
+            print(f"{path.stem:<24s} BROKEN: {exc}", file=stream)
+            continue
+        print(f"{s.name:<24s} {s.description}", file=stream)
         print(f"{'':<24s} outputs: {s.output_dir}", file=stream)
-    return 0
+    return 1 if broken else 0
 
 
 def _controllers(args, stream):
@@ -82,8 +101,20 @@ def _controllers(args, stream):
 def _compare(args, stream):
     import pandas as pd
 
-    from piezolib.workbook import report
+    from piezolib.workbook import outputs, report
+    from piezolib.workbook import study as studies
 
+    try:
+        if args.first == args.second:
+            raise ValueError(f"both arguments name the study {args.first!r}")
+        for name in (args.first, args.second):
+            s = studies.load(name)
+            if not s.is_reference and not any(outputs.study_results_dir(s.name).glob("*.csv")):
+                raise ValueError(f"study {s.name!r} has no results yet: run `python -m piezolib "
+                                 f"reproduce --study {name}` first")
+    except (ValueError, studies.StudyError) as exc:
+        print(f"python -m piezolib compare: {exc}", file=sys.stderr)
+        return 2
     table = report.compare_studies(args.first, args.second).reset_index()
     table["source"] = table["source"].str[:2]        # the notebook's number
     columns = ["source", "quantity", "unit", "paper", args.first, args.second,

@@ -68,6 +68,8 @@ def test_structured_bound_picks_largest_full_block():
     assert isinstance(best, LowerBound) and len(per) == 1 and best is per[0][1]
     text = achievable_range(best, 0.6)
     assert text.startswith("achievable mu_RP in [0.500, 0.600]")
+    text = achievable_range(1.0, 0.5)                  # no bracket: never print [1.000, 0.500]
+    assert "[" not in text and "below that bound" in text
 
 
 def test_bad_input_named():

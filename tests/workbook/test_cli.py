@@ -58,3 +58,34 @@ def test_list_studies_and_bad_study(capsys):
     assert out.splitlines()[0].startswith("reference")
     assert cli.main(["reproduce", "--study", "no_such_study"]) == 2
     assert "no study named 'no_such_study'" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("timeout", ["0", "-5", "nan", "inf", "soon"])
+def test_a_timeout_that_is_no_limit_is_a_usage_error(timeout, capsys):
+    with pytest.raises(SystemExit) as exc:
+        cli.main(["reproduce", "--timeout", timeout])
+    assert exc.value.code == 2
+    assert "positive number of seconds" in capsys.readouterr().err
+
+
+def test_compare_refuses_unknown_unrun_and_identical_studies(tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
+    (tmp_path / "studies").mkdir()
+    (tmp_path / "studies" / "unrun.toml").write_text("name = 'unrun'\n[weights]\nomega_e = 2000.0\n")
+    for argv, message in ((["compare", "reference", "nope"], "no study named 'nope'"),
+                          (["compare", "reference", "unrun"], "'unrun' has no results yet"),
+                          (["compare", "reference", "reference"], "both arguments name")):
+        assert cli.main(argv) == 2
+        assert message in capsys.readouterr().err
+
+
+def test_list_names_a_broken_study_file_and_fails(tmp_path, monkeypatch):
+    monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
+    (tmp_path / "studies").mkdir()
+    (tmp_path / "studies" / "good.toml").write_text("name = 'good'\ndescription = 'fine'\n")
+    (tmp_path / "studies" / "bad.toml").write_text("name = 'bad'\n[loop]\nfs_Hz = -1.0\n")
+    buf = io.StringIO()
+    assert cli.main(["reproduce", "--list"], stream=buf) == 1
+    out = buf.getvalue()
+    assert "good" in out and "fine" in out
+    assert "BROKEN" in out and "loop.fs_Hz" in out
