@@ -71,8 +71,7 @@ def _list_studies(stream):
     from piezolib.workbook import study as studies
 
     broken = 0
-    paths = sorted(studies.studies_dir().glob("*.toml"), key=lambda p: p.stem != studies.REFERENCE)
-    for path in paths:
+    for path in studies.study_files():
         try:
             s = studies.load(path)
         except studies.StudyError as exc:

@@ -249,7 +249,7 @@ def derive_controllers(study, cache=True):
 
 def reference_design_path():
     """``data/controllers/reference_design.json``: the committed reference controllers."""
-    return outputs.data_dir() / "controllers" / "reference_design.json"
+    return outputs.study_controllers_dir(studies.REFERENCE) / "reference_design.json"
 
 
 def study_controllers(study, cache=True):
@@ -302,7 +302,7 @@ def write_reference_design(cache=False):
     reference = studies.load(studies.REFERENCE)
     found = derive_controllers(reference, cache=cache)
     path = write_controllers(found, reference_design_path(), reference)
-    export_sections(reference, outputs.data_dir() / "controllers", found)
+    export_sections(reference, outputs.study_controllers_dir(reference.name), found)
     return path
 
 
@@ -366,10 +366,10 @@ def study_sections(study):
     """
     study = studies.load(study)
     if not study.is_reference:
-        return export_sections(study, study.output_dir / "controllers")
+        return export_sections(study, outputs.study_controllers_dir(study.name))
     found = {}
     for stem in SECTION_FILES:
-        path = outputs.data_dir() / "controllers" / f"{stem}.json"
+        path = outputs.study_controllers_dir(study.name) / f"{stem}.json"
         if not path.is_file():
             raise ArtifactError(f"{path} is missing: run `python -m piezolib controllers "
                                 "--write-reference` to derive and export the reference "

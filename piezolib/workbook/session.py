@@ -21,7 +21,7 @@ import pandas as pd
 from piezolib.workbook import plotting, report, style
 from piezolib.workbook import study as studies
 
-__all__ = ["Session", "start"]
+__all__ = ["Session", "start", "DISPLAY_OPTIONS"]
 
 #: pandas display options every notebook starts with (tables of claims and numbers).
 DISPLAY_OPTIONS = {"display.precision": 4, "display.max_colwidth": 90,

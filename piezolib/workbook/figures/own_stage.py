@@ -42,7 +42,7 @@ def extra_own_stage_records(records, marks=None):
                             f"got {type(rec).__name__}")
     marks = {} if marks is None else dict(marks)
     fig, axes = new_figure(len(records), 1, figsize=(9.0, 2.3 * len(records)),
-                                    squeeze=False)
+                           squeeze=False)
     for ax, (label, rec) in zip(axes[:, 0], records.items()):
         ax.plot(rec.time, rec.input, lw=0.7, color=PALETTE.peer)
         ax.set_ylabel(f"{rec.input_name} [{rec.input_unit}]", color=PALETTE.peer)

@@ -1,5 +1,7 @@
 """Figures of notebook 06 (tracking experiments): Fig. 14 and Fig. 15."""
 
+from string import ascii_lowercase
+
 from piezolib.problem import paper
 from piezolib.workbook import plotting
 from piezolib.workbook.style import new_figure
@@ -29,15 +31,14 @@ def fig14_hysteresis_cases(result, frequency_Hz=None, controller="our 6th-order 
     frequency_Hz = paper.HYSTERESIS_TEST["frequency_Hz"] if frequency_Hz is None else frequency_Hz
     amplitudes = list(result.table.columns)
     fig, axes = new_figure(len(CASES), len(amplitudes), figsize=(10, 7.2), sharex="col",
-                                    squeeze=False)
-    letters = "abcdefghijklmnopqrstuvwxyz"
+                           squeeze=False)
     for k, A in enumerate(amplitudes):
         for i, case in enumerate(CASES):
             run = result.runs[case, A]
             s = run.steady_state(frequency_Hz)
             ax = axes[i, k]
             ax.plot(paper.AMPLIFIER_GAIN * run.v_r_V[s], run.x_um[s], lw=0.8)
-            ax.set_title(f"({letters[len(amplitudes) * i + k]}) Case {case}, {A:.0f} V: "
+            ax.set_title(f"({ascii_lowercase[len(amplitudes) * i + k]}) Case {case}, {A:.0f} V: "
                          f"{result.table.loc[f'case_{case}', A]:.2f} %")
             if k == 0:
                 ax.set_ylabel("x = 3 v_y [um]")
@@ -72,8 +73,7 @@ def fig15_tracking_error(ours, published=None, fs=None):
     fs = paper.SAMPLING_FREQUENCY_HZ if fs is None else fs
     frequencies = list(ours.table.columns)
     fig, axes = new_figure(len(CASES), len(frequencies), figsize=(11, 5.6), sharey="row",
-                                    squeeze=False)
-    letters = "abcdefghijklmnopqrstuvwxyz"
+                           squeeze=False)
     for k, f in enumerate(frequencies):
         for i, case in enumerate(CASES):
             ax = axes[i, k]
@@ -85,7 +85,7 @@ def fig15_tracking_error(ours, published=None, fs=None):
                 last = slice(len(run) - 1 - int(round(fs / f)), None)   # the last period
                 phase = (run.t_s[last] - run.t_s[last][0]) * f
                 ax.plot(phase, run.error_um[last], style, lw=0.8, label=label)
-            ax.set_title(f"({letters[len(frequencies) * i + k]}) {case}, {f:g} Hz: "
+            ax.set_title(f"({ascii_lowercase[len(frequencies) * i + k]}) {case}, {f:g} Hz: "
                          f"{ours.table.loc[f'case_{case}', f]:.2f} %", fontsize=8)
             if k == 0:
                 ax.set_ylabel(f"Case {case}: e [um]")

@@ -220,15 +220,15 @@ def dahl_control(model, loop, *, discard=None, interactive=None):
     b2 = model.beta2
     sliders = {
         "g_a": linear_slider(w, "g_a", model.g_a, 0.75 * model.g_a, 1.25 * model.g_a,
-                              model.g_a / 400, description="g_a [V/V]"),
+                             model.g_a / 400, description="g_a [V/V]"),
         "alpha1": log_slider(w, "alpha1", model.alpha1, description="alpha1 [1/V]"),
         "alpha2": log_slider(w, "alpha2", model.alpha2, description="alpha2 [1/V^2]"),
         "beta2": linear_slider(w, "beta2", b2, min(0.0, 2 * b2), max(0.0, 2 * b2),
-                                max(abs(b2), 1e-3) / 200),
+                               max(abs(b2), 1e-3) / 200),
         "x0": linear_slider(w, "x0", model.x0, model.x0 - 0.5, model.x0 + 0.5, 0.005,
-                             description="x0 [V]"),
+                            description="x0 [V]"),
     }
     panel = LivePanel(w, sliders,
-                       lambda values: dahl_view(replace(model, **values), loop, discard=discard),
-                       draw_dahl, _dahl_summary)
+                      lambda values: dahl_view(replace(model, **values), loop, discard=discard),
+                      draw_dahl, _dahl_summary)
     return finish(panel, panel.box())

@@ -214,10 +214,10 @@ def spread_control(G, H_m, omega=None, spread=paper.UNCERTAINTY_SPREAD, *, level
         return static_figure(draw_spread(spread_view(G, spread, omega, levels), H_m))
     w = import_ipywidgets()
     slider = linear_slider(w, "spread", 100 * spread, 0.5, 10.0, 0.1,
-                            description="spread +- [%]")
+                           description="spread +- [%]")
     slider.description = unit_text(slider.description)
     panel = LivePanel(w, {"spread": slider},
-                       lambda values: spread_view(G, values["spread"] / 100, omega, levels),
-                       lambda view, fig: draw_spread(view, H_m, fig),
-                       lambda view: _spread_summary(view, H_m))
+                      lambda values: spread_view(G, values["spread"] / 100, omega, levels),
+                      lambda view, fig: draw_spread(view, H_m, fig),
+                      lambda view: _spread_summary(view, H_m))
     return finish(panel, panel.box())
