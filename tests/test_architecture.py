@@ -382,3 +382,21 @@ def test_the_private_name_check_sees_every_form(tmp_path):
     assert module_under_test(test_file) == "piezolib.robust.hinf"
     assert module_under_test(TESTS / "test_checks.py") == "piezolib._checks"
     assert module_under_test(TESTS / "robust" / "conftest.py") is None
+
+
+def test_every_name_in_all_exists():
+    # `from piezolib.<package> import *` fails on a name left in __all__ after a rename
+    missing = []
+    for path in SOURCES:
+        module = importlib.import_module(_module_name(path))
+        missing += [f"{module.__name__}.{name}" for name in getattr(module, "__all__", ())
+                    if not hasattr(module, name) and not _is_submodule(module, name)]
+    assert not missing, f"__all__ names that do not exist: {missing}"
+
+
+def _is_submodule(package, name):
+    try:
+        importlib.import_module(f"{package.__name__}.{name}")
+    except ModuleNotFoundError:
+        return False
+    return True

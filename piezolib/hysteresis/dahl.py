@@ -33,6 +33,11 @@ FORMS = ("printed", "bliman_sorine")
 STARTS = ("virgin", "rest")
 
 
+#: Largest scale (and inverse of the smallest) of alpha1, alpha2 and the steady
+#: state gamma_a / alpha2 whose products stay inside double precision.
+_SCALE_LIMIT = 1e150
+
+
 class NotInvertibleError(ValueError):
     """x + H(x) is not monotone along a stroke, so x = g_a v - H has no unique solution."""
 
@@ -91,6 +96,24 @@ class DahlModel:
             raise ValueError(f"form must be one of {FORMS}, got {self.form!r}")
         if self.start not in STARTS:
             raise ValueError(f"start must be one of {STARTS}, got {self.start!r}")
+        self._check_range()
+
+    def _check_range(self):
+        # the closed-form strokes multiply the state matrices (entries up to
+        # alpha1, alpha2) by states of the size of the steady state
+        # gamma_a / alpha2; beyond _SCALE_LIMIT those products overflow
+        # and the simulation returns infinities or zeros instead of the model
+        scales = {"alpha1": self.alpha1, "alpha2": self.alpha2,
+                  "gamma_a / alpha2 (the steady state)": abs(self.gamma_a) / self.alpha2}
+        for what, value in scales.items():
+            # a tiny steady state is only a weak hysteresis: no lower limit for it
+            low = 0.0 if what.startswith("gamma_a") else 1 / _SCALE_LIMIT
+            if not low <= value <= _SCALE_LIMIT:
+                raise ValueError(
+                    f"{what} = {value:.3g} is outside [{low:g}, {_SCALE_LIMIT:g}]: the stroke "
+                    "integration "
+                    "would overflow double precision; rescale the displacement unit "
+                    f"(alpha1={self.alpha1!r}, alpha2={self.alpha2!r}, gamma_a={self.gamma_a!r})")
 
     def steady_state(self, direction=1):
         """H reached after a long stroke in ``direction`` (+1 or -1) [x-unit].

@@ -91,6 +91,15 @@ def rls(regressors, y, initial_gain=1e6, initial_parameters=None):
                          f"precision), got {initial_gain:g}")
     psi = (np.zeros(p) if initial_parameters is None else
            check_finite_array("initial_parameters", initial_parameters, shape=(p,), real=True).copy())
+    size = np.max(np.abs(phi), axis=0)
+    # W(0) ~ 1 / theta^2 and eq. 3 squares theta: outside this range a square
+    # overflows or W underflows to 0, and the estimate silently stays at Psi(0)
+    bad = (size > 1e150) | ((size > 0) & (size < 1e-150))
+    if np.any(bad):
+        j = int(np.flatnonzero(bad)[0])
+        raise ValueError(f"regressors: column {j} has magnitude {size[j]:.3g}, outside "
+                         "[1e-150, 1e150] where eq. 3 can be evaluated in double precision; "
+                         "rescale the data (another unit)")
     power = np.mean(phi ** 2, axis=0)
     power[power == 0] = 1.0                          # all-zero regressor: unit scale
     W = np.diag(initial_gain / power)

@@ -7,7 +7,7 @@ stage_hysteresis the virtual stage's hysteresis truth (play operators)
 stage_data       its experiment files (chirps, Table 4 Case I loops): definitions, CSV I/O
 design           the workbook's mu controller in one call
 analysis         Table 3: NS, NP, RS, RP of any controller
-hysteresis       the paper's Dahl model and the workbook's Dahl fit to the Case I loops
+hysteresis_fits  the paper's Dahl model and the workbook's Dahl fit to the Case I loops
 paths            where the checkout and its ``data/`` folder are
 
 :func:`piezolib.problem.paper.problem` returns the models G, H_m, H_e, H_y, K
@@ -15,4 +15,5 @@ that the other modules here take explicitly (plant first, then the weights);
 ``piezolib.paper`` is the same module under its old name.
 """
 
-__all__ = ["paper", "genplant", "stage", "stage_data", "design", "analysis", "hysteresis"]
+__all__ = ["paper", "genplant", "stage", "stage_hysteresis", "stage_data", "design",
+           "analysis", "hysteresis_fits", "paths"]

@@ -14,7 +14,8 @@ import control as ct
 import numpy as np
 
 from piezolib._checks import (check_continuous, check_finite_array, check_finite_lti,
-                              check_integer, check_nonnegative, check_positive, check_siso)
+                              check_integer, check_nonnegative, check_positive, check_proper,
+                              check_siso)
 from piezolib.robust.lft import lower_lft
 from piezolib.robust.lti import (balance, from_scaled, scaled_coefficients, time_scale_of,
                                  to_scaled, with_signals)
@@ -77,7 +78,7 @@ DESIGN_ROLLOFF = RolloffWeight()
 
 
 def check_models(G, H_m, H_e, H_y):
-    """Check that the plant and the three weights are SISO LTI models; return them.
+    """Check that the plant and the weights are proper SISO LTI models (H_y: H_y G proper).
 
     Raises
     ------
@@ -88,7 +89,20 @@ def check_models(G, H_m, H_e, H_y):
         check_siso(name, sys)
         check_finite_lti(name, sys)
         check_continuous(name, sys)   # a discrete G used to come back continuous
+        if name != "H_y":             # H_y may be improper where G's roll-off covers it
+            check_proper(name, sys)   # else G's realisation drops its polynomial part
+    _check_output_weight_order(G, H_y)
     return G, H_m, H_e, H_y
+
+
+def _check_output_weight_order(G, H_y):
+    """Raise unless H_y G is proper: H_y's excess zeros at most G's relative degree."""
+    g_num, g_den = _tf_coefficients(G)
+    y_num, y_den = _tf_coefficients(H_y)
+    excess, relative_degree = len(y_num) - len(y_den), len(g_den) - len(g_num)
+    if excess > relative_degree:
+        raise ValueError(f"H_y G is improper: H_y has {excess} excess zero(s), more than G's "
+                         f"relative degree {relative_degree}; give H_y poles (roll it off)")
 
 
 def _tf_coefficients(sys):
@@ -131,10 +145,7 @@ def _plant_with_output_weight(G, H_y, omega_s):
     poles = np.roots(y_den)
     poles = poles[np.argsort(-np.abs(poles))]
     relative_degree = len(g_den) - len(g_num)
-    n_split = min(len(poles), relative_degree - (len(y_num) - len(y_den)))
-    if n_split < 0:
-        raise ValueError("H_y G is improper: H_y has more excess zeros than G's "
-                         "relative degree")
+    n_split = min(len(poles), relative_degree - (len(y_num) - len(y_den)))   # >= 0: checked
     split, rest = poles[:n_split], poles[n_split:]
     if np.any(split.real >= 0):
         raise ValueError(f"H_y must be stable, got poles {split[split.real >= 0]}")

@@ -1157,6 +1157,15 @@ def case_I_hysteresis(records):
     return {A: hysteresis_percent(rec.v_a_V, rec.x_measured_um) for A, rec in records.items()}
 
 
+def _check_targets(targets):
+    """{amplitude [V]: hysteresis [%]} with both positive and finite (log-parameter fit)."""
+    if not isinstance(targets, dict) or not targets:
+        raise TypeError(f"targets must be a non-empty dict {{amplitude [V]: %}}, got {targets!r}")
+    return {check_positive("targets (amplitude)", A):
+            check_positive(f"targets[{A!r}] (hysteresis %)", value)
+            for A, value in targets.items()}
+
+
 def calibrate_hysteresis(law=CALIBRATED_HYSTERESIS, targets=None):
     """Re-derive the hysteresis parameters from Table 4 Case I only.
 
@@ -1179,9 +1188,15 @@ def calibrate_hysteresis(law=CALIBRATED_HYSTERESIS, targets=None):
         Calibrated law (c and rho rounded to 6 significant digits).
     achieved : dict
         {amplitude: %} of the noise-free stage with that law.
+
+    Raises
+    ------
+    TypeError, ValueError
+        ``targets`` not a dict of positive, finite amplitudes and percentages.
     """
     if targets is None:
         targets = paper.table4().loc["case_I"].to_dict()
+    targets = _check_targets(targets)
     amplitudes = sorted(targets)
     want = np.array([targets[A] for A in amplitudes])
 

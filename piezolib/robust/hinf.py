@@ -95,6 +95,10 @@ class HinfResult:
         gamma judged infeasible.
     attempts : tuple
         (gamma, outcome) of every trial, in order.
+    realization : str
+        "as given", or how P was re-realised when the given realisation gave
+        no converged controller and the re-realised one did better (the
+        result is then checked on the plant as given too).
     """
 
     K: ct.StateSpace
@@ -112,6 +116,7 @@ class HinfResult:
     elapsed: float
     converged: bool = True
     attempts: tuple = field(default=(), repr=False)
+    realization: str = "as given"
 
 
 # --- plant partition, regularisation and normalisation ----------------------
@@ -629,9 +634,54 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60,
         the controller must pass the dense-grid check, stabilise the given
         plant with a margin and meet gamma on it).
     """
-    t0 = time.perf_counter()
     options = dict(gamma_max=gamma_max, rtol=rtol, max_iter=max_iter, time_scale=time_scale,
                    verify_rtol=verify_rtol)
+    t0 = time.perf_counter()
+    try:
+        res = _hinfsyn_escalating(P, nmeas, ncon, effort_weight, noise_weight, options)
+        failure = None
+    except HinfSynthesisError as exc:
+        res, failure = None, exc
+    if res is not None and res.converged:
+        return res
+    # A badly scaled realisation of the same system (a plant built by direct interconnection
+    # of transfer functions with coefficients up to 1e23: A entries to 5e11) can make the
+    # Riccati verdicts false: "no gamma <= 1e6 feasible" where the optimum is 1.87, also after
+    # diagonal balancing.  Its block-diagonal (modal) realisation, which separates the modes
+    # by well-conditioned similarities, does not have the problem: one retry on it.
+    retry = _on_modal_realization(P, nmeas, ncon, effort_weight, noise_weight, options)
+    if retry is not None and (res is None or retry.converged or retry.gamma < res.gamma):
+        return replace(retry, elapsed=time.perf_counter() - t0)
+    if res is None:
+        raise failure
+    return res
+
+
+def _on_modal_realization(P, nmeas, ncon, effort_weight, noise_weight, options):
+    """:func:`hinfsyn` on a block-diagonal realisation of P, with its controller checked on
+    P as given (stable loop, norm within the tolerance); None if that fails anywhere."""
+    P = ct.ss(P)
+    try:
+        Pm = ct.ss(ct.modal_form(P)[0], inputs=P.input_labels, outputs=P.output_labels)
+        res = _hinfsyn_escalating(Pm, nmeas, ncon, effort_weight, noise_weight, options)
+    except (HinfSynthesisError, np.linalg.LinAlgError, ValueError, ArithmeticError):
+        return None
+    loop = P.lft(res.K, nu=ncon, ny=nmeas)
+    if np.any(np.linalg.eigvals(np.asarray(loop.A, float)).real >= 0):
+        return None
+    norm, w_peak = lft_hinf_norm(P, res.K, _check_grid(np.asarray(loop.A, float), 2000),
+                                 omega_s=res.time_scale)
+    if not norm <= res.gamma * (1 + options["verify_rtol"]):
+        return None
+    return replace(res, norm=float(norm), omega_peak=float(w_peak),
+                   realization="block-diagonal (modal) form: the given realisation "
+                               "gave no converged controller")
+
+
+def _hinfsyn_escalating(P, nmeas, ncon, effort_weight, noise_weight, options):
+    """:func:`hinfsyn` on P as realised: the default regularisation, raised while no
+    controller verifies near the optimum."""
+    t0 = time.perf_counter()
     # the default regularisation can leave the central controllers too ill-conditioned to
     # verify near the optimum (a random plant with D12 = 0: X spanning 14 decades, every
     # loop unstable up to gamma 1e9 under one BLAS kernel, a few far above the optimum under

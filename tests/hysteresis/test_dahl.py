@@ -327,3 +327,14 @@ def test_bad_feedforward_inputs_raise():
         hy.feedforward(model(), [0.0, np.inf])
     with pytest.raises(TypeError, match="model must be a DahlModel"):
         hy.feedforward(PARAMS, [0.0, 1.0])              # the parameters, not a model
+
+
+@pytest.mark.parametrize("overrides, name", [(dict(alpha2=1e-300), "alpha2"),
+                                             (dict(alpha1=1e-300), "alpha1"),
+                                             (dict(alpha2=1e300), "alpha2"),
+                                             (dict(gamma_a=1e200, alpha2=1e-10), "gamma_a")])
+def test_parameters_beyond_double_precision_are_refused(overrides, name):
+    # alpha2 = 1e-300 simulated to x ~ 1e301 (overflowing products) instead of the model
+    with pytest.raises(ValueError, match=name):
+        model(**overrides)
+    model(gamma_a=1e-300)                   # a vanishing hysteresis is only weak: accepted

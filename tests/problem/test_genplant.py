@@ -199,3 +199,13 @@ def test_discrete_or_nan_plant_is_rejected():
         genplant.generalized_plant(ct.c2d(G, 1e-4), H_m, H_e, H_y)
     with pytest.raises(ValueError, match="G has a NaN coefficient"):
         genplant.generalized_plant(ct.tf([np.nan], [1.0, 1.0]), H_m, H_e, H_y)
+
+
+def test_improper_plant_is_refused_naming_it(models):
+    # an improper G used to be realised without its polynomial part, silently
+    G, H_m, H_e, H_y, _ = models
+    s = ct.tf("s")
+    with pytest.raises(ValueError, match=r"\bG must be proper"):
+        genplant.generalized_plant(G * s ** 4, H_m, H_e, H_y)
+    with pytest.raises(ValueError, match=r"H_e must be proper"):
+        genplant.generalized_plant(G, H_m, H_e * s * s, H_y)

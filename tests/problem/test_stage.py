@@ -326,3 +326,13 @@ def test_calibration_rederives_the_stored_parameters():
     assert law.decay_V == pytest.approx(CALIBRATED_HYSTERESIS.decay_V, rel=1e-3)
     target = paper.table4().loc["case_I"]
     assert all(abs(achieved[A] - target[A]) <= 0.5 for A in achieved)
+
+
+@pytest.mark.parametrize("targets, match", [({5.0: -1.0}, r"targets\[5.0\]"),
+                                            ({-5.0: 1.0}, "targets"),
+                                            ({5.0: np.nan}, r"targets\[5.0\]"),
+                                            ([1.0], "targets"), ({}, "targets")])
+def test_calibration_refuses_impossible_targets(targets, match):
+    # a negative target used to be fitted (to whatever least squares found)
+    with pytest.raises((TypeError, ValueError), match=match):
+        S.calibrate_hysteresis(targets=targets)

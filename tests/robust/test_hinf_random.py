@@ -147,5 +147,12 @@ def test_default_regularisation_is_raised_where_no_controller_verifies():
     assert res.effort_weight == 1.0 and "raised from the default" in res.regularization
     assert res.converged and res.norm <= res.gamma * (1 + 1e-3)
     assert np.all(ct.poles(P.lft(res.K, nu=nu, ny=ny)).real < 0)
-    with pytest.raises(HinfSynthesisError, match="effort_weight"):
-        hinfsyn(P, ny, nu, rtol=1e-4, gamma_max=1e9, effort_weight=1e-3)
+    # with the weight fixed at 1e-3 nothing converges: either no controller verifies at all,
+    # or the retry on the modal realisation verifies one short of the optimum, and says so
+    try:
+        fixed = hinfsyn(P, ny, nu, rtol=1e-4, gamma_max=1e9, effort_weight=1e-3)
+    except HinfSynthesisError as exc:
+        assert "effort_weight" in str(exc)
+    else:
+        assert not fixed.converged and fixed.norm <= fixed.gamma * (1 + 1e-3)
+        assert np.all(ct.poles(P.lft(fixed.K, nu=nu, ny=ny)).real < 0)

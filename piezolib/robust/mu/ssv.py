@@ -16,7 +16,7 @@ import control as ct
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
-from piezolib._checks import check_finite_array, check_integer
+from piezolib._checks import check_finite_array, check_integer, check_positive
 from piezolib.robust.blocks import parse_blk
 from piezolib.robust.mu.lower import complex_lower_bound, mixed_lower_bound
 from piezolib.robust.mu.refine.branch import branch_and_bound_upper
@@ -136,7 +136,9 @@ def _as_response(M, omega):
     if min(arr.shape) == 0:
         raise ValueError(f"M must not be empty, got shape {arr.shape}")
     if omega is not None:
-        omega = check_finite_array("omega", omega, ndim=1)
+        omega = check_finite_array("omega", omega, ndim=1, real=True)
+        if np.any(omega < 0):
+            raise ValueError(f"omega must be frequencies >= 0 [rad/s], got {omega.min():g}")
         if omega.shape[0] != arr.shape[0]:
             raise ValueError(f"omega has {omega.shape[0]} frequencies but M has "
                              f"{arr.shape[0]}")
@@ -242,6 +244,9 @@ def mussv(M, blk, omega=None, *, lower=True, restarts=3, iterations=60, tol=1e-1
     blocks = parse_blk(blk, p, q)
     restarts = check_integer("restarts", restarts, minimum=0)
     iterations = check_integer("iterations", iterations, minimum=1)
+    tol = check_positive("tol", tol)
+    if tol >= 1:
+        raise ValueError(f"tol must be below 1 (a decrease of a logarithm), got {tol!r}")
     if not isinstance(lower, bool):
         raise TypeError(f"lower must be True or False, got {lower!r}")
     _check_refine(refine, blocks, lower)
