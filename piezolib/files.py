@@ -1,12 +1,16 @@
-"""File integrity: atomic writes and manifests of row count, rate and checksums.
+"""File integrity: atomic writes, manifests of row count, rate and checksums, sealed JSON.
 
 :func:`atomic_write` and :func:`atomic_path` write a file through a
 temporary file in the same folder and :func:`os.replace`, so a reader never
-sees a partial file; :func:`manifest_entry` and :func:`verify_file` check a
+sees a partial file; a write that the system refuses (full disk, read-only
+file system, no permission) raises an :class:`OSError` that names the file.
+:func:`remove_stale_temporaries` removes the temporary files that a killed
+writer left behind.  :func:`manifest_entry` and :func:`verify_file` check a
 file against a stored row count, sampling rate and SHA-256 (with block
 checksums that locate a change to a range of lines).  A file that fails its
 check raises the :class:`~piezolib.records.RecordError` of a record file,
-which names the file and the line.
+which names the file and the line.  :func:`seal` adds a SHA-256 of its
+content to a JSON document and :func:`seal_problem` checks it on reading.
 
 Examples
 --------
@@ -27,18 +31,48 @@ piezolib.records.RecordError: ...loop.csv, line 3: truncated: the file ends afte
 """
 
 import contextlib
+import errno
 import hashlib
+import json
+import logging
 import os
+import re
+import stat
 import tempfile
+import time
 from pathlib import Path
 
-from piezolib._checks import check_integer, check_positive
+from piezolib._checks import check_integer, check_nonnegative, check_positive
 from piezolib.records import RecordError
 
-__all__ = ["atomic_write", "atomic_path", "manifest_entry", "verify_file", "BLOCK_LINES"]
+__all__ = ["atomic_write", "atomic_path", "remove_stale_temporaries", "STALE_AFTER_S",
+           "manifest_entry", "verify_file", "BLOCK_LINES", "CONTENT_KEY", "content_sha256",
+           "seal", "seal_problem"]
+
+logger = logging.getLogger(__name__)
 
 #: Lines per block checksum in a manifest entry.
 BLOCK_LINES = 1000
+
+#: Age [s] (since its last write) from which :func:`remove_stale_temporaries`
+#: takes a temporary file of :func:`atomic_path` for one a killed writer left.
+#: Every writer of the library writes a file in one call from memory, so a
+#: live temporary file is seconds old at most; 10 minutes is two orders of
+#: magnitude above that and above the clock skew of a network file system.
+#: Too short a value would make a stalled writer fail loudly (its
+#: ``os.replace`` finds no file), never corrupt the target; too long a value
+#: only leaves a hidden file until a later run.
+STALE_AFTER_S = 600.0
+
+#: Errors of the file system itself (not of the caller's code) that
+#: :func:`atomic_path` reports with the target's path when they carry no file name.
+_WRITE_ERRNOS = frozenset(getattr(errno, name) for name in
+                          ("ENOSPC", "EDQUOT", "EROFS", "EACCES", "EPERM", "EIO", "EFBIG")
+                          if hasattr(errno, name))
+
+#: Names of the temporary files of :func:`atomic_path`:
+#: ``.<name>.<8 characters of tempfile>.tmp<suffix of name>``.
+_TEMPORARY = re.compile(r"^\.(?P<name>.+)\.[a-z0-9_]{8}\.tmp(?P<suffix>(\.[^.]*)?)$")
 
 
 @contextlib.contextmanager
@@ -49,12 +83,24 @@ def atomic_path(path):
 
     The temporary name keeps the suffix of ``path`` so that writers choosing a
     format by suffix (matplotlib) still work.
+
+    Raises
+    ------
+    OSError
+        Of the type the system raised (full disk, read-only file system, no
+        permission, ...), naming ``path`` (its ``filename``) instead of the
+        temporary file or nothing: raised while creating, writing (an error
+        without a file name or naming the temporary file) or renaming it.
+        An error naming another file is the caller's and passes unchanged.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=f".tmp{path.suffix}",
-                               dir=path.parent)
-    os.close(fd)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=f".tmp{path.suffix}",
+                                   dir=path.parent)
+        os.close(fd)
+    except OSError as exc:
+        raise _naming(exc, path) from exc
     try:
         yield Path(tmp)
         # mkstemp makes the file private (0600); give it the mode a plain open() would
@@ -62,10 +108,32 @@ def atomic_path(path):
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)
         os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
+    except BaseException as exc:
+        # a failed removal must not hide why the write failed
+        with contextlib.suppress(OSError):
             os.remove(tmp)
+        if isinstance(exc, OSError) and _about_the_write(exc, tmp):
+            raise _naming(exc, path) from exc
         raise
+
+
+def _about_the_write(exc, tmp):
+    """Whether ``exc`` (raised inside :func:`atomic_path`) is about writing its file."""
+    if exc.filename is None:
+        # fh.write or fsync: ENOSPC and its kind carry no name; other errors
+        # without one (a socket's, say) may come from the caller's own code
+        return exc.errno in _WRITE_ERRNOS
+    return str(exc.filename) == str(tmp)
+
+
+def _naming(exc, path):
+    """A copy of ``exc`` (same type and errno) whose message and ``filename`` name ``path``."""
+    reason = exc.strerror or str(exc)
+    args = (exc.errno, f"cannot write {path}: {reason}", str(path))
+    try:
+        return type(exc)(*args)
+    except TypeError:                   # a subclass with another signature (BlockingIOError)
+        return OSError(*args)
 
 
 def atomic_write(path, data):
@@ -74,6 +142,12 @@ def atomic_write(path, data):
     Returns
     -------
     Path
+
+    Raises
+    ------
+    OSError
+        The system refused the write (full disk, ...): naming ``path``, which
+        is left as it was (:func:`atomic_path`).
     """
     if isinstance(data, str):
         data = data.encode("utf-8")
@@ -86,6 +160,57 @@ def atomic_write(path, data):
             fh.flush()
             os.fsync(fh.fileno())
     return path
+
+
+def remove_stale_temporaries(directory, older_than_s=STALE_AFTER_S):
+    """Remove the temporary files of :func:`atomic_path` that a killed writer left.
+
+    Only regular files whose name is the pattern of :func:`atomic_path`
+    (``.<name>.XXXXXXXX.tmp<suffix of name>``) are candidates, so no file of
+    the user's is touched; of those, only files not written to for
+    ``older_than_s`` seconds, so the live file of a concurrent writer stays
+    (:data:`STALE_AFTER_S`).  Each removal is logged (warning).
+
+    Parameters
+    ----------
+    directory : str or Path
+        Searched with its sub-folders (symbolic links are not followed); a
+        missing folder has nothing to remove.
+    older_than_s : float, optional
+
+    Returns
+    -------
+    list of Path
+        The files removed.
+    """
+    older_than_s = check_nonnegative("older_than_s", older_than_s)
+    now = time.time()
+    removed = []
+    for folder, _, names in os.walk(directory):
+        for name in names:
+            path = Path(folder) / name
+            if not _is_temporary_name(name):
+                continue
+            try:
+                info = path.lstat()
+                if not stat.S_ISREG(info.st_mode):     # a link or a folder is not ours
+                    continue
+                age = now - info.st_mtime
+                if age < older_than_s:
+                    continue
+                path.unlink()
+            except FileNotFoundError:
+                continue                      # its writer finished or removed it meanwhile
+            logger.warning("removed %s: a temporary file left by an interrupted write "
+                           "(%.0f s old)", path, age)
+            removed.append(path)
+    return removed
+
+
+def _is_temporary_name(name):
+    """Whether ``name`` is one :func:`atomic_path` gives its temporary files."""
+    match = _TEMPORARY.match(name)
+    return bool(match) and Path(match["name"]).suffix == match["suffix"]
 
 
 def _blocks(lines):
@@ -163,3 +288,59 @@ def verify_file(path, entry, rows=None, fs=None):
                                   f"{first}-{min(first + BLOCK_LINES - 1, len(lines))}",
                                   path, first)
         raise RecordError("content differs from the manifest (SHA-256)", path)
+
+
+#: Key of a JSON document's SHA-256 (:func:`seal`).
+CONTENT_KEY = "content_sha256"
+
+
+def content_sha256(doc):
+    """SHA-256 (hex) of a JSON document's canonical form, its :data:`CONTENT_KEY` left out.
+
+    The canonical form (sorted keys, no spaces, floats as ``repr``) does not
+    depend on how the file was indented, so a writer may format as it likes.
+    """
+    body = {key: value for key, value in doc.items() if key != CONTENT_KEY}
+    canonical = json.dumps(body, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(canonical.encode("utf-8")).hexdigest()
+
+
+def seal(doc):
+    """``doc`` with its :func:`content_sha256` under :data:`CONTENT_KEY`, after its first key.
+
+    After the first key (a format version, which a reader checks first) rather
+    than last, so that adding the checksum to an existing file adds one line
+    and changes no other.
+
+    Returns
+    -------
+    dict
+        A new dict; ``doc`` is not changed.
+    """
+    items = [(key, value) for key, value in doc.items() if key != CONTENT_KEY]
+    return dict(items[:1] + [(CONTENT_KEY, content_sha256(doc))] + items[1:])
+
+
+def seal_problem(doc):
+    """Why ``doc`` (read from a file of :func:`seal`) fails its checksum, or None.
+
+    Returns
+    -------
+    str or None
+        ``"it has no content checksum ..."``, ``"content differs from its
+        checksum: ..."``, or None for an intact document.
+
+    Examples
+    --------
+    >>> doc = seal({"format": 1, "gain": 0.1})
+    >>> list(doc) == ["format", CONTENT_KEY, "gain"], seal_problem(doc)
+    (True, None)
+    >>> seal_problem({**doc, "gain": 0.2})
+    'content differs from its checksum: the file was edited or corrupted'
+    """
+    stored = doc.get(CONTENT_KEY)
+    if stored is None:
+        return f"it has no content checksum ({CONTENT_KEY})"
+    if stored != content_sha256(doc):
+        return "content differs from its checksum: the file was edited or corrupted"
+    return None

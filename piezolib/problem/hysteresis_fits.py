@@ -24,7 +24,7 @@ from piezolib._checks import check_integer
 from piezolib.hysteresis.dahl import FORMS, STARTS, DahlModel
 from piezolib.hysteresis.fit import check_fit_options, fit_dahl, rescore_dahl
 from piezolib.problem.paths import data_dir
-from piezolib.files import atomic_write
+from piezolib.files import CONTENT_KEY, atomic_write, seal, seal_problem
 from piezolib.hysteresis.pi import fit_pi
 
 __all__ = ["published_dahl", "CASE_I_CANDIDATES", "WORKBOOK_DAHL", "fit_case_I_loops",
@@ -253,24 +253,58 @@ def _stored_fit(path):
 
 
 def read_dahl_model(path):
-    """A :class:`DahlModel` from a JSON file of :func:`write_dahl_model`."""
+    """A :class:`DahlModel` from a JSON file of :func:`write_dahl_model`.
+
+    Raises
+    ------
+    ValueError
+        Naming the file: not a Dahl model file of this format, or its content
+        fails its checksum (edited or corrupted), with the way to write it anew.
+    """
     path = Path(path)
+    doc = _read_model_document(path)
+    problem = seal_problem(doc)
+    if problem is not None:
+        what = (problem if CONTENT_KEY in doc else
+                f"not a Dahl model file written by this version of piezolib ({problem})")
+        raise ValueError(f"{path}: {what}; write it anew with {_rewrite_hint(path)}")
     try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-        if doc.get("format") != _MODEL_FORMAT:
-            raise ValueError(f"format {doc.get('format')!r}, expected {_MODEL_FORMAT}")
         return DahlModel(**doc["model"])
     except (KeyError, TypeError, ValueError) as exc:
         raise ValueError(f"{path}: not a Dahl model file ({exc})") from None
 
 
+def _read_model_document(path):
+    """The JSON object of a Dahl model file, after checking its format version."""
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+        if not isinstance(doc, dict):
+            raise ValueError(f"a JSON {type(doc).__name__}, not an object")
+        if doc.get("format") != _MODEL_FORMAT:
+            raise ValueError(f"format {doc.get('format')!r}, expected {_MODEL_FORMAT}")
+        return doc
+    except ValueError as exc:
+        raise ValueError(f"{path}: not a Dahl model file ({exc})") from None
+
+
+def _rewrite_hint(path):
+    """How to write the Dahl model file ``path`` anew."""
+    if path.resolve() == workbook_dahl_path().resolve():
+        return "`python -m piezolib controllers --write-reference`"
+    return "piezolib.problem.hysteresis_fits.write_dahl_model"
+
+
 def write_dahl_model(model, path, about=""):
-    """Write ``model`` as JSON (floats at full precision: they read back bit for bit)."""
+    """Write ``model`` as JSON (floats at full precision: they read back bit for bit).
+
+    The file carries the SHA-256 of its content (:func:`piezolib.files.seal`),
+    which :func:`read_dahl_model` checks.
+    """
     if not isinstance(model, DahlModel):
         raise TypeError(f"model must be a DahlModel, got {type(model).__name__}")
     doc = {"format": _MODEL_FORMAT, "about": about,
            "model": {f.name: getattr(model, f.name) for f in fields(model)}}
-    return atomic_write(path, json.dumps(doc, indent=1) + "\n")
+    return atomic_write(path, json.dumps(seal(doc), indent=1) + "\n")
 
 
 def write_workbook_dahl():

@@ -14,15 +14,20 @@ DK-iteration follows a path that depends on floating-point details).  It is
   06 and 07, and re-running 06 does not redo the DK-iteration.
 
 ``PIEZOLIB_CACHE=off`` disables the disk cache; ``PIEZOLIB_CACHE=<folder>``
-moves it.
+moves it.  Every cache entry carries a SHA-256 of its content
+(:func:`checked_cache_call`): an entry that was corrupted on disk is computed
+anew, never served.  The committed and written controller files carry one
+too (:func:`write_controllers`), checked by :func:`read_controllers`.
 """
 
 import copyreg
 import functools
 import hashlib
+import inspect
 import json
 import logging
 import os
+import pickle
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -32,7 +37,7 @@ import numpy as np
 from piezolib.problem import paper
 from piezolib.problem.design import design_controller
 from piezolib.problem.hysteresis_fits import write_workbook_dahl
-from piezolib.files import atomic_write
+from piezolib.files import CONTENT_KEY, atomic_write, seal, seal_problem
 from piezolib.robust import export, frequency_grid
 from piezolib.robust.discrete import discretize
 from piezolib.uncertainty import fit_covering_weight, model_set, relative_error_envelope
@@ -40,7 +45,8 @@ from piezolib.workbook import outputs
 from piezolib.workbook import study as studies
 
 __all__ = ["StudyControllers", "study_problem", "study_uncertainty_weight",
-           "study_controllers", "derive_controllers", "design_choices", "design_digest", "memory", "library_fingerprint", "reference_design_path",
+           "study_controllers", "derive_controllers", "design_choices", "design_digest",
+           "memory", "checked_cache_call", "library_fingerprint", "reference_design_path",
            "write_controllers", "read_controllers", "write_reference_design",
            "case_III_controllers", "discretized_controllers", "export_sections",
            "study_sections", "SECTION_FILES", "ArtifactError", "CACHE_ENV"]
@@ -192,6 +198,90 @@ def memory():
     return joblib.Memory(location=location, verbose=0)
 
 
+def checked_cache_call(func, *args):
+    """``func(*args)`` through the disk cache (:func:`memory`), each entry checked on reading.
+
+    The cache stores the result pickled, together with the SHA-256 of the
+    pickle, and unpickles it only when the bytes read match it: a cache
+    entry that was corrupted on disk (a flipped bit, a truncated file) is
+    computed anew and stored again, with a warning, instead of served.
+
+    Parameters
+    ----------
+    func : callable
+        A module-level function with a picklable result; its qualified name
+        and its source key the entry, with ``args``.
+    *args
+        Its positional arguments (hashed by joblib).
+
+    Returns
+    -------
+    value : object
+        ``func(*args)``.
+    source : str
+        Where it came from: ``"disk cache"``, ``"derived (now cached)"``,
+        ``"recomputed (cache entry failed its checksum)"``,
+        ``"recomputed (cache entry unreadable)"`` or ``"derived (disk cache off)"``.
+    """
+    store = memory()
+    if store.store_backend is None:
+        return func(*args), "derived (disk cache off)"
+    # `func` is passed but not hashed (its name and source are); `ran` tells whether
+    # func ran in this call, which check_call_in_cache cannot: joblib silently
+    # recomputes an entry it cannot load
+    cached = store.cache(_sealed_call, ignore=["func", "ran"])
+    key = (f"{func.__module__}.{func.__qualname__}", _source_digest(func), args)
+    ran = []
+    was_stored = cached.check_call_in_cache(*key, func, ran)
+    entry = cached(*key, func, ran)
+    if ran:
+        if not was_stored:
+            return _unsealed(entry)[0], "derived (now cached)"
+        problem = "unreadable"
+        value = _unsealed(entry)[0]
+    else:
+        value, problem = _unsealed(entry)
+        if problem is None:
+            return value, "disk cache"
+        # overwrite the entry, so that the next call reads a good one
+        value = _unsealed(cached.call(*key, func, ran)[0])[0]
+    logger.warning("the disk cache entry of %s in %s %s: computed anew", key[0],
+                   store.location, "could not be read" if problem == "unreadable" else problem)
+    return value, f"recomputed (cache entry {problem})"
+
+
+def _sealed_call(name, code, args, func, ran):
+    """The computation :func:`checked_cache_call` caches: ``func(*args)`` pickled and the
+    SHA-256 (hex) of the pickle (``name`` and ``code`` only key the entry; ``ran`` records
+    that it ran)."""
+    ran.append(True)
+    payload = pickle.dumps(func(*args), protocol=pickle.HIGHEST_PROTOCOL)
+    return payload, hashlib.sha256(payload).hexdigest()
+
+
+def _unsealed(entry):
+    """(value, None) from an entry of :func:`_sealed_call`, or (None, what is wrong with it)."""
+    if not (isinstance(entry, tuple) and len(entry) == 2 and isinstance(entry[0], bytes)
+            and isinstance(entry[1], str)):
+        return None, "unreadable"
+    payload, digest = entry
+    if hashlib.sha256(payload).hexdigest() != digest:
+        return None, "failed its checksum"
+    try:
+        return pickle.loads(payload), None
+    except Exception:       # the bytes it was stored with, yet no longer loadable here
+        return None, "unreadable"
+
+
+def _source_digest(func):
+    """SHA-256 (16 hex digits) of ``func``'s source: a changed function misses the cache."""
+    try:
+        text = inspect.getsource(func)
+    except (OSError, TypeError):        # no source (a builtin): its name keys it alone
+        text = ""
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
+
+
 def _design_pair(uncertainty, weights, design, loop, fingerprint):
     """Both designs for the given choices (the cached computation; ``fingerprint``
     only keys the cache)."""
@@ -216,12 +306,14 @@ def derive_controllers(study, cache=True):
     ----------
     study : Study, str or path
     cache : bool
-        Use the disk cache (:func:`memory`); False always recomputes.
+        Use the disk cache (:func:`memory`, through :func:`checked_cache_call`);
+        False always recomputes.
 
     Returns
     -------
     StudyControllers
-        With ``design`` and ``nodelay`` set.
+        With ``design`` and ``nodelay`` set; ``source`` says whether they were
+        read from the cache, derived, or recomputed for a corrupted cache entry.
     """
     study = studies.load(study)
     # the model set enters the cache key only when H_m is fitted to it
@@ -230,10 +322,7 @@ def derive_controllers(study, cache=True):
     args = (uncertainty, *(study.choices(s)[s] for s in _DESIGN_SECTIONS),
             library_fingerprint())
     if cache:
-        cached = memory().cache(_design_pair)
-        hit = cached.check_call_in_cache(*args)
-        delay_aware, nodelay = cached(*args)
-        source = "disk cache" if hit else "derived (now cached)"
+        (delay_aware, nodelay), source = checked_cache_call(_design_pair, *args)
     else:
         delay_aware, nodelay = _design_pair(*args)
         source = "derived"
@@ -378,8 +467,16 @@ def study_sections(study):
     return found
 
 
+#: Command that writes the committed reference artifacts anew.
+_WRITE_REFERENCE = "python -m piezolib controllers --write-reference"
+
+
 def write_controllers(controllers, path, study):
-    """Write ``controllers`` as JSON (matrices with full float precision); return the path."""
+    """Write ``controllers`` as JSON (matrices with full float precision); return the path.
+
+    The file carries the SHA-256 of its content (:func:`piezolib.files.seal`),
+    which :func:`read_controllers` checks.
+    """
     study = studies.load(study)
     doc = {"format": ARTIFACT_FORMAT, "study": study.name, "digest": controllers.digest,
            "choices": design_choices(study),
@@ -390,23 +487,49 @@ def write_controllers(controllers, path, study):
                            for name in _CONTROLLERS}}
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    # json writes floats with repr: they read back bit for bit
-    return atomic_write(path, json.dumps(doc, indent=1) + "\n")
+    # json writes floats with repr: they read back bit for bit, so the checksum of the
+    # document read back is the one written
+    return atomic_write(path, json.dumps(seal(doc), indent=1) + "\n")
 
 
 def read_controllers(path):
-    """Read a file of :func:`write_controllers` back into :class:`StudyControllers`."""
+    """Read a file of :func:`write_controllers` back into :class:`StudyControllers`.
+
+    Raises
+    ------
+    ArtifactError
+        Naming the file: not a controller file of this format, or its content
+        fails its checksum (edited or corrupted).
+    """
     path = Path(path)
     try:
         doc = json.loads(path.read_text(encoding="utf-8"))
+        if not isinstance(doc, dict):
+            raise TypeError(f"a JSON {type(doc).__name__}, not an object")
         if doc.get("format") != ARTIFACT_FORMAT:
             raise ArtifactError(f"{path}: format {doc.get('format')!r}, expected "
                                 f"{ARTIFACT_FORMAT}")
+        _check_seal(doc, path)
         systems = {name: _ss_from_dict(doc["controllers"][name]) for name in _CONTROLLERS}
         return StudyControllers(study=doc["study"], digest=doc["digest"], source=str(path),
                                 mu={k: float(v) for k, v in doc["mu"].items()}, **systems)
     except (KeyError, TypeError, ValueError) as exc:
         raise ArtifactError(f"{path}: not a controller artifact ({exc})") from None
+
+
+def _check_seal(doc, path):
+    """Raise :class:`ArtifactError` when a controller file's content fails its checksum."""
+    problem = seal_problem(doc)
+    if problem is None:
+        return
+    name = doc.get("study") if isinstance(doc.get("study"), str) else "<study>"
+    is_reference = Path(path).resolve() == reference_design_path().resolve()
+    regenerate = (f"`{_WRITE_REFERENCE}`" if is_reference
+                  else f"`python -m piezolib reproduce --study {name}`")
+    if CONTENT_KEY in doc:
+        raise ArtifactError(f"{path}: {problem}; write it anew with {regenerate}")
+    raise ArtifactError(f"{path}: not a controller artifact written by this version of "
+                        f"piezolib ({problem}); write it anew with {regenerate}")
 
 
 def _ss_to_dict(sys):

@@ -7,7 +7,9 @@ into ``figures/`` and the paper-versus-reproduced tables into
 naming the notebook and the cell, when a step fails.  Two notebooks run side
 by side on a machine with two cores or more (``--jobs``); the reproduction
 report, which gathers the other notebooks' tables, runs last.  The notebooks
-on disk are never modified: they are executed in memory.
+on disk are never modified: they are executed in memory.  First of all, the
+temporary files that a killed earlier run left in ``data/`` and the study's
+output folder are removed (:func:`remove_stale_temporaries`).
 
 With ``--study``, the study's name or file is injected after each notebook's
 cell tagged ``parameters`` (as papermill does), the figures and tables go to
@@ -22,13 +24,14 @@ import time
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from pathlib import Path
 
-from piezolib import progress
+from piezolib import files, progress
 from piezolib.workbook import study as studies
-from piezolib.workbook.outputs import notebooks_dir, project_root, study_results_dir
+from piezolib.workbook.outputs import (data_dir, notebooks_dir, project_root,
+                                       study_figures_dir, study_results_dir)
 
 __all__ = ["DATA_STEPS", "DATA_CHECKS", "GATHERING", "check_data", "list_notebooks",
            "notebook_waves", "default_jobs", "inject_study", "run_notebook", "run",
-           "NotebookFailure"]
+           "remove_stale_temporaries", "NotebookFailure"]
 
 #: Data-generating steps run before the notebooks, as "module:function" names
 #: of functions that take no arguments and return the list of files written.
@@ -176,6 +179,8 @@ def run(selection=None, timeout=600, keep_going=False, data=True, stream=sys.std
     # kernels inherit this: threaded BLAS on small problems is slower on 2 cores
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     os.environ.setdefault("PIEZOLIB_ROOT", str(project_root()))
+    # before anything writes: what a killed earlier run left half-written
+    remove_stale_temporaries(chosen)
     steps = DATA_STEPS if data and not selection else []
     notebooks = list_notebooks(selection)
     counter = _Counter(stream, len(steps) + len(notebooks))
@@ -197,6 +202,25 @@ def run(selection=None, timeout=600, keep_going=False, data=True, stream=sys.std
           f"{out / 'figures'}, tables in {tables}"
           + (f", executed notebooks in {save_to}" if save_to else ""), file=stream, flush=True)
     return failures
+
+
+def remove_stale_temporaries(study, older_than_s=files.STALE_AFTER_S):
+    """Remove the temporary files a killed run left in ``data/`` and the study's outputs.
+
+    The folders a run writes to: ``data/`` (experiment files, tables,
+    controllers) and ``figures/`` for the reference study, ``data/`` and
+    ``runs/<study>/`` for any other; each with its sub-folders, through
+    :func:`piezolib.files.remove_stale_temporaries` (which logs each removal).
+
+    Returns
+    -------
+    list of Path
+        The files removed.
+    """
+    study = studies.load(study)
+    own = study_figures_dir(study.name) if study.is_reference else study.output_dir
+    return [path for folder in (data_dir(), own)
+            for path in files.remove_stale_temporaries(folder, older_than_s)]
 
 
 class _Counter:

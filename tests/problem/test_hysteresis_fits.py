@@ -1,5 +1,7 @@
 """The paper's Dahl model (published parameters) and the workbook's fit to the Case I loops."""
 
+import json
+
 import numpy as np
 import pytest
 
@@ -95,6 +97,37 @@ def test_a_stored_model_off_the_fits_optimum_is_refused(tmp_path, monkeypatch):
         ph.read_dahl_model(tmp_path / "bad.json")
     with pytest.raises(TypeError, match="DahlModel"):
         ph.write_dahl_model("model", tmp_path / "x.json")
+
+
+def test_an_edited_dahl_model_file_is_refused(tmp_path, monkeypatch):
+    committed = ph.workbook_dahl_path()
+    text = committed.read_text()
+    model = ph.read_dahl_model(committed)                     # intact: reads
+    # written and read back: the same model, bit for bit, through its checksum
+    assert ph.read_dahl_model(ph.write_dahl_model(model, tmp_path / "again.json")) == model
+    copy = tmp_path / "workbook_dahl.json"
+    edited = text.replace(repr(model.alpha2), repr(float(np.nextafter(model.alpha2, 0))))
+    assert edited != text
+    copy.write_text(edited)
+    with pytest.raises(ValueError, match=r"workbook_dahl\.json: content differs from its "
+                                         r"checksum: the file was edited or corrupted"):
+        ph.read_dahl_model(copy)
+    # at the committed place, the message names the command that writes it anew
+    monkeypatch.setattr(ph, "workbook_dahl_path", lambda: copy)
+    with pytest.raises(ValueError, match="differs.*`python -m piezolib controllers "
+                                         "--write-reference`"):
+        ph.read_dahl_model(copy)
+    # the committed file carries its checksum, after the format; a file without one is not
+    # one this version wrote
+    doc = json.loads(text)
+    assert list(doc)[:2] == ["format", "content_sha256"]
+    del doc["content_sha256"]
+    copy.write_text(json.dumps(doc, indent=1) + "\n")
+    with pytest.raises(ValueError, match="not a Dahl model file written by this version"):
+        ph.read_dahl_model(copy)
+    copy.write_text("[]")
+    with pytest.raises(ValueError, match="not a Dahl model file"):
+        ph.read_dahl_model(copy)
 
 
 def test_workbook_pi_fit_and_validation_records():

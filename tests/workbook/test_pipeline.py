@@ -1,6 +1,8 @@
 """The pipeline's controller artifacts: committed for the reference, cached for other studies."""
 
 import json
+import logging
+from types import SimpleNamespace
 
 import control as ct
 import numpy as np
@@ -72,6 +74,7 @@ def test_write_read_round_trip_is_bit_exact(tmp_path):
         assert np.array_equal(getattr(back.K_fixed, m), getattr(K, m))
     assert back.mu == {"fixed order": 0.1 + 0.2} and back.K_full.input_labels == ["v_e"]
     doc = json.loads(path.read_text())
+    assert len(doc["content_sha256"]) == 64                     # written with its checksum
     doc["format"] = 99
     path.write_text(json.dumps(doc))
     with pytest.raises(pipeline.ArtifactError, match="format 99"):
@@ -144,3 +147,140 @@ def test_reference_sections_are_the_committed_exports(tmp_path, monkeypatch):
     monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
     with pytest.raises(pipeline.ArtifactError, match="write-reference"):
         pipeline.study_sections("reference")
+
+
+# --- the disk cache: every entry checked on reading ---------------------------------------------
+
+FAKE_RUNS = []
+
+
+def fake_design_pair(uncertainty, weights, design, loop, fingerprint):
+    """Stands for the DK design (minutes): records of a stable 30-state controller."""
+    FAKE_RUNS.append(design)
+    rng = np.random.default_rng(design["max_iter"])
+    n = 30
+    K = ct.ss(-np.diag(np.arange(1.0, n + 1)) + 0.01 * rng.standard_normal((n, n)),
+              rng.standard_normal((n, 1)), rng.standard_normal((1, n)), [[0.0]],
+              inputs=["v_e"], outputs=["u_b"], name="K")
+    record = SimpleNamespace(K_full=K, K_reduced=K, K_fixed=K,
+                             musyn=SimpleNamespace(mu_peak=0.9),
+                             fixed_order=SimpleNamespace(mu_peak=0.95))
+    return record, record
+
+
+@pytest.fixture
+def fake_cache(tmp_path, monkeypatch):
+    """A disk cache in tmp_path, in front of :func:`fake_design_pair`; returns the cache folder."""
+    monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
+    monkeypatch.setenv(pipeline.CACHE_ENV, str(tmp_path / "cache"))
+    monkeypatch.setattr(pipeline, "_design_pair", fake_design_pair)
+    FAKE_RUNS.clear()
+    return tmp_path / "cache"
+
+
+SMALL = study.Study().replace(name="small", design={"max_iter": 2})
+
+
+def assert_same_controllers(found, fresh):
+    for name in ("K_full", "K_reduced", "K_fixed", "K_nodelay_full", "K_nodelay_reduced"):
+        for m in "ABCD":
+            np.testing.assert_array_equal(getattr(getattr(found, name), m),
+                                          getattr(getattr(fresh, name), m), err_msg=name)
+    assert found.mu == fresh.mu
+
+
+def cached_entry(folder):
+    [entry] = folder.rglob("output.pkl")
+    return entry
+
+
+def test_a_cache_entry_with_a_flipped_bit_is_recomputed_not_served(fake_cache, caplog):
+    first = pipeline.derive_controllers(SMALL)
+    assert first.source == "derived (now cached)" and len(FAKE_RUNS) == 1
+    hit = pipeline.derive_controllers(SMALL)
+    assert hit.source == "disk cache" and len(FAKE_RUNS) == 1
+    entry = cached_entry(fake_cache)
+    raw = bytearray(entry.read_bytes())
+    raw[len(raw) // 2] ^= 0x08                     # one bit, amid the stored matrices
+    entry.write_bytes(bytes(raw))
+    with caplog.at_level(logging.WARNING, logger=pipeline.__name__):
+        found = pipeline.derive_controllers(SMALL)
+    assert_same_controllers(found, pipeline.derive_controllers(SMALL, cache=False))
+    assert found.source == "recomputed (cache entry failed its checksum)"
+    assert len(FAKE_RUNS) == 3 and "failed its checksum" in caplog.text   # (+1: cache=False)
+    # the entry was stored anew: the next call reads it
+    again = pipeline.derive_controllers(SMALL)
+    assert again.source == "disk cache" and len(FAKE_RUNS) == 3
+    assert_same_controllers(again, found)
+
+
+@pytest.mark.filterwarnings("ignore:.*Exception while loading results:UserWarning")
+def test_a_truncated_cache_entry_is_recomputed_and_says_so(fake_cache, caplog):
+    first = pipeline.derive_controllers(SMALL)
+    entry = cached_entry(fake_cache)
+    raw = entry.read_bytes()
+    entry.write_bytes(raw[:len(raw) // 2])
+    with caplog.at_level(logging.WARNING, logger=pipeline.__name__):
+        found = pipeline.derive_controllers(SMALL)
+    assert found.source == "recomputed (cache entry unreadable)"
+    assert len(FAKE_RUNS) == 2 and "could not be read" in caplog.text
+    assert_same_controllers(found, first)
+    assert pipeline.derive_controllers(SMALL).source == "disk cache"
+
+
+def test_checked_cache_call_keys_by_function_and_arguments(fake_cache, monkeypatch):
+    value, source = pipeline.checked_cache_call(fake_design_pair, {}, {}, {"max_iter": 3}, {}, "x")
+    assert source == "derived (now cached)" and value[0].musyn.mu_peak == 0.9
+    assert pipeline.checked_cache_call(fake_design_pair, {}, {}, {"max_iter": 3}, {}, "x")[1] \
+        == "disk cache"
+    assert pipeline.checked_cache_call(fake_design_pair, {}, {}, {"max_iter": 4}, {}, "x")[1] \
+        == "derived (now cached)"
+    assert len(FAKE_RUNS) == 2
+    monkeypatch.setenv(pipeline.CACHE_ENV, "off")
+    assert pipeline.derive_controllers(SMALL).source == "derived (disk cache off)"
+
+
+# --- controller artifacts carry a checksum of their content -------------------------------------
+
+def edit_one_number(text, number):
+    """``text`` with the first ``repr(number)`` replaced by the next double down."""
+    edited = text.replace(repr(number), repr(float(np.nextafter(number, -np.inf))), 1)
+    assert edited != text
+    return edited
+
+
+def test_an_edited_controller_artifact_is_refused(tmp_path, monkeypatch):
+    committed = pipeline.reference_design_path()
+    text = committed.read_text()
+    found = pipeline.read_controllers(committed)                  # intact: reads
+    monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
+    copy = pipeline.reference_design_path()
+    copy.parent.mkdir(parents=True)
+    copy.write_text(edit_one_number(text, float(found.K_fixed.A[0, 0])))
+    with pytest.raises(pipeline.ArtifactError,
+                       match=r"reference_design\.json: content differs from its checksum: the "
+                             r"file was edited or corrupted; write it anew with "
+                             r"`python -m piezolib controllers --write-reference`"):
+        pipeline.read_controllers(copy)
+    with pytest.raises(pipeline.ArtifactError, match="differs from its checksum"):
+        pipeline.study_controllers("reference")
+    # the committed file carries its checksum, after the format, and a file without one is
+    # not one this version wrote
+    doc = json.loads(text)
+    assert list(doc)[:2] == ["format", "content_sha256"]
+    del doc["content_sha256"]
+    copy.write_text(json.dumps(doc, indent=1) + "\n")
+    with pytest.raises(pipeline.ArtifactError,
+                       match="not a controller artifact written by this version.*"
+                             "--write-reference"):
+        pipeline.read_controllers(copy)
+    # a study's own file names the run that writes it
+    other = tmp_path / "runs" / "small" / "artifacts" / "controllers.json"
+    other.parent.mkdir(parents=True)
+    other.write_text(edit_one_number(text, found.mu["fixed order"]).replace(
+        '"study": "reference"', '"study": "small"'))
+    with pytest.raises(pipeline.ArtifactError, match="reproduce --study small"):
+        pipeline.read_controllers(other)
+    copy.write_text("[1, 2]")
+    with pytest.raises(pipeline.ArtifactError, match="not a controller artifact"):
+        pipeline.read_controllers(copy)

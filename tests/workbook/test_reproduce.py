@@ -163,3 +163,32 @@ def test_every_workbook_notebook_has_a_parameters_cell_naming_the_study():
         tagged = [c for c in nb.cells if "parameters" in c.metadata.get("tags", [])]
         assert len(tagged) == 1 and 'study = "reference"' in tagged[0].source, path.name
         assert "session.start(study" in "".join(c.source for c in nb.cells), path.name
+
+
+def test_reproduce_first_removes_the_temporary_files_a_killed_run_left(workbook, caplog):
+    import io
+    import logging
+    import os
+    import time
+
+    from piezolib.workbook import study
+
+    def left(path, seconds=3600):
+        """A file named as atomic_path names its temporary files, last written long ago."""
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text("half a fi")
+        os.utime(path, (time.time() - seconds,) * 2)
+        return path
+
+    data = left(workbook / "data" / "results" / ".tracking.csv.k2j4x9_a.tmp.csv")
+    figure = left(workbook / "figures" / ".fig_05.png.abcdefgh.tmp.png")
+    live = left(workbook / "data" / ".chirp.csv.abcdefgh.tmp.csv", seconds=1)
+    other_study = left(workbook / "runs" / "wide" / "figures" / ".fig_05.png.abcdefgh.tmp.png")
+    users = left(workbook / "data" / "notes.tmp.csv")
+    with caplog.at_level(logging.WARNING):
+        assert reproduce.run(data=False, stream=io.StringIO(), jobs=1) == 0
+    assert not data.exists() and not figure.exists()
+    assert live.exists() and users.exists()
+    assert other_study.exists()                  # another study's folder: not this run's
+    assert str(data) in caplog.text and str(figure) in caplog.text
+    assert reproduce.remove_stale_temporaries(study.Study().replace(name="wide")) == [other_study]
