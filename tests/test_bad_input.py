@@ -305,7 +305,7 @@ CASES = {
                                   "directory": {"none": None, "a file": DATA / "README.md"},
                                   "name": {"not an identifier": "1 K", "number": 3},
                                   "meta": {"not a dict": [1, 2]},
-                                  "dtype": {"unknown": "float16"}}),
+                                  "dtype": {"unknown": "float16"}, "rtol": POSITIVE}),
     "identification.refit_numerator": (dict(poles=[-1.0, -5.0], u=U, y=Y, fs=FS, n_zeros=1),
                                        {"poles": {"nan": [np.nan, -5.0], "unstable": [1.0, -5.0],
                                                   "unpaired complex": [-1 + 1j, -5.0],

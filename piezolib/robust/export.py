@@ -20,26 +20,50 @@ precision asked for (float32 arithmetic for the float32 coefficients),
 :func:`sos_filter` runs it over a signal.  :func:`write_json` and
 :func:`write_c_header` write the coefficients in float64 and rounded to
 float32; :func:`read_json` reads them back.
+
+Rounding the coefficients to float32 moves every pole and zero.  Wherever
+that happens for a target (:func:`export_controller`, :func:`write_json`,
+:func:`write_c_header`, a float32 :class:`SectionFilter` and so
+:func:`sos_filter`) the float32 sections are checked against the float64
+ones (:meth:`SOSController.check_float32`): a section that rounding makes
+marginal or unstable is refused (:class:`ExportError`), and a response error
+larger than the first-order effect of the rounding (or than ``rtol``) is
+reported (:class:`ExportWarning`).
 """
 
+import functools
 import json
+import math
 import os
 import re
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
 import control as ct
 import numpy as np
+import scipy.linalg as la
 import scipy.signal as sig
 
 from piezolib._checks import (check_finite_array, check_finite_lti, check_integer, check_positive,
-                              check_siso)
+                              check_proper, check_siso)
 
 __all__ = ["SOSController", "controller_sos", "SectionFilter", "SectionFilterBatch",
            "sos_filter", "write_json",
-           "read_json", "write_c_header", "export_controller"]
+           "read_json", "write_c_header", "export_controller", "Float32Check", "ExportError",
+           "ExportWarning"]
 
 _DTYPES = {"float64": np.float64, "float32": np.float32}
+#: relative error allowed between the float64 sections and K_d on the check grid
+_SOS_RTOL = 1e-6
+
+
+class ExportError(ValueError):
+    """Rounding to float32 makes a stable (or marginal) section marginal (or unstable)."""
+
+
+class ExportWarning(UserWarning):
+    """The float32 sections differ from the float64 ones more than rounding explains."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -49,16 +73,31 @@ class SOSController:
     Attributes
     ----------
     sos : ndarray, shape (n_sections, 6)
-        Rows [b0, b1, b2, 1, a1, a2], float64.
+        Rows [b0, b1, b2, 1, a1, a2], float64 (read-only copy).
     fs : float
         Sampling rate [Hz].
     name : str
-        Identifier (used for the C symbol names).
+        Identifier (used for the C symbol names): letters, digits and
+        underscores, starting with a letter.
+
+    Raises
+    ------
+    ValueError, TypeError
+        A section matrix that is not finite, real and (n >= 1, 6), a section
+        not normalised (a0 != 1: every formula here divides by a0 = 1), a
+        non-positive fs or a name that is not a C identifier.
     """
 
     sos: np.ndarray
     fs: float
     name: str = "K"
+
+    def __post_init__(self):
+        sos = _normalised_sections("sos", self.sos)
+        sos.flags.writeable = False        # the float32 check is cached: no edits behind it
+        object.__setattr__(self, "sos", sos)
+        object.__setattr__(self, "fs", check_positive("fs", self.fs))
+        _check_name(self.name)
 
     @property
     def n_sections(self):
@@ -66,7 +105,11 @@ class SOSController:
         return self.sos.shape[0]
 
     def coefficients(self, dtype="float64"):
-        """The section matrix rounded to ``dtype`` ('float64' or 'float32')."""
+        """The section matrix rounded to ``dtype`` ('float64' or 'float32').
+
+        No check here: this is the float32 controller as it is, for analysis
+        (:meth:`check_float32` says whether it is still the controller).
+        """
         return self.sos.astype(_dtype(dtype))
 
     def frequency_response(self, omega, dtype="float64"):
@@ -83,12 +126,8 @@ class SOSController:
         ndarray of complex
         """
         omega = check_finite_array("omega", omega, ndim=1, min_length=1)
-        z = np.exp(1j * omega / self.fs)
-        sos = self.coefficients(dtype).astype(np.float64)
-        h = np.ones_like(z)
-        for b0, b1, b2, _, a1, a2 in sos:
-            h *= (b0 + b1 / z + b2 / z ** 2) / (1 + a1 / z + a2 / z ** 2)
-        return h
+        return _sections_response(self.coefficients(dtype).astype(np.float64),
+                                  np.exp(1j * omega / self.fs))
 
     def to_statespace(self, dtype="float64"):
         """The sections (``dtype`` coefficients) as a control.StateSpace at dt = 1/fs."""
@@ -97,6 +136,73 @@ class SOSController:
         for row in sos:
             sys = sys * ct.tf(row[:3], row[3:], 1.0 / self.fs)
         return ct.ss(sys, inputs="v_e", outputs="u_b", name=self.name)
+
+    def check_float32(self, rtol=None, what="controller"):
+        """Check the float32 sections against these (float64) ones.
+
+        Parameters
+        ----------
+        rtol : float, optional
+            Relative response error allowed at every frequency.  Default: the
+            first-order effect of rounding each coefficient to float32,
+            sum over sections and coefficients of half an ulp times
+            |d ln H / d c| (:class:`Float32Check`), which the rounding exceeds
+            only when it is no longer a small perturbation of the sections.
+        what : str
+            Name of the argument the sections came from (for the messages).
+
+        Returns
+        -------
+        Float32Check
+
+        Raises
+        ------
+        ExportError
+            A section stable in float64 is marginal or unstable in float32 (or
+            a marginal one unstable): the message names the section and gives
+            its pole radius in float64 and float32.
+
+        Warns
+        -----
+        ExportWarning
+            The float32 response error exceeds the tolerance somewhere (worst
+            error, its frequency, the tolerance there and the DC gains), or a
+            pole's distance to the unit circle changed by more than the
+            tolerance at the pole's frequency.
+        """
+        return self._float32_check.enforce(rtol, what, stacklevel=3)
+
+    @functools.cached_property
+    def _float32_check(self):
+        # computed once per controller (the sections are read-only), enforced at every use
+        return Float32Check.of(self.sos, self.fs, self.name)
+
+
+def _check_name(name):
+    if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", name):
+        raise ValueError(f"name must be a C identifier, got {name!r}")
+    return name
+
+
+def _normalised_sections(name, sos):
+    """``sos`` as a float64 (n >= 1, 6) array of real, finite rows with a0 = 1."""
+    sos = np.array(check_finite_array(name, sos, ndim=2, min_length=1, shape=(None, 6),
+                                      real=True), dtype=np.float64)
+    bad = np.nonzero(sos[:, 3] != 1)[0]
+    if bad.size:
+        i = int(bad[0])
+        raise ValueError(f"{name} section {i} has a0 = {float(sos[i, 3])!r}: sections must be "
+                         "normalised (a0 = 1), the Direct Form II transposed step assumes it")
+    return sos
+
+
+def _sections_response(sos, z):
+    """prod_i (b0 + b1/z + b2/z^2) / (a0 + a1/z + a2/z^2) at the points ``z``."""
+    w = 1 / z
+    h = np.ones_like(z)
+    for b0, b1, b2, a0, a1, a2 in sos:
+        h *= (b0 + b1 * w + b2 * w ** 2) / (a0 + a1 * w + a2 * w ** 2)
+    return h
 
 
 def _dtype(dtype):
@@ -108,11 +214,19 @@ def _dtype(dtype):
 def controller_sos(Kd, name="K"):
     """Second-order sections of a discrete SISO controller.
 
+    The poles are the eigenvalues of a state-space realisation and the zeros
+    its invariant zeros (never the roots of transfer-function polynomials
+    formed on the way); the gain matches K_d's frequency response, evaluated
+    on a balanced realisation (a product of sections realised one after the
+    other can be so badly scaled that the plain evaluation loses every digit).
+
     Parameters
     ----------
     Kd : control.LTI
         Discrete-time SISO controller with a numeric sample time (e.g. the
-        Tustin controller of :func:`piezolib.robust.discrete.discretize`).
+        Tustin controller of :func:`piezolib.robust.discrete.discretize`),
+        best as a state-space model: the coefficients of a high-order
+        transfer function can fix its poles only loosely.
     name : str
         Identifier: letters, digits and underscores, starting with a letter.
 
@@ -123,44 +237,176 @@ def controller_sos(Kd, name="K"):
     Raises
     ------
     ValueError
-        A continuous-time or improper controller, a bad name, or a
-        factorisation that does not reproduce K_d (relative error above
-        1e-6 on a grid up to the Nyquist frequency).
+        A continuous-time or improper controller, one that is identically
+        zero, a bad name, or a factorisation that does not reproduce K_d
+        (relative error above 1e-6 on a grid up to the Nyquist frequency,
+        measured against max(|K_d|, 1e-6 max |K_d|) so that deep notches are
+        held to an absolute accuracy).
+
+    Examples
+    --------
+    >>> import control as ct
+    >>> controller_sos(ct.tf(1, [1, -1, 0.25], 1e-4)).sos    # double pole at z = 0.5
+    array([[ 0. ,  0. ,  1. ,  1. , -0.5,  0. ],
+           [ 1. ,  0. ,  0. ,  1. , -0.5,  0. ]])
     """
     check_siso("Kd", Kd)
     check_finite_lti("Kd", Kd)
     if not Kd.isdtime(strict=True) or Kd.dt is True:
         raise ValueError("Kd must be a discrete-time controller with a numeric sample time")
-    if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", name):
-        raise ValueError(f"name must be a C identifier, got {name!r}")
+    _check_name(name)
+    check_proper("Kd", Kd)
     fs = 1.0 / float(Kd.dt)
     K = ct.ss(Kd)
-    poles = np.linalg.eigvals(K.A) if K.nstates else np.zeros(0)
-    zeros = ct.zeros(K) if K.nstates else np.zeros(0)
-    zeros = zeros[np.isfinite(zeros)]
-    if zeros.size > poles.size:
-        raise ValueError("Kd must be proper")
+    Kb = _balanced(K)
     theta = np.linspace(0.01, 0.99, 97) * np.pi
     z = np.exp(1j * theta)
-    k_ref = np.ravel(K(z))
+    k_ref = np.ravel(Kb(z))
+    if not np.any(k_ref != 0):
+        raise ValueError(f"Kd is identically zero (its response is 0 at all {theta.size} "
+                         f"frequencies from {theta[0] * fs / (2 * np.pi):.4g} to "
+                         f"{theta[-1] * fs / (2 * np.pi):.4g} Hz): there is nothing to export")
+    # k_ref is the balanced realisation's response: the reference every candidate must meet
+    best = (math.inf, theta[0])
+    for realisation, zeros in _candidates(K, Kb):
+        try:
+            out = SOSController(_sections(realisation, zeros, z), fs, name)
+        except ValueError:          # zeros without their conjugate: not a real factorisation
+            continue
+        err, i = _relative_error(out.frequency_response(theta * fs), k_ref)
+        if err <= _SOS_RTOL:
+            return out
+        best = min(best, (err, theta[i]))
+    raise ValueError(_mismatch_message(Kd, *best, fs))
+
+
+def _candidates(K, Kb):
+    """(realisation the gain is fitted to, zeros) to try, in order.
+
+    First the realisation as given with SLICOT's zeros (a well-scaled
+    controller keeps the sections it always had, e.g. the committed exports
+    in data/controllers); then the balanced realisation (a product of
+    sections realised one after the other can be scaled so badly that the
+    plain response loses every digit); then the zeros by QZ on the balanced
+    Rosenbrock pencil, which keeps digits that SLICOT's reduction loses on
+    such realisations (and sometimes loses digits SLICOT keeps), with
+    SLICOT's count of finite zeros and with the pencil's own.  Each
+    candidate is checked against K_d's response.
+    """
+    if not K.nstates:
+        yield K, np.zeros(0)
+        return
+    zeros = _finite(ct.zeros(K))
+    yield K, zeros
+    if Kb is not K:
+        yield Kb, zeros
+    pencil = _pencil_eigenvalues(K)
+    counts = dict.fromkeys([zeros.size, int(np.count_nonzero(np.isfinite(pencil)))])
+    for count in counts:
+        yield Kb, pencil[:count]
+
+
+def _finite(values):
+    return values[np.isfinite(values)]
+
+
+def _pencil_eigenvalues(K):
+    """Generalised eigenvalues of the Rosenbrock pencil of ``K``, finite ones first by modulus.
+
+    [A - z I, B; C, D] drops rank at the invariant zeros.  The pencil is
+    balanced first (a diagonal similarity by powers of two: the same zeros,
+    and diag(I, 0) is unchanged); of its n + 1 eigenvalues the relative
+    degree plus one are infinite (inf or huge in floating point), so the
+    finite zeros are the first ones.
+    """
+    n = K.nstates
+    L = np.block([[K.A, K.B], [K.C, K.D]])
+    _, (scale, _) = la.matrix_balance(L, permute=False, separate=True)
+    w = la.eigvals(L / scale[:, None] * scale, np.diag(np.r_[np.ones(n), 0.0]))
+    return w[np.argsort(np.where(np.isfinite(w), np.abs(w), np.inf), kind="stable")]
+
+
+def _balanced(K):
+    """``K`` with its states scaled by powers of two (the same system to the last bit).
+
+    ``K`` itself when the balancing scales nothing.
+    """
+    if not K.nstates:
+        return K
+    _, (scale, _) = la.matrix_balance(K.A, permute=False, separate=True)
+    if np.all(scale == 1):
+        return K
+    return ct.ss(K.A / scale[:, None] * scale, K.B / scale[:, None], K.C * scale, K.D, K.dt)
+
+
+def _sections(K, zeros, z):
+    """Section matrix of the realisation ``K``: its eigenvalues, the invariant ``zeros`` and
+    the gain that matches its response at the points ``z`` (the median over them)."""
+    if not K.nstates:
+        return np.array([[float(K.D[0, 0]), 0, 0, 1, 0, 0]])
+    poles = np.linalg.eigvals(K.A)
+    k = np.ravel(K(z))
     shape = np.array([np.prod(zz - zeros) / np.prod(zz - poles) for zz in z])
     use = np.abs(shape) > 1e-300
-    gain = np.median((k_ref[use] / shape[use]).real) if np.any(use) else 0.0
-    if poles.size:
-        delay = poles.size - zeros.size        # relative degree: zeros at z = 0 become z^-1
-        sos = sig.zpk2sos(np.r_[zeros, np.zeros(delay)], poles, gain, pairing="nearest")
-        for _ in range(delay):
-            i = next(i for i, row in enumerate(sos) if row[2] == 0 and row[0] != 0)
-            sos[i, :3] = [0.0, sos[i, 0], sos[i, 1]]
-        sos = _split_real(sos)
-    else:
-        sos = np.array([[float(K.D[0, 0]), 0, 0, 1, 0, 0]])
-    out = SOSController(np.asarray(sos, float), fs, name)
-    err = np.max(np.abs(out.frequency_response(theta * fs) / k_ref - 1))
-    if not err <= 1e-6:
-        raise ValueError(f"the sections do not reproduce Kd (relative error {err:.2g}); "
-                         "is Kd minimal?")
-    return out
+    gain = np.median((k[use] / shape[use]).real) if np.any(use) else 0.0
+    delay = poles.size - zeros.size        # relative degree: zeros at z = 0 become z^-1
+    sos = sig.zpk2sos(np.r_[zeros, np.zeros(delay)], poles, gain, pairing="nearest")
+    return np.asarray(_split_real(_delay_numerators(sos, delay)), float)
+
+
+def _relative_error(h, reference):
+    """max |h / reference - 1| with |reference| floored at _SOS_RTOL max |reference|; where.
+
+    Near a zero of K_d on the unit circle the pointwise relative error means
+    nothing (the response is at rounding level); below the floor the error is
+    absolute, relative to the controller's peak.  Never NaN: a non-finite
+    error counts as inf.
+    """
+    floor = max(_SOS_RTOL * float(np.max(np.abs(reference))), np.finfo(float).tiny)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        err = np.abs(h - reference) / np.maximum(np.abs(reference), floor)
+    err = np.where(np.isfinite(err), err, np.inf)
+    i = int(np.argmax(err))
+    return float(err[i]), i
+
+
+def _mismatch_message(Kd, err, theta, fs):
+    """Why the sections may not reproduce Kd (worst error ``err`` at ``theta`` rad/sample)."""
+    where = (f"relative error {err:.2g} at {theta * fs / (2 * np.pi):.4g} Hz, "
+             f"tolerance {_SOS_RTOL:g}")
+    if isinstance(Kd, ct.TransferFunction):
+        # how far the coefficients themselves pin the response down there
+        z = np.exp(1j * theta)
+        cond = sum(np.polyval(np.abs(c), abs(z)) / abs(np.polyval(c, z))
+                   for c in (Kd.num[0][0], Kd.den[0][0]))
+        if cond * np.finfo(float).eps > 0.1 * _SOS_RTOL:
+            return (f"the sections do not reproduce Kd ({where}): Kd's transfer-function "
+                    f"coefficients fix its response there only to about "
+                    f"{cond * np.finfo(float).eps:.1g} (condition number {cond:.2g}); give Kd "
+                    "as a state-space model (e.g. the realisation it was formed from)")
+    return (f"the sections do not reproduce Kd ({where}); is Kd minimal (a pole cancelled "
+            "by a zero)? try control.minreal(Kd)")
+
+
+def _delay_numerators(sos, delay):
+    """Turn ``delay`` zeros at z = 0 of the sections into zeros at infinity (z^-1 factors).
+
+    A section with a zero at 0 (b2 = 0) takes a factor z^-1 as
+    [b0, b1, 0] -> [0, b0, b1]; one with two, [b0, 0, 0], takes two, the
+    second as [0, b0, 0] -> [0, 0, b0].  Sections with b0 != 0 go first
+    (as always: the sections of earlier exports stay as they were).
+    """
+    sos = np.array(sos, float)
+    for _ in range(delay):
+        zero_at_0 = sos[:, 2] == 0
+        rows = np.nonzero(zero_at_0 & (sos[:, 0] != 0))[0]
+        if not rows.size:
+            rows = np.nonzero(zero_at_0 & (sos[:, 1] != 0))[0]
+        if not rows.size:   # cannot happen: ``delay`` zeros at 0 were padded
+            raise RuntimeError("no section has a zero at z = 0 left for the delay")
+        i = rows[0]
+        sos[i, :3] = [0.0, sos[i, 0], sos[i, 1]]
+    return sos
 
 
 def _split_real(sos):
@@ -175,6 +421,8 @@ def _split_real(sos):
     out = []
     for b0, b1, b2, _, a1, a2 in sos:
         p = np.roots([1.0, a1, a2]) if a2 != 0 else np.array([])
+        if p.size == 2 and a1 * a1 >= 4 * a2:
+            p = p.real     # a double real pole may come out as a pair with a tiny imaginary part
         if p.size != 2 or np.any(np.abs(p.imag) > 0):
             out.append([b0, b1, b2, 1.0, a1, a2])
             continue
@@ -191,6 +439,236 @@ def _split_real(sos):
     return np.array(out)
 
 
+@dataclass(frozen=True, eq=False)
+class Float32Check:
+    """What rounding the sections to float32 does to the controller.
+
+    The float32 response H32 is compared with the float64 one H64 at DC, at
+    600 log-spaced frequencies up to Nyquist and at the frequency of every
+    section pole and zero.  The tolerance at each frequency is, by default,
+    the first-order effect of the rounding,
+
+        bound = sum_i [ sum_k ulp(b_ik)/2 / |b_i| + sum_k ulp(a_ik)/2 / |a_i| ],
+
+    (b_i, a_i the numerator and denominator of section i at e^{j omega/fs},
+    ulp the float32 spacing, 0 for a coefficient float32 holds exactly): a
+    sensitive section (a pole near z = 1) is allowed its large but
+    predictable error; the error exceeds the bound only when the rounding is
+    no longer a small perturbation of the sections.
+
+    Attributes
+    ----------
+    name : str
+        The controller's name.
+    fs : float or None
+        Sampling rate [Hz] (None: a bare section matrix, frequencies in rad/sample).
+    omega : ndarray
+        Check frequencies [rad/s] (rad/sample when fs is None).
+    error : ndarray
+        |H32 / H64 - 1| there (nan where H64 is 0 or infinite, e.g. at a
+        zero on the unit circle or at the DC pole of an integrator).
+    bound : ndarray
+        The first-order bound there (dimensionless).
+    dc_gain : tuple of float
+        DC gain of the float64 and of the float32 sections (inf with a pole at z = 1).
+    radius64, radius32 : ndarray
+        Largest pole radius of each section in float64 and float32.
+    stability64, stability32 : ndarray of int
+        Each section's poles: 2 all strictly inside the unit circle, 1 some on
+        it (marginal), 0 some outside; decided on the coefficients (|a2| < 1,
+        |a1| < 1 + a2, or <=), not on computed roots.
+    decay_change : ndarray
+        For each pole (two per section), |d32 - d64| / d64 with d = 1 - |p|
+        its distance to the unit circle (nan for a pole on or outside it).
+    omega_pole : ndarray
+        Frequency of each pole [rad/s] (rad/sample when fs is None).
+    """
+
+    name: str
+    fs: float | None
+    omega: np.ndarray
+    error: np.ndarray
+    bound: np.ndarray
+    dc_gain: tuple
+    radius64: np.ndarray
+    radius32: np.ndarray
+    stability64: np.ndarray
+    stability32: np.ndarray
+    decay_change: np.ndarray
+    omega_pole: np.ndarray
+
+    @property
+    def max_error(self):
+        """Largest relative error of the float32 response on the check grid."""
+        return float(np.nanmax(self.error)) if np.any(np.isfinite(self.error)) else 0.0
+
+    @property
+    def omega_max_error(self):
+        """Frequency of :attr:`max_error` [rad/s] (rad/sample when fs is None)."""
+        if not np.any(np.isfinite(self.error)):
+            return math.nan
+        return float(self.omega[np.nanargmax(self.error)])
+
+    @classmethod
+    def of(cls, sos, fs=None, name="K"):
+        """The check of the (normalised, float64) section matrix ``sos`` at rate ``fs`` [Hz]."""
+        sos32 = sos.astype(np.float32).astype(np.float64)
+        poles64, poles32 = _section_poles(sos), _section_poles(sos32)
+        angles = np.abs(np.angle(np.r_[poles64.ravel(), _section_zeros(sos)]))
+        theta = np.unique(np.r_[0.0, np.geomspace(1e-6 * np.pi, np.pi, 600), angles])
+        z = np.exp(1j * theta)
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            h64, h32 = _sections_response(sos, z), _sections_response(sos32, z)
+            error = np.abs(h32 - h64) / np.abs(h64)
+            bound = _rounding_bound(sos, z)
+            d64, d32 = 1 - np.abs(poles64), 1 - np.abs(poles32)
+            decay = np.where(d64 > 0, np.abs(d32 - d64) / d64, np.nan)
+        error[~(np.isfinite(h64) & (h64 != 0) & np.isfinite(error))] = np.nan
+        scale = 1.0 if fs is None else fs
+        return cls(name=name, fs=fs, omega=theta * scale, error=error, bound=bound,
+                   dc_gain=(_dc_gain(sos), _dc_gain(sos32)),
+                   radius64=np.max(np.abs(poles64), axis=1),
+                   radius32=np.max(np.abs(poles32), axis=1),
+                   stability64=_stability(sos), stability32=_stability(sos32),
+                   decay_change=decay.ravel(),
+                   omega_pole=np.abs(np.angle(poles64)).ravel() * scale)
+
+    def enforce(self, rtol=None, what="controller", stacklevel=2, refuse=True):
+        """Raise :class:`ExportError` or warn :class:`ExportWarning` as the check finds; self.
+
+        Parameters
+        ----------
+        rtol : float, optional
+            Relative error allowed at every frequency (default: :attr:`bound`).
+        what : str
+            Name of the argument the sections came from (for the messages).
+        stacklevel : int
+            Passed to :func:`warnings.warn`.
+        refuse : bool
+            Raise on a section made marginal or unstable (False: warn, for
+            a float64 target, where the float32 coefficients are only written
+            alongside).
+        """
+        tol = (self.bound if rtol is None
+               else np.full_like(self.bound, check_positive("rtol", rtol)))
+        told = "rtol" if rtol is not None else "the first-order effect of the rounding"
+        unstable = self._unstable_message(what)
+        if unstable and refuse:
+            raise ExportError(unstable)
+        if unstable:
+            warnings.warn(unstable, ExportWarning, stacklevel=stacklevel)
+        moved = self._moved_pole_message(tol, told, what)
+        if moved:
+            warnings.warn(moved, ExportWarning, stacklevel=stacklevel)
+        with np.errstate(invalid="ignore"):
+            over = np.nan_to_num(self.error / tol, nan=0.0)
+        if np.any(over > 1):
+            i = int(np.argmax(over))
+            warnings.warn(
+                f"{what}: rounding {self.name}'s sections to float32 changes its response by "
+                f"{self.error[i]:.3g} (relative) at {self._where(self.omega[i])}, more than "
+                f"{told} ({tol[i]:.3g}) allows; worst error {self.max_error:.3g} at "
+                f"{self._where(self.omega_max_error)}; DC gain {self.dc_gain[0]:.7g} in "
+                f"float64, {self.dc_gain[1]:.7g} in float32", ExportWarning,
+                stacklevel=stacklevel)
+        return self
+
+    def _unstable_message(self, what):
+        """The first section rounding makes marginal or unstable, in words ('' if none)."""
+        worse = np.nonzero(self.stability32 < self.stability64)[0]
+        if not worse.size:
+            return ""
+        i = int(worse[0])
+        kinds = ("unstable", "marginal", "stable")
+        r64, r32 = self.radius64[i], self.radius32[i]
+        return (f"{what}: rounding to float32 makes section {i} of {self.name} "
+                f"{kinds[self.stability32[i]]} (it is {kinds[self.stability64[i]]} in float64): "
+                f"pole radius {r64:.12g} (1 - {1 - r64:.3g}) in float64, {r32:.12g} "
+                f"(1 - {1 - r32:.3g}) in float32; a pole this close to the unit circle needs "
+                "float64 sections (export_controller(..., dtype='float64'))")
+
+    def _moved_pole_message(self, tol, told, what):
+        """The pole whose distance to the unit circle moved most beyond ``tol``, in words."""
+        # each pole's tolerance is the response tolerance at its own frequency (a grid point)
+        at = np.minimum(np.searchsorted(self.omega, self.omega_pole), self.omega.size - 1)
+        tol_p = tol[at]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            over = np.nan_to_num(self.decay_change / tol_p, nan=0.0, posinf=0.0)
+        if not np.any(over > 1):
+            return ""
+        j = int(np.argmax(over))
+        return (f"{what}: rounding {self.name}'s sections to float32 moves pole {j % 2} of "
+                f"section {j // 2} (at {self._where(self.omega_pole[j])}): its distance to the "
+                f"unit circle changes by {self.decay_change[j]:.3g} (relative), more than "
+                f"{told} ({tol_p[j]:.3g}) allows")
+
+    def _where(self, omega):
+        if self.fs is None:
+            return f"{omega / np.pi:.4g} pi rad/sample"
+        return "DC" if omega == 0 else f"{omega / (2 * np.pi):.4g} Hz"
+
+
+def _section_poles(sos):
+    """The two poles of each section, shape (n, 2) (a first-order section has one at 0)."""
+    return np.array([np.roots(row[3:]) for row in sos], dtype=complex).reshape(-1, 2)
+
+
+def _section_zeros(sos):
+    """The finite zeros of all sections (flat)."""
+    rows = [np.roots(row[:3]) for row in sos if np.any(row[:3] != 0)]
+    return np.concatenate(rows).astype(complex) if rows else np.zeros(0, complex)
+
+
+def _stability(sos):
+    """2 (poles inside the unit circle), 1 (on it) or 0 (outside), per section.
+
+    The Jury conditions of z^2 + a1 z + a2 on the coefficients themselves, so
+    that a pole rounded exactly onto the circle is seen exactly.
+    """
+    a1, a2 = sos[:, 4], sos[:, 5]
+    inside = (np.abs(a2) < 1) & (np.abs(a1) < 1 + a2)
+    closed = (np.abs(a2) <= 1) & (np.abs(a1) <= 1 + a2)
+    return np.where(inside, 2, np.where(closed, 1, 0))
+
+
+def _half_ulp32(c):
+    """Largest float32 rounding error of each coefficient (0 where float32 holds it exactly)."""
+    c32 = c.astype(np.float32)
+    return np.where(c32.astype(np.float64) == c, 0.0,
+                    np.spacing(np.abs(c32)).astype(np.float64) / 2)
+
+
+def _rounding_bound(sos, z):
+    """First-order bound on |H32 / H64 - 1| at ``z``: sum of |d ln H / d c| ulp(c)/2."""
+    h = _half_ulp32(sos)
+    w = 1 / z
+    powers = np.stack([np.ones_like(w), w, w ** 2])        # |w| = 1 on the unit circle
+    bound = np.zeros(z.shape)
+    for row, err in zip(sos, h):
+        num, den = np.abs(row[:3] @ powers), np.abs(row[3:] @ powers)
+        bound += err[:3].sum() / num + err[3:].sum() / den
+    return bound
+
+
+def _dc_gain(sos):
+    """prod_i b_i(1) / a_i(1) (inf with a pole at z = 1)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        g = np.prod(sos[:, :3].sum(axis=1) / sos[:, 3:].sum(axis=1))
+    return float(g) if np.isfinite(g) else math.inf
+
+
+def _check_float32(controller, sos, what, stacklevel, rtol=None, refuse=True):
+    """Enforce the float32 check of ``controller`` (an SOSController or its matrix ``sos``).
+
+    ``stacklevel`` is that of a warning issued by the caller of this function.
+    """
+    if np.array_equal(sos.astype(np.float32).astype(np.float64), sos):
+        return          # float32 holds every coefficient: nothing moves
+    check = (controller._float32_check if isinstance(controller, SOSController)
+             else Float32Check.of(sos))
+    check.enforce(rtol, what, stacklevel=stacklevel + 2, refuse=refuse)
+
+
 class SectionFilter:
     """Reference Direct Form II transposed implementation of the sections.
 
@@ -200,6 +678,19 @@ class SectionFilter:
         The sections (or an (n, 6) section matrix).
     dtype : {'float64', 'float32'}
         Precision of the coefficients, the states and every operation.
+        float32 coefficients are checked against the given (float64) ones
+        (:meth:`SOSController.check_float32`); sections already rounded to
+        float32 (as :func:`read_json` gives them) pass unchanged.
+
+    Raises
+    ------
+    ExportError
+        float32 rounding makes a section marginal or unstable.
+
+    Warns
+    -----
+    ExportWarning
+        float32 rounding changes the response more than it should.
 
     Examples
     --------
@@ -208,12 +699,12 @@ class SectionFilter:
     [0.5, 0.75, 0.875]
     """
 
-    def __init__(self, controller, dtype="float64"):
-        sos = controller.sos if isinstance(controller, SOSController) else controller
-        sos = check_finite_array("controller", sos, ndim=2, shape=(None, 6))
-        if np.any(sos[:, 3] != 1):
-            raise ValueError("controller sections must be normalised (a0 = 1)")
+    def __init__(self, controller, dtype="float64", _stacklevel=2):
+        sos = (controller.sos if isinstance(controller, SOSController)
+               else _normalised_sections("controller", controller))
         self.dtype = _dtype(dtype)
+        if self.dtype is np.float32:
+            _check_float32(controller, sos, "controller", stacklevel=_stacklevel)
         c = sos.astype(self.dtype)
         self._coef = [tuple(self.dtype(x) for x in row) for row in c]
         self._py = self.dtype is np.float64     # float64: Python floats are IEEE doubles
@@ -262,7 +753,7 @@ class SectionFilterBatch:
     """
 
     def __init__(self, controller, dtype="float64", size=1):
-        ref = SectionFilter(controller, dtype)          # checks the sections and dtype
+        ref = SectionFilter(controller, dtype, _stacklevel=3)   # checks sections and dtype
         self.dtype = ref.dtype
         self.size = check_integer("size", size, minimum=1)
         c = np.array(ref._coef, dtype=self.dtype)       # (n_sections, 6) in dtype
@@ -332,7 +823,7 @@ def sos_filter(controller, x, dtype="float64"):
         Output samples (float64 array holding the ``dtype`` results).
     """
     x = check_finite_array("x", x, ndim=1, min_length=1, real=True)
-    f = SectionFilter(controller, dtype)
+    f = SectionFilter(controller, dtype, _stacklevel=3)
     return np.array([f.step(v) for v in x.tolist()])
 
 
@@ -375,23 +866,52 @@ def write_json(controller, path, meta=None):
     Returns
     -------
     Path
+
+    Raises
+    ------
+    ExportError
+        The float32 sections written are marginal or unstable where the
+        float64 ones are not (:meth:`SOSController.check_float32`); nothing
+        is written.
+
+    Warns
+    -----
+    ExportWarning
+        The float32 sections' response is off by more than the rounding explains.
     """
+    _check_controller(controller)
+    meta = _meta_json(meta)
+    path = _path("path", path)
+    _check_float32(controller, controller.sos, "controller", stacklevel=2)
+    return _write_json(controller, path, meta)
+
+
+def _check_controller(controller):
     if not isinstance(controller, SOSController):
         raise TypeError(f"controller must be an SOSController, got {type(controller).__name__}")
+
+
+def _write_json(controller, path, meta):
     doc = {"name": controller.name, "fs_Hz": controller.fs,
            "form": "second-order sections [b0, b1, b2, 1, a1, a2], Direct Form II transposed",
            "input": "v_e [V]", "output": "u_b [V]",
            "sos_float64": controller.sos.tolist(),
            # float32 values written as the exact decimal of the rounded number
            "sos_float32": [[float(np.float32(v)) for v in row] for row in controller.sos],
-           "meta": _meta_json(meta)}
-    path = _path("path", path)
+           "meta": meta}
     path.write_text(json.dumps(doc, indent=1) + "\n")
     return path
 
 
 def read_json(path, dtype="float64"):
-    """Read a file of :func:`write_json`; the ``dtype`` coefficients as an SOSController."""
+    """Read a file of :func:`write_json`; the ``dtype`` coefficients as an SOSController.
+
+    Raises
+    ------
+    ValueError
+        Not such a file, or its sections are not normalised (a0 != 1: the
+        file names the section and the value; write_json always writes 1).
+    """
     key = {"float64": "sos_float64", "float32": "sos_float32"}[_dtype(dtype).__name__]
     path = _path("path", path)
     try:
@@ -400,11 +920,19 @@ def read_json(path, dtype="float64"):
         raise ValueError(f"path {path} is not a JSON file: {exc}") from None
     try:
         sos, fs, name = np.array(doc[key], float), float(doc["fs_Hz"]), doc["name"]
-    except (KeyError, TypeError) as err:
+    except (KeyError, TypeError, ValueError) as err:
         raise ValueError(f"path {path} is not a controller file of write_json "
-                         f"(missing {err})") from None
-    return SOSController(check_finite_array("sos", sos, ndim=2, shape=(None, 6)),
-                         check_positive("fs_Hz", fs), name)
+                         f"(missing or bad {err})") from None
+    try:
+        sos = check_finite_array(key, sos, ndim=2, min_length=1, shape=(None, 6))
+        bad = np.nonzero(sos[:, 3] != 1)[0]
+        if bad.size:
+            i = int(bad[0])
+            raise ValueError(f"section {i} of {key} has a0 = {float(sos[i, 3])!r}, not 1 (sections "
+                             "must be normalised; write_json writes a0 = 1)")
+        return SOSController(sos, check_positive("fs_Hz", fs), name)
+    except (ValueError, TypeError) as err:
+        raise type(err)(f"path {path}: {err}") from None
 
 
 def _c_rows(sos, fmt):
@@ -422,9 +950,25 @@ def write_c_header(controller, path):
     Returns
     -------
     Path
+
+    Raises
+    ------
+    ExportError
+        The float sections are marginal or unstable where the double ones are
+        not (:meth:`SOSController.check_float32`); nothing is written.
+
+    Warns
+    -----
+    ExportWarning
+        The float sections' response is off by more than the rounding explains.
     """
-    if not isinstance(controller, SOSController):
-        raise TypeError(f"controller must be an SOSController, got {type(controller).__name__}")
+    _check_controller(controller)
+    path = _path("path", path)
+    _check_float32(controller, controller.sos, "controller", stacklevel=2)
+    return _write_c_header(controller, path)
+
+
+def _write_c_header(controller, path):
     n, N = controller.n_sections, controller.name.upper()
     f32 = controller.sos.astype(np.float32)
     guard = f"{N}_SOS_H"
@@ -462,12 +1006,11 @@ static inline float {controller.name.lower()}_step_f32(float state[{n}][2], floa
 
 #endif /* {guard} */
 """
-    path = _path("path", path)
     path.write_text(text)
     return path
 
 
-def export_controller(Kd, directory, name, meta=None, dtype="float32"):
+def export_controller(Kd, directory, name, meta=None, dtype="float32", rtol=None):
     """Export a discrete controller as ``<name>.json`` and ``<name>.h``; read it back.
 
     Parameters
@@ -482,16 +1025,39 @@ def export_controller(Kd, directory, name, meta=None, dtype="float32"):
         Extra fields of the JSON file (e.g. the discretisation used).
     dtype : {"float32", "float64"}
         Precision of the controller returned, as the target would run it.
+    rtol : float, optional
+        Relative error of the float32 response allowed at every frequency
+        (default: the first-order effect of the rounding, see
+        :class:`Float32Check`).
 
     Returns
     -------
     SOSController
         The sections read back from the JSON file in ``dtype``: what is deployed.
+
+    Raises
+    ------
+    ExportError
+        ``dtype`` 'float32' and rounding to float32 makes a section marginal
+        or unstable (nothing is written).  For ``dtype`` 'float64' that is
+        an :class:`ExportWarning`: the float32 coefficients are only written
+        alongside.
+
+    Warns
+    -----
+    ExportWarning
+        The float32 response differs from the float64 one by more than
+        ``rtol`` (or than the rounding explains), with the worst error, its
+        frequency and the DC gains.
     """
     directory = _path("directory", directory, directory=True)
     meta = _meta_json(meta)
+    dtype = _dtype(dtype).__name__
+    rtol = None if rtol is None else check_positive("rtol", rtol)
     sos = controller_sos(Kd, name)
+    # one check for both files, before anything is written
+    _check_float32(sos, sos.sos, "Kd", stacklevel=2, rtol=rtol, refuse=dtype == "float32")
     directory.mkdir(parents=True, exist_ok=True)
-    path = write_json(sos, directory / f"{name}.json", meta=meta)
-    write_c_header(sos, directory / f"{name}.h")
+    path = _write_json(sos, directory / f"{name}.json", meta)
+    _write_c_header(sos, directory / f"{name}.h")
     return read_json(path, dtype)

@@ -3,13 +3,18 @@
 Continuous loop L(s) = G(s) K(s) with negative feedback (any SISO plant and
 controller):
 
-* gain margin: 1 / |L(jw_pc)| at the phase crossovers (Im L = 0, Re L < 0);
+* gain margin: 1 / |L(jw_pc)| at the phase crossovers (Im L = 0, Re L < 0),
+  w_pc = 0 and w_pc = inf included (a negative DC gain L(0), a negative
+  high-frequency gain L(j inf) = D_G D_K of a biproper loop: gain k brings
+  the closed-loop pole 1 + k L = 0 through s = 0 or through infinity);
   the upward margin is the smallest such factor > 1 (inf when none), the
   downward one the largest factor < 1 (0 when none);
 * phase margin: 180 deg + arg L(jw_gc) at the gain crossovers |L| = 1,
   smallest over all crossovers;
 * delay margin: the smallest extra delay that brings one gain crossover onto
-  -1, min_i ((arg L(jw_i) + pi) mod 2 pi) / w_i  [s];
+  -1, min_i ((arg L(jw_i) + pi) mod 2 pi) / w_i  [s]; 0 when |L(j inf)| >= 1
+  (a delay then turns the high-frequency gain into a circle of radius
+  |D_G D_K| around 0 that encircles -1 however small the delay);
 * balanced disk margin (skew 0, Seiler, Packard and Gahinet 2020):
   alpha = 1 / ||S - 1/2||_inf = 2 / ||S - T||_inf, the largest alpha for which every simultaneous gain/phase change f in the disk
   |(f - 1)/(f + 1)| < alpha/2 keeps the loop stable; the disk gain margin is
@@ -19,8 +24,11 @@ controller):
 All four are computed on the frequency response of G and K realised in
 scaled time (so a controller with polynomial coefficients up to 1e23 is
 evaluated accurately); crossovers are located on a dense grid and refined by
-root finding.  They are meaningful only when the nominal closed loop is
-stable, which :attr:`LoopMargins.closed_loop_stable` reports.
+root finding, and the two ends w = 0 and w = inf, which no grid reaches, are
+evaluated exactly (L(0) from the models as given, so that an integrator is
+an infinite DC gain, not a large one).  They are meaningful only when the
+nominal closed loop is stable, which :attr:`LoopMargins.closed_loop_stable`
+reports.
 
 Sampled loop: the plant's zero-order-hold equivalent G_d at the controller's
 sample time, the discrete controller K_d, and d whole samples of
@@ -55,7 +63,8 @@ class LoopMargins:
     gain_margin_low : float
         Downward gain margin [ratio] (0: none).
     omega_gain_margin : float
-        Phase crossover of ``gain_margin`` [rad/s] (nan when inf).
+        Phase crossover of ``gain_margin`` [rad/s] (nan when inf; 0 for the
+        DC gain, inf for the high-frequency gain of a biproper loop).
     phase_margin_deg : float
         Smallest phase margin over the gain crossovers [deg] (inf: no crossover).
     omega_crossover : float
@@ -78,6 +87,9 @@ class LoopMargins:
         All closed-loop poles in the open left half-plane.
     crossovers : ndarray
         All gain crossover frequencies [rad/s].
+    omega_gain_margin_low : float
+        Phase crossover of ``gain_margin_low`` [rad/s] (nan when 0; 0 or inf
+        as for ``omega_gain_margin``).
     """
 
     gain_margin: float
@@ -94,6 +106,7 @@ class LoopMargins:
     modulus_margin: float
     closed_loop_stable: bool
     crossovers: np.ndarray
+    omega_gain_margin_low: float = math.nan
 
     @property
     def gain_margin_dB(self):
@@ -126,6 +139,43 @@ def _response(Gr, Kr):
         w = np.atleast_1d(np.asarray(w, float))
         return np.ravel(Gr(1j * w)) * np.ravel(Kr(1j * w))
     return L
+
+
+def _end_gains(sys):
+    """(sys(0), sys(inf)) of a proper continuous SISO model, from the model as given.
+
+    An exact pole at s = 0 (a zero constant coefficient of the denominator,
+    a singular A) gives an infinite DC gain; a balanced realisation would
+    turn it into a pole at 1e-9 and a large finite gain.
+    """
+    if isinstance(sys, ct.TransferFunction):
+        num, den = (np.trim_zeros(np.atleast_1d(np.asarray(c, float)), "f")
+                    for c in (sys.num[0][0], sys.den[0][0]))
+        at_inf = (num[0] / den[0] if num.size == den.size
+                  else 0.0 if num.size < den.size else math.copysign(math.inf, num[0] / den[0]))
+        # lowest-order coefficients; equal powers of s cancel
+        num_b, den_b = np.trim_zeros(num, "b"), np.trim_zeros(den, "b")
+        lag = (num.size - num_b.size) - (den.size - den_b.size)
+        if num_b.size == 0:
+            return 0.0, at_inf
+        at_0 = num_b[-1] / den_b[-1] if lag == 0 else (0.0 if lag > 0 else math.inf)
+        return float(at_0), float(at_inf)
+    S = ct.ss(sys)
+    at_inf = float(S.D[0, 0])
+    if not S.nstates:
+        return at_inf, at_inf
+    try:
+        x = np.linalg.solve(S.A, S.B)
+    except np.linalg.LinAlgError:
+        return math.inf, at_inf
+    return float((S.D - S.C @ x)[0, 0]), at_inf
+
+
+def _loop_ends(G, K):
+    """(L(0), L(j inf)) of L = G K; nan where 0 * inf leaves it undetermined."""
+    (g0, ginf), (k0, kinf) = _end_gains(G), _end_gains(K)
+    with np.errstate(invalid="ignore"):
+        return float(np.float64(g0) * k0), float(ginf * kinf)
 
 
 def _crossings(f, omega, values):
@@ -183,16 +233,21 @@ def loop_margins(G, K, omega=None):
     def lg(w):
         return float(np.log(np.abs(L(w))[0]))
     wc = _crossings(lg, omega, np.log(np.abs(Lw)))
-    # phase crossovers: Im L = 0 with Re L < 0
+    # phase crossovers: Im L = 0 with Re L < 0, on the grid and at its two ends w = 0, inf
     def im(w):
         return float(L(w).imag[0])
     wp = _crossings(im, omega, Lw.imag)
     wp = wp[np.array([L(w).real[0] < 0 for w in wp], bool)] if wp.size else wp
     inv = np.array([1.0 / abs(L(w)[0]) for w in wp])
+    L0, Linf = _loop_ends(G, K)
+    for w, value in ((0.0, L0), (math.inf, Linf)):
+        if math.isfinite(value) and value < 0:
+            wp, inv = np.r_[wp, w], np.r_[inv, -1.0 / value]
     up, low = inv > 1, inv < 1
     gm = float(inv[up].min()) if np.any(up) else math.inf
     w_gm = float(wp[up][np.argmin(inv[up])]) if np.any(up) else math.nan
     gm_low = float(inv[low].max()) if np.any(low) else 0.0
+    w_gm_low = float(wp[low][np.argmax(inv[low])]) if np.any(low) else math.nan
 
     if wc.size:
         ang = np.array([np.angle(L(w)[0]) for w in wc])
@@ -205,6 +260,9 @@ def loop_margins(G, K, omega=None):
     else:
         pm_min = w_pm = dm = w_dm = math.inf
         w_pm = w_dm = math.nan
+    if abs(Linf) >= 1:
+        # |L(j inf)| >= 1: the delayed loop circles -1 at high frequency for any delay
+        dm, w_dm = 0.0, math.inf
 
     # disk margin (skew 0): alpha = 1 / max |S - 1/2|; modulus margin min |1 + L|
     def s_half(w):
@@ -215,17 +273,25 @@ def loop_margins(G, K, omega=None):
     r = minimize_scalar(s_half, bounds=(lo, hi), method="bounded",
                         options={"xatol": 1e-10 * omega[k]})
     peak, w_disk = (-r.fun, r.x) if -r.fun >= dist[k] else (dist[k], omega[k])
+    # the ends: S(0) (0 with an integrator), S(j inf) = 1 / (1 + D_G D_K)
+    ends = [(w, 1.0 + value) for w, value in ((0.0, L0), (math.inf, Linf))
+            if not math.isnan(value)]
+    for w, one_plus_L in ends:
+        s_end = 0.0 if math.isinf(one_plus_L) else (
+            math.inf if one_plus_L == 0 else 1.0 / one_plus_L)
+        if abs(s_end - 0.5) > peak:
+            peak, w_disk = abs(s_end - 0.5), w
     alpha = 1.0 / peak
     dgm = (2 + alpha) / (2 - alpha) if alpha < 2 else math.inf
     dpm = math.degrees(2 * math.atan(alpha / 2))
-    mod = float(np.min(np.abs(1.0 + Lw)))
+    mod = float(min([np.min(np.abs(1.0 + Lw))] + [abs(v) for _, v in ends]))
     stable = bool(np.all(closed_loop_poles(G, K).real < 0))
     return LoopMargins(gain_margin=gm, gain_margin_low=gm_low, omega_gain_margin=w_gm,
                        phase_margin_deg=pm_min, omega_crossover=w_pm, delay_margin_s=dm,
                        omega_delay_margin=w_dm, disk_margin=float(alpha),
                        disk_gain_margin=float(dgm), disk_phase_margin_deg=dpm,
                        omega_disk=float(w_disk), modulus_margin=mod,
-                       closed_loop_stable=stable, crossovers=wc)
+                       closed_loop_stable=stable, crossovers=wc, omega_gain_margin_low=w_gm_low)
 
 
 def _discrete_parts(G, Kd):

@@ -85,3 +85,64 @@ def test_bad_input_named():
         delay_tolerance(1 / (s + 1), ct.tf([1], [1, 0], 0.01), delays=(1, 2))
     with pytest.raises(ValueError, match="G"):
         loop_margins(ct.tf([1], [1, 0], 0.1), ONE)
+
+
+# --- phase crossovers at w = 0 and w = inf, which no grid reaches --------------------------
+def test_downward_gain_margin_at_dc():
+    # L = 2/(s - 1): L(j0) = -2 on the negative real axis; closed loop s - 1 + 2k stable
+    # for k > 1/2, so the gain may drop by 0.5 (the pole crosses s = 0), never rise to a limit
+    m = loop_margins(1 / (s - 1), ct.tf(2, 1))
+    assert m.closed_loop_stable
+    assert m.gain_margin_low == pytest.approx(0.5, abs=1e-9) and m.omega_gain_margin_low == 0
+    assert m.gain_margin == math.inf and math.isnan(m.omega_gain_margin)
+    gm, _, _, wpc, _, _ = ct.stability_margins(2 / (s - 1))     # right here, python-control
+    assert m.gain_margin_low == pytest.approx(gm, rel=1e-12) and wpc == 0
+    # S = (s - 1)/(s + 1): |S - 1/2| peaks at DC, 3/2, so alpha = 2/3 exactly
+    assert m.disk_margin == pytest.approx(2 / 3, rel=1e-12) and m.omega_disk == 0
+    assert m.modulus_margin == pytest.approx(1.0, rel=1e-12)
+
+
+def test_upward_gain_margin_at_infinite_frequency():
+    # L = -0.5 (s - 1)/(s + 1): |L| = 0.5 and Im L = -0.5 sin(2 atan w) < 0 for 0 < w < inf,
+    # so no phase crossover in between; L(0) = +0.5, L(j inf) = -0.5.  The closed loop
+    # (1 - k/2) s + (1 + k/2) = 0 has its pole at -(2 + k)/(2 - k): stable for 0 < k < 2,
+    # the pole leaving through infinity at k = 2 -- an upward gain margin of 2 at w = inf
+    G, K = (s - 1) / (s + 1), ct.tf(-0.5, 1)
+    m = loop_margins(G, K)
+    assert m.closed_loop_stable
+    assert m.gain_margin == pytest.approx(2.0, rel=1e-12) and m.omega_gain_margin == math.inf
+    assert m.gain_margin_low == 0 and math.isnan(m.omega_gain_margin_low)
+    for k, stable in ((2 * (1 - 1e-6), True), (2 * (1 + 1e-6), False)):
+        assert np.all(ct.poles(ct.feedback(G * K * k, 1)).real < 0) == stable
+    # S(j inf) = 1/(1 - 0.5) = 2: the disk margin is set there too, and agrees: (2 + a)/(2 - a) = 2
+    assert m.modulus_margin == pytest.approx(0.5, rel=1e-12) and m.omega_disk == math.inf
+    assert m.disk_gain_margin == pytest.approx(2.0, rel=1e-12)
+
+
+def test_integrator_loops_have_no_crossover_at_dc():
+    # L(0) is infinite (a single or double integrator): never a downward margin from DC
+    for G in (1 / (s * (s + 1)), (s + 3) / (s ** 2 * (s + 10)), ct.ss(1 / (s * (s + 1)))):
+        m = loop_margins(G, ONE)
+        assert m.gain_margin_low == 0 and math.isnan(m.omega_gain_margin_low)
+
+
+def test_high_frequency_gain_above_one_leaves_no_delay_margin():
+    # |L(j inf)| = 2: with any delay the loop gain circles -1 at high frequency
+    G = 2 * (s + 3) / (s + 1)
+    m = loop_margins(G, ONE)
+    assert m.closed_loop_stable and m.crossovers.size == 0
+    assert m.delay_margin_s == 0 and m.omega_delay_margin == math.inf
+    num, den = ct.pade(1e-4, 12)
+    assert np.any(ct.poles(ct.feedback(G * ct.tf(num, den), 1)).real > 0)
+
+
+@pytest.mark.parametrize("L", [10 / ((s + 1) * (s + 2) * (s + 3)), 1 / (s * (s + 1) * (s + 2)),
+                               5 * (s + 1) / (s * (s + 2) * (0.05 * s + 1) ** 2)])
+def test_ordinary_loops_agree_with_python_control(L):
+    m = loop_margins(L, ONE)
+    gm, pm, _, wpc, wgc, _ = ct.stability_margins(L)
+    assert m.gain_margin == pytest.approx(gm, rel=1e-6)
+    assert m.omega_gain_margin == pytest.approx(wpc, rel=1e-6)
+    assert m.phase_margin_deg == pytest.approx(pm, rel=1e-6)
+    assert m.omega_crossover == pytest.approx(wgc, rel=1e-6)
+    assert m.gain_margin_low == 0
