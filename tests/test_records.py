@@ -1,7 +1,12 @@
 """Records: the loader's errors name file and line; helpers."""
 
+import codecs
+import tempfile
+from pathlib import Path
+
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 
 from piezolib import records as R
 
@@ -76,6 +81,213 @@ def test_missing_file_and_bad_arguments(tmp_path):
         R.load_csv(path, input=1, output=2, fs=FS, output_scale=0)
     with pytest.raises(ValueError, match="fs"):
         R.load_csv(path, input=1, output=2, fs=-1.0)
+
+
+def data_lines(n=40, sep=","):
+    return [sep.join([f"{k / FS:.6f}", f"{np.sin(k / 5):.5f}", f"{3 * np.sin(k / 5):.5f}"])
+            for k in range(n)]
+
+
+LOAD = dict(time="t", input="v", output="x", header=True)
+
+
+@pytest.mark.parametrize("sep, cell, line, says", [
+    (";", "1,234.5", 7, "a thousands separator ',': pass thousands=','"),
+    ("\t", "1,234.5", 7, "a thousands separator ',': pass thousands=','"),
+    (";", "1.234,5", 7, "a decimal comma and a thousands separator '.': pass decimal=',', "
+                        "thousands='.'"),
+    (";", "0,25", 7, "a decimal comma: pass decimal=','"),
+    (";", "1,234", 7, "a thousands separator ',' or a decimal comma: pass thousands=',' or "
+                      "decimal=','"),
+])
+def test_locale_numbers_are_refused_with_how_to_read_them(tmp_path, sep, cell, line, says):
+    rows = data_lines(sep=sep)
+    rows[4] = sep.join([rows[4].split(sep)[0], "0.5", cell])
+    path = write(tmp_path / "eu.csv", ["# instrument = X", sep.join("tvx")] + rows)
+    with pytest.raises(R.RecordError) as info:
+        R.load_csv(path, delimiter=sep, **LOAD)
+    assert info.value.line == line and f"line {line}:" in str(info.value)
+    assert f"column 'x' (output): {cell!r} is not a number; it looks like" in str(info.value)
+    assert says in str(info.value)
+
+
+def test_comma_numbers_in_a_comma_file_are_not_read_as_extra_columns(tmp_path):
+    # 2,001.5 in a comma-delimited file is two fields: the old loader read y = 2.0 throughout
+    rows = [f"{k / FS:.6f},{0.1 * k:.1f},{2000 + k:,.1f}" for k in range(40)]
+    path = write(tmp_path / "c.csv", ["t,v,x"] + rows)
+    with pytest.raises(R.RecordError, match=r"line 2: 4 fields, but the header \(line 1\) "
+                                            "names 3 columns; with ','") as info:
+        R.load_csv(path, **LOAD)
+    assert "decimal mark or thousands separator splits in two" in str(info.value)
+
+
+def test_a_short_row_and_a_long_row_do_not_cancel_out(tmp_path):
+    # only some columns are read: a row without the unused last field is fine, one with an
+    # extra field is not, even when the two together hold the expected number of delimiters
+    rows = [line + ",0" for line in data_lines()]
+    rows[5], rows[9] = rows[5][:-2], rows[9] + ",7"
+    path = write(tmp_path / "d.csv", ["t,v,x,spare"] + rows)
+    with pytest.raises(R.RecordError, match=r"line 11: 5 fields, but the header \(line 1\) "
+                                            "names 4 columns"):
+        R.load_csv(path, **LOAD)
+    rows[9] = rows[9][:-2]
+    assert len(R.load_csv(write(path, ["t,v,x,spare"] + rows), **LOAD)) == 40
+
+
+def test_decimal_comma_and_thousands_arguments(tmp_path):
+    lines = [f"{k / FS:.6f};{1000 + k:.2f};{-2000.5 - k:,.1f}".replace(",", "_")
+             for k in range(40)]
+    european = [line.replace(".", ",").replace("_", ".") for line in lines]
+    path = write(tmp_path / "eu.csv", ["# gain = 10", "t;v;x"] + european)
+    rec = R.load_csv(path, delimiter=";", decimal=",", thousands=".", **LOAD)
+    assert rec.fs == pytest.approx(FS) and rec.metadata["gain"] == 10
+    assert rec.input[3] == 1003.0 and rec.output[3] == -2003.5
+    english = [line.replace("_", ",") for line in lines]
+    rec = R.load_csv(write(tmp_path / "en.csv", ["t;v;x"] + english), delimiter=";",
+                     thousands=",", **LOAD)
+    assert rec.output[3] == -2003.5
+    plain = [line.replace(",", "") for line in english]          # decimal="," alone
+    rec = R.load_csv(write(tmp_path / "p.csv", ["t;v;x"] + [p.replace(".", ",") for p in plain]),
+                     delimiter=";", decimal=",", **LOAD)
+    assert rec.input[3] == 1003.0
+    with pytest.raises(R.RecordError, match=r"line 2: column 'v' \(input\): '1000.00' is not "
+                                            "a number; it looks like a decimal point: pass "
+                                            "decimal='.'"):
+        R.load_csv(write(tmp_path / "r.csv", ["t;v;x"] + plain), delimiter=";", decimal=",",
+                   **LOAD)
+    for bad in (dict(decimal=","), dict(decimal=";", delimiter=","),
+                dict(delimiter=";", thousands="."), dict(delimiter=";", thousands="1")):
+        with pytest.raises(ValueError):
+            R.load_csv(path, **{"delimiter": ",", **bad}, **LOAD)
+
+
+def test_a_duplicated_column_name_is_refused_when_asked_for(tmp_path):
+    path = write(tmp_path / "dup.csv", ["# gain = 10", "t,v,v"] + data_lines())
+    with pytest.raises(R.RecordError, match=r"line 2: column name 'v' \(columns\['input'\]\) "
+                                            r"appears 2 times in the header \(columns 1, 2\)"):
+        R.load_csv(path, **LOAD | dict(output=2))
+    # a duplicated name nobody asks for is no ambiguity
+    rec = R.load_csv(write(path, ["t,x,v,v"] + data_lines()), time="t", input=2, output="x",
+                     header=True)
+    assert len(rec) == 40
+
+
+def test_header_true_on_a_file_without_header(tmp_path):
+    path = write(tmp_path / "nh.csv", ["# gain = 10", ""] + data_lines())
+    with pytest.raises(R.RecordError, match=r"line 3: the header line holds only numbers "
+                                            r"\('0.000000', '0.00000', '0.00000'\): it looks "
+                                            "like data; pass header=False"):
+        R.load_csv(path, time=0, input=1, output=2, header=True)
+    assert len(R.load_csv(path, time=0, input=1, output=2)) == 40
+
+
+@pytest.mark.parametrize("codec, encoding", [
+    ("utf-8-sig", None), ("utf-16", None), ("utf-16-be", None), ("utf-32", None),
+    ("latin-1", "latin-1"), ("cp1252", "cp1252"), ("utf-8-sig", "utf-8")])
+def test_encodings(tmp_path, codec, encoding):
+    text = "".join(f"{line}\r\n" for line in ["# unit = µm at 20 °C", "t,v [V],x [µm]"]
+                   + data_lines())
+    data = text.encode(codec)
+    if codec == "utf-16-be":                       # as "utf-16" writes it, big-endian
+        data = codecs.BOM_UTF16_BE + data
+    path = tmp_path / "enc.csv"
+    path.write_bytes(data)
+    given = {} if encoding is None else {"encoding": encoding}      # None: found from the BOM
+    rec = R.load_csv(path, time="t", input="v [V]", output="x [µm]", header=True, **given)
+    assert len(rec) == 40 and rec.metadata["unit"] == "µm at 20 °C"
+    assert rec.output[5] == pytest.approx(3 * np.sin(1.0), abs=1e-5)
+
+
+def test_undecodable_files_name_the_line_and_the_encoding_to_pass(tmp_path):
+    lines = ["t,v,x"] + data_lines()
+    lines[6] = lines[6] + " µ"
+    path = tmp_path / "l1.csv"
+    path.write_bytes("".join(line + "\n" for line in lines).encode("latin-1"))
+    with pytest.raises(R.RecordError, match=r"line 7: byte 0xb5 is not UTF-8 text .*"
+                                            "pass its encoding, e.g. encoding='latin-1'"):
+        R.load_csv(path, **LOAD)
+    path.write_bytes("".join(line + "\n" for line in lines[:3]).encode("utf-16-le"))
+    with pytest.raises(R.RecordError, match="line 1: NUL character: .* without a byte-order "
+                                            "mark .*encoding='utf-16-le'"):
+        R.load_csv(path, **LOAD)
+    with pytest.raises(ValueError, match="unknown encoding"):
+        R.load_csv(path, encoding="no-such-codec", **LOAD)
+
+
+STRUCTURES = {
+    "plain": lambda ls: ls,
+    "CRLF": lambda ls: ls,
+    "comment among the data": lambda ls: ls[:20] + ["# late = 7"] + ls[20:],
+    "blank lines": lambda ls: ls[:9] + ["", "   "] + ls[9:] + ["", ""],
+    "unused extra column": lambda ls: ls[:2] + [ls[2] + ",spare"] + [line + ",0.5"
+                                                                      for line in ls[3:]],
+    "trailing delimiter": lambda ls: ls[:3] + [line + "," for line in ls[3:]],
+    "no last line end": lambda ls: ls,
+}
+
+
+@pytest.mark.parametrize("name", STRUCTURES)
+def test_fast_read_and_line_by_line_reader_agree(tmp_path, monkeypatch, name):
+    lines = STRUCTURES[name](["# gain = 10", "", "t,v,x"] + data_lines())
+    end = "\r\n" if name == "CRLF" else "\n"
+    path = tmp_path / "s.csv"
+    path.write_bytes((end.join(lines) + ("" if name == "no last line end" else end)).encode())
+    expected = [k + 1 for k, line in enumerate(lines) if line.strip() and line[0] != "#"][1:]
+    columns = {"t": "t", "x": "x"}
+    results = []
+    for chunk in (R._CHUNK, 7):              # small chunks: counts carried across chunks
+        monkeypatch.setattr(R, "_CHUNK", chunk)
+        results.append(R.read_table(path, columns, header=True))
+    monkeypatch.setattr(R, "_read_fast", lambda *args: None)
+    results.append(R.read_table(path, columns, header=True))
+    for data, meta, numbers in results:
+        assert list(numbers) == expected
+        assert meta == results[-1][1] and meta["gain"] == 10
+        for key in columns:
+            assert np.array_equal(data[key], results[-1][0][key])
+    assert results[0][0]["x"][5] == pytest.approx(3 * np.sin(1.0), abs=1e-5)
+    if name == "comment among the data":
+        assert results[0][1]["late"] == 7
+
+
+def outcome(path, columns, header):
+    try:
+        data, meta, numbers = R.read_table(path, columns, header=header)
+    except R.RecordError as exc:
+        return str(exc)
+    return {key: values.tolist() for key, values in data.items()}, meta, numbers.tolist()
+
+
+cell = st.sampled_from(["1", "2.5", " -3e2 ", "1000", "", "nan", "x", "#1", "1,5"])
+row = st.one_of(st.lists(cell, min_size=1, max_size=5).map(",".join),
+                st.sampled_from(["", "  ", "# k = 2", " # note"]))
+
+
+@settings(max_examples=150, deadline=None)
+@given(rows=st.lists(row, max_size=8), header=st.booleans(), width=st.integers(1, 4),
+       picked=st.lists(st.integers(0, 3), min_size=1, max_size=3),
+       end=st.sampled_from(["\n", "\r\n", "\r"]), last_end=st.booleans(),
+       chunk=st.sampled_from([3, 1 << 20]))
+def test_fast_read_agrees_with_the_line_by_line_reader(rows, header, width, picked, end,
+                                                       last_end, chunk):
+    lines = ([",".join("abcd"[:width])] if header else []) + rows
+    columns = {f"k{n}": col for n, col in enumerate(picked)}
+    with tempfile.TemporaryDirectory() as folder, pytest.MonkeyPatch.context() as patch:
+        path = Path(folder) / "h.csv"
+        path.write_bytes((end.join(lines) + (end if last_end else "")).encode())
+        patch.setattr(R, "_CHUNK", chunk)
+        fast = outcome(path, columns, header)
+        patch.setattr(R, "_read_fast", lambda *args: None)
+        assert fast == outcome(path, columns, header)
+
+
+def test_line_numbers_count_comment_lines_among_the_data(tmp_path):
+    lines = ["# gain = 10", "t,v,x"] + data_lines()
+    lines[30] = "0.005560" + lines[30][8:]                    # uneven step at file line 31
+    lines = lines[:10] + ["# a note", ""] + lines[10:]
+    with pytest.raises(R.RecordError, match="uneven sampling") as info:
+        R.load_csv(write(tmp_path / "n.csv", lines), **LOAD)
+    assert info.value.line == 33
 
 
 def test_record_checks_its_arrays():
