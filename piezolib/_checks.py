@@ -18,6 +18,21 @@ __all__ = [
 ]
 
 
+def check_type(name, value, types, what=None):
+    """Return ``value`` after checking it is an instance of ``types``.
+
+    ``what`` describes the expected kind in the message (default: the type names),
+    so that a wrong object fails here, naming the argument, and not later as an
+    AttributeError deep inside the computation.
+    """
+    if not isinstance(value, types):
+        if what is None:
+            names = [t.__name__ for t in (types if isinstance(types, tuple) else (types,))]
+            what = " or ".join(names)
+        raise TypeError(f"{name} must be {what}, got {type(value).__name__}")
+    return value
+
+
 def check_positive(name, value):
     """Return ``value`` as a float after checking it is finite and > 0."""
     value = _as_real_scalar(name, value)

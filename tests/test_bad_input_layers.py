@@ -1,0 +1,462 @@
+"""Bad input to the problem and workbook layers: a specific exception naming what is wrong.
+
+The toolkit's sweep (``tests/test_bad_input.py``) extended upwards.  Each entry of ``CASES``
+holds a valid call of one public function of ``piezolib.problem`` or ``piezolib.workbook`` (or
+None where the valid call is a whole design or notebook run, exercised elsewhere) and bad
+values per argument; each bad call must raise ValueError or TypeError (StudyError,
+RecordError and ArtifactError are ValueErrors) whose message names the argument, or, for a
+study, says "study" or names the file.  ``EXEMPT`` lists, with a reason, the public functions
+that take no argument a user could get wrong.  ``test_every_public_function_is_covered``
+keeps the two complete as the API grows; ``test_cli_*`` does the same for every option of
+every subcommand of ``python -m piezolib``.
+"""
+
+import argparse
+import importlib
+import inspect
+import re
+
+import control as ct
+import numpy as np
+import pandas as pd
+import pytest
+
+from piezolib.hysteresis import DahlModel
+from piezolib.problem import paper
+from piezolib.problem.stage import VirtualStage
+from piezolib.workbook import cli
+
+LAYERS = {
+    "problem": ("paper", "genplant", "stage", "stage_data", "design", "analysis",
+                "hysteresis_fits", "stage_hysteresis", "paths"),
+    "workbook": ("study", "pipeline", "loop", "experiments", "report", "style", "plotting",
+                 "reproduce", "cli", "outputs", "session"),
+}
+
+G, H_M, H_E, H_Y, K = paper.problem()
+S = ct.tf("s")
+FS = paper.SAMPLING_FREQUENCY_HZ
+STAGE = VirtualStage(seed=0)
+DAHL = DahlModel(alpha1=236.0, alpha2=335.4, beta1=0.0, beta2=2.56, gamma_a=30.0, g_a=1.28,
+                 form="bliman_sorine", x0=-0.15, start="rest")
+V_R = np.zeros(200)
+OMEGA = np.logspace(2, 5, 20)
+
+
+class InTmp(str):
+    """A file name inside the test's temporary directory, written with the given text."""
+
+    def __new__(cls, name, text=""):
+        obj = super().__new__(cls, name)
+        obj.text = text
+        return obj
+
+
+def resolve(kwargs, tmp_path):
+    out = {}
+    for key, value in kwargs.items():
+        if isinstance(value, InTmp):
+            path = tmp_path / value
+            if value.text is not None:
+                path.write_text(value.text)
+            value = path
+        out[key] = value
+    return out
+
+
+# bad values by kind of argument
+STUDY = {"unknown name": "no_such_study", "missing file": "/nonexistent/x.toml",
+         "number": 3.5, "none": None, "empty": "",
+         "broken file": InTmp("broken.toml", 'name = "broken"\n[weights\n'),
+         "name unlike its file": InTmp("other.toml", 'name = "reference"\n')}
+POSITIVE = {"zero": 0.0, "negative": -1.0, "nan": np.nan, "inf": np.inf, "text": "x"}
+POSITIVE_INT = {"zero": 0, "negative": -1, "fraction": 1.5, "text": "x"}
+SIGNAL = {"nan": np.r_[V_R[:-1], np.nan], "empty": np.array([]), "2-D": np.c_[V_R, V_R],
+          "complex": V_R + 1j, "text": "abc"}
+LTI = {"nan coefficient": ct.ss([[np.nan]], [[1.0]], [[1.0]], [[0.0]]),
+       "discrete": ct.ss(ct.tf([1.0], [1.0, -0.5], 1e-4)), "not a model": np.ones((2, 2)),
+       "two inputs": ct.ss(np.eye(1) * -1.0, np.ones((1, 2)), np.ones((1, 1)), np.zeros((1, 2)))}
+LTI_PROPER = {**LTI, "improper": ct.tf([1.0, 0.0, 0.0], [1.0, 1.0])}
+PLANT = {**LTI_PROPER, "improper": G * S ** 4}
+GRID = {"nan": np.r_[OMEGA[:-1], np.nan], "negative": -OMEGA, "empty": np.array([]),
+        "complex": OMEGA + 1j, "text": "abc"}
+MODEL = {"not a model": object(), "text": "dahl", "parameters": {"alpha1": 1.0}}
+STAGE_BAD = {"not a stage": object(), "text": "stage", "model": DAHL}
+DIRECTORY = {"a file": InTmp("plain.txt", "x"), "number": 3}
+PATH_MISSING = {"missing": "/nonexistent/file.json", "number": 3,
+                "not json": InTmp("bad.json", "{not json"), "empty": InTmp("empty.json", ""),
+                "a directory": InTmp(".", None)}
+FIGURE_BAD = {"none": None, "text": "fig", "axes array": np.zeros(2)}
+FRAME_BAD = {"not a frame": [1, 2, 3], "none": None}
+NAME = {"empty": "", "with a slash": "a/b", "with dots": "..", "number": 3}
+SEEDS = {"empty": [], "negative": [-1], "fraction": [1.5], "text": ["a"], "repeated": [1, 1]}
+TEXT_BAD = {"number": 3, "none": None}
+
+# name -> (valid call or None, {argument: bad values})
+CASES = {
+    # problem.paper
+    "paper.plant": (dict(), {"coefficients": {"text": "abc", "negative": -1.0, "none": 3}}),
+    "paper.uncertainty_weight": (dict(), {"params": {"text": "abc", "number": 3}}),
+    "paper.error_weight": (dict(M_e=2.0), {"M_e": POSITIVE, "omega_e": POSITIVE,
+                                           "params": {"text": "abc"}}),
+    "paper.output_weight": (dict(), {"omega_y": POSITIVE, "params": {"text": "abc"}}),
+    "paper.controller": (dict(), {"coefficients": {"text": "abc", "number": 3}}),
+    # problem.genplant
+    "genplant.check_models": (dict(G=G, H_m=H_M, H_e=H_E, H_y=H_Y),
+                              {"G": PLANT, "H_m": LTI_PROPER, "H_e": LTI_PROPER, "H_y": LTI}),
+    "genplant.generalized_plant": (dict(G=G, H_m=H_M, H_e=H_E, H_y=H_Y),
+                                   {"G": PLANT, "H_e": LTI_PROPER,
+                                    "effort_weight": {"negative": -1.0, "nan": np.nan},
+                                    "omega_s": POSITIVE}),
+    "genplant.design_plant": (dict(G=G, H_m=H_M, H_e=H_E, H_y=H_Y),
+                              {"G": PLANT, "effort_weight": {"negative": -1.0, "text": "x"}}),
+    "genplant.closed_loop_matrix": (dict(K=K, G=G, H_m=H_M, H_e=H_E, H_y=H_Y),
+                                    {"K": LTI, "G": PLANT, "omega_s": POSITIVE}),
+    "genplant.effective_delay": (dict(fs=FS, delay_samples=1),
+                                 {"fs": POSITIVE, "delay_samples": {"negative": -1,
+                                                                    "fraction": 0.5}}),
+    "genplant.rolloff_weight": (dict(), {"params": {"text": "abc", "number": 3}}),
+    "genplant.delay_aware_plant": (dict(G=G, H_m=H_M, H_e=H_E, H_y=H_Y, fs=FS),
+                                   {"G": PLANT, "fs": POSITIVE,
+                                    "delay_samples": {"negative": -1, "fraction": 0.5},
+                                    "pade_order": {"negative": -1, "fraction": 1.5}}),
+    "genplant.delayed_closed_loop_response": (
+        dict(K=K, G=G, H_m=H_M, H_e=H_E, H_y=H_Y, omega=OMEGA, fs=FS, delay_samples=1),
+        {"K": LTI, "omega": GRID, "fs": POSITIVE, "delay_samples": {"negative": -1}}),
+    # problem.stage
+    "stage.check_seeds": (dict(seeds=[1, 2]), {"seeds": SEEDS}),
+    "stage.case_I_input": (dict(amplitude_V=5.0), {"amplitude_V": POSITIVE,
+                                                   "periods": POSITIVE_INT,
+                                                   "frequency_Hz": POSITIVE}),
+    "stage.run_case_I": (None, {"stage": STAGE_BAD, "amplitudes_V": {"empty": [],
+                                                                    "negative": [-5.0],
+                                                                    "text": ["a"]},
+                                "periods": POSITIVE_INT}),
+    "stage.case_I_hysteresis": (None, {"records": {"empty": {}, "text": "abc",
+                                                   "not records": {5.0: 1.0}}}),
+    "stage.calibrate_hysteresis": (None, {"targets": {"negative": {5.0: -1.0},
+                                                      "not a dict": [1.0], "empty": {}},
+                                          "law": {"text": "abc"}}),
+    # problem.stage_data
+    "stage_data.chirp_input": (None, {"settings": {"text": "abc", "none": None},
+                                      "fs": POSITIVE}),
+    "stage_data.experiment_paths": (dict(), {"directory": DIRECTORY}),
+    "stage_data.write_experiment_files": (None, {"directory": DIRECTORY}),
+    "stage_data.load_record": (None, {"path": {"missing": "/nonexistent.csv", "number": 3,
+                                               "not a record": InTmp("r.csv", "a,b\nx,y\n")}}),
+    "stage_data.load_chirp": (dict(), {"which": {"unknown": "nope", "number": 3},
+                                       "directory": DIRECTORY}),
+    "stage_data.load_hysteresis_loops": (None, {"directory": DIRECTORY}),
+    "stage_data.manifest_path": (dict(), {"directory": DIRECTORY}),
+    "stage_data.read_manifest": (dict(), {"directory": DIRECTORY}),
+    "stage_data.check_experiment_files": (None, {"directory": DIRECTORY}),
+    "stage_data.write_foreign_records": (None, {"directory": DIRECTORY}),
+    "stage_data.foreign_record_paths": (dict(), {"directory": DIRECTORY}),
+    # problem.design, analysis, hysteresis_fits
+    "design.design_controller": (None, {"G": PLANT, "order": POSITIVE_INT,
+                                        "d_order": {"negative": -1, "fraction": 1.5},
+                                        "max_iter": POSITIVE_INT, "fs": POSITIVE,
+                                        "delay_samples": {"negative": -2, "fraction": 0.5}}),
+    "analysis.analyze": (None, {"K": LTI, "G": PLANT, "omega": GRID}),
+    "analysis.table3": (None, {"analyses": {"text": "abc", "number": 3}}),
+    "analysis.table3_peaks": (None, {"analyses": {"text": "abc", "number": 3}}),
+    "analysis.robust_performance_peak": (dict(K=K, G=G, H_m=H_M, H_e=H_E, H_y=H_Y),
+                                         {"K": LTI, "G": PLANT, "omega": GRID}),
+    "analysis.margins_table": (None, {"controllers": {"empty": {}, "not a mapping": [K],
+                                                      "not a model": {"K": 3.0}},
+                                      "G": PLANT, "fs": POSITIVE,
+                                      "delays": {"negative": (-1,), "empty": (),
+                                                 "fraction": (0.5,)}}),
+    "analysis.achievable_mu_lower_bound": (None, {"G": PLANT}),
+    "hysteresis_fits.published_dahl": (dict(), {"form": {"unknown": "nope", "number": 3},
+                                                "params": {"text": "abc"}}),
+    "hysteresis_fits.fit_case_I_loops": (None, {"form": {"unknown": "nope"},
+                                                "start": {"unknown": "nope"},
+                                                "stride": POSITIVE_INT,
+                                                "directory": DIRECTORY}),
+    "hysteresis_fits.workbook_dahl_fit": (None, {"directory": DIRECTORY}),
+    "hysteresis_fits.read_dahl_model": (None, {"path": PATH_MISSING}),
+    "hysteresis_fits.write_dahl_model": (dict(model=DAHL, path=InTmp("dahl.json", None)),
+                                         {"model": MODEL, "about": TEXT_BAD}),
+    "hysteresis_fits.workbook_pi_fit": (None, {"directory": DIRECTORY,
+                                               "n_plays": POSITIVE_INT}),
+    "hysteresis_fits.validation_loops": (None, {"stage": STAGE_BAD}),
+    # workbook.study
+    "study.load": (dict(spec="reference"), {"spec": STUDY}),
+    "study.from_dict": (dict(data={"name": "from_dict_test"}),
+                        {"data": {"not a mapping": [1, 2], "no name": {},
+                                  "unknown section": {"name": "x", "nope": {}},
+                                  "bool number": {"name": "x", "experiments":
+                                                  {"amplitudes_V": [True]}}}}),
+    "study.choices_digest": (dict(choices={"a": 1}), {"choices": {"not a mapping": [1],
+                                                                  "unserialisable":
+                                                                      {"a": object()}}}),
+    # workbook.pipeline
+    "pipeline.study_problem": (dict(study="reference"), {"study": STUDY}),
+    "pipeline.study_uncertainty_weight": (dict(study="reference"), {"study": STUDY}),
+    "pipeline.study_controllers": (None, {"study": STUDY}),
+    "pipeline.derive_controllers": (None, {"study": STUDY}),
+    "pipeline.design_choices": (dict(study="reference"), {"study": STUDY}),
+    "pipeline.design_digest": (dict(study="reference"), {"study": STUDY}),
+    "pipeline.write_controllers": (None, {"controllers": {"text": "abc", "none": None},
+                                          "study": STUDY}),
+    "pipeline.read_controllers": (None, {"path": PATH_MISSING}),
+    "pipeline.case_III_controllers": (None, {"study": STUDY,
+                                             "controllers": {"text": "abc", "number": 3}}),
+    "pipeline.discretized_controllers": (None, {"study": STUDY,
+                                                "controllers": {"text": "abc"}}),
+    "pipeline.export_sections": (None, {"study": STUDY, "directory": DIRECTORY}),
+    "pipeline.study_sections": (None, {"study": STUDY}),
+    # workbook.loop
+    "loop.discrete_controller": (dict(K=K), {"K": LTI, "fs": POSITIVE}),
+    "loop.run_loop": (dict(stage=STAGE, v_r=V_R),
+                      {"stage": STAGE_BAD, "v_r": SIGNAL,
+                       "delay_samples": {"negative": -1, "fraction": 0.5},
+                       "sections_dtype": {"unknown": "float16", "number": 3},
+                       "seeds": SEEDS, "controller": {"text": "abc", "number": 3},
+                       "feedforward": {"text": "abc", "number": 3}}),
+    # workbook.experiments
+    "experiments.table4_reference": (dict(amplitude_V=5.0),
+                                     {"amplitude_V": POSITIVE, "periods": POSITIVE_INT,
+                                      "frequency_Hz": POSITIVE, "fs": POSITIVE,
+                                      "amplifier_gain": POSITIVE}),
+    "experiments.table4_measure": (None, {"reference_V": SIGNAL, "v_y_V": SIGNAL,
+                                          "fs": POSITIVE, "um_per_volt": POSITIVE}),
+    "experiments.run_case": (None, {"case": {"unknown": "IV", "number": 1},
+                                    "stage": STAGE_BAD, "v_r": SIGNAL, "model": MODEL,
+                                    "delay_samples": {"negative": -1}}),
+    "experiments.case_table": (None, {"case_values": {"text": "abc", "number": 3},
+                                      "columns": {"number": 3}}),
+    "experiments.hysteresis_test": (None, {"stage": STAGE_BAD, "model": MODEL,
+                                           "amplitudes_V": {"empty": [], "negative": [-5.0]},
+                                           "periods": POSITIVE_INT, "seeds": SEEDS}),
+    "experiments.tracking_periods": (dict(frequency_Hz=10.0),
+                                     {"frequency_Hz": POSITIVE,
+                                      "discard_periods": {"negative": -1, "fraction": 0.5},
+                                      "min_measured_s": POSITIVE}),
+    "experiments.tracking_reference": (dict(frequency_Hz=10.0, periods=3),
+                                       {"frequency_Hz": POSITIVE, "periods": POSITIVE_INT,
+                                        "amplitude_um": POSITIVE, "fs": POSITIVE}),
+    "experiments.tracking_test": (None, {"stage": STAGE_BAD, "model": MODEL,
+                                         "frequencies_Hz": {"empty": [], "negative": [-1.0]},
+                                         "amplitude_um": POSITIVE, "seeds": SEEDS}),
+    "experiments.add_table_claims": (None, {"claims": {"text": "abc", "none": None},
+                                            "published": FRAME_BAD}),
+    "experiments.design_goal_table": (None, {"results": {"text": "abc", "number": 3}}),
+    # workbook.report
+    "report.verdict": (dict(paper=1.0, ours=1.0), {"rtol": {"negative": -1.0, "nan": np.nan},
+                                                   "atol": {"negative": -1.0},
+                                                   "interval": {"reversed": (2.0, 1.0),
+                                                                "text": "ab"}}),
+    "report.goal_verdict": (dict(low=0.5, high=0.7, goal=1.0),
+                            {"low": {"nan": np.nan, "text": "x"}, "high": {"below low": 0.1},
+                             "goal": {"nan": np.nan, "text": "x"}}),
+    "report.side_by_side": (None, {"published": FRAME_BAD, "ours": FRAME_BAD}),
+    "report.save_results": (None, {"frame": FRAME_BAD, "name": NAME, "study": STUDY}),
+    "report.load_claims": (dict(), {"study": STUDY, "names": {"number": 3}}),
+    "report.compare_studies": (None, {"first": STUDY, "second": STUDY}),
+    "report.same_result": (dict(first=1.0, second=1.0), {}),
+    "report.reproduction_table": (None, {"claims": {"text": "abc", "number": 3}}),
+    "report.inconsistent_verdicts": (None, {"table": FRAME_BAD}),
+    "report.verdict_counts": (None, {"table": FRAME_BAD}),
+    # workbook.style and plotting
+    "style.new_figure": (dict(), {"nrows": POSITIVE_INT, "ncols": POSITIVE_INT}),
+    "style.unit_text": (dict(text="u [V]"), {"text": TEXT_BAD}),
+    "style.apply_unit_text": (None, {"fig": FIGURE_BAD}),
+    "style.db": (dict(x=[1.0, 10.0]), {"x": {"text": "abc"}}),
+    "style.plot_magnitude": (None, {"ax": FIGURE_BAD, "omega": GRID}),
+    "plotting.name_figure": (None, {"fig": FIGURE_BAD, "number": {"text": "x", "negative": -1},
+                                    "what": TEXT_BAD}),
+    "plotting.figure_name": (dict(number=3, what="weights"),
+                             {"number": {"negative": -1, "text": "x"},
+                              "what": {**TEXT_BAD, "empty": ""}}),
+    "plotting.save_figure": (None, {"fig": FIGURE_BAD, "directory": DIRECTORY}),
+    "plotting.same_picture": (None, {"first": PATH_MISSING, "tolerance": POSITIVE}),
+    # workbook.reproduce, outputs, session
+    "reproduce.list_notebooks": (dict(), {"selection": {"unknown prefix": ["99"],
+                                                        "number": 3}}),
+    "reproduce.notebook_waves": (None, {"paths": {"number": 3, "missing": ["/nope.ipynb"]}}),
+    "reproduce.inject_study": (None, {"nb": {"text": "abc", "none": None}, "study": STUDY}),
+    "reproduce.run_notebook": (None, {"path": {"missing": "/nonexistent.ipynb", "number": 3},
+                                      "timeout": POSITIVE, "study": STUDY}),
+    "reproduce.run": (None, {"selection": {"unknown prefix": ["99"]}, "timeout": POSITIVE,
+                             "study": STUDY, "jobs": POSITIVE_INT}),
+    "outputs.study_output_dir": (dict(name="reference"), {"name": NAME}),
+    "outputs.study_results_dir": (dict(name="reference"), {"name": NAME}),
+    "outputs.study_figures_dir": (dict(name="reference"), {"name": NAME}),
+    "outputs.study_controllers_dir": (dict(name="reference"), {"name": NAME}),
+    "session.start": (None, {"study": STUDY, "claims": {"number": 3, "empty": ""}}),
+    "cli.main": (None, {}),                 # by argument below: test_cli_*
+}
+
+#: Public functions without an argument a user could get wrong.
+EXEMPT = {
+    "paper.case_rows_index": "no arguments", "paper.table1": "no arguments",
+    "paper.table2": "no arguments", "paper.table4": "no arguments",
+    "paper.table5": "no arguments", "paper.problem": "no arguments",
+    "hysteresis_fits.workbook_dahl_path": "no arguments",
+    "hysteresis_fits.write_workbook_dahl": "no arguments (writes a committed artifact)",
+    "hysteresis_fits.clear_cache": "no arguments",
+    "paths.project_root": "no arguments", "paths.data_dir": "no arguments",
+    "study.list_studies": "no arguments", "study.study_files": "no arguments",
+    "study.studies_dir": "no arguments",
+    "pipeline.memory": "no arguments (its location comes from PIEZOLIB_CACHE)",
+    "pipeline.library_fingerprint": "no arguments",
+    "pipeline.reference_design_path": "no arguments",
+    "pipeline.write_reference_design": "only cache, a flag (a whole design run)",
+    "style.use_style": "no arguments",
+    "reproduce.check_data": "no arguments", "reproduce.default_jobs": "no arguments",
+    "outputs.project_root": "no arguments", "outputs.data_dir": "no arguments",
+    "outputs.runs_dir": "no arguments", "outputs.notebooks_dir": "no arguments",
+}
+
+
+def function(qualname):
+    module, name = qualname.split(".")
+    layer = next(k for k, mods in LAYERS.items() if module in mods)
+    return getattr(importlib.import_module(f"piezolib.{layer}.{module}"), name)
+
+
+def public_functions():
+    names = set()
+    for layer, modules in LAYERS.items():
+        for module in modules:
+            mod = importlib.import_module(f"piezolib.{layer}.{module}")
+            names |= {f"{module}.{n}" for n in getattr(mod, "__all__", ())
+                      if callable(getattr(mod, n)) and not inspect.isclass(getattr(mod, n))}
+    return names
+
+
+def call(qualname, kwargs):
+    f = function(qualname)
+    star = [p for p in inspect.signature(f).parameters.values()
+            if p.kind is inspect.Parameter.VAR_POSITIONAL]
+    if star and star[0].name in kwargs:                 # table3(*analyses)
+        kwargs = dict(kwargs)
+        value = kwargs.pop(star[0].name)
+        return f(value, **kwargs)
+    return f(**kwargs)
+
+
+def bad_calls():
+    for qualname, (valid, corrupt) in CASES.items():
+        for argument, values in corrupt.items():
+            for kind, value in values.items():
+                yield pytest.param(qualname, valid, argument, value,
+                                   id=f"{qualname}-{argument}-{kind}")
+
+
+def test_every_public_function_is_covered():
+    public = public_functions()
+    assert not (set(CASES) | set(EXEMPT)) - public, "entries for names that are not public"
+    missing = public - set(CASES) - set(EXEMPT)
+    assert not missing, f"public functions with no bad-input cases: {sorted(missing)}"
+    # every named argument exists: a renamed parameter must not leave a case testing nothing
+    for qualname, (_, corrupt) in CASES.items():
+        params = inspect.signature(function(qualname)).parameters
+        if not any(p.kind is p.VAR_KEYWORD for p in params.values()):
+            assert set(corrupt) <= set(params), (qualname, set(corrupt) - set(params))
+
+
+@pytest.mark.parametrize("qualname", sorted(q for q, (v, _) in CASES.items() if v is not None))
+def test_the_valid_call_works(qualname, tmp_path):
+    call(qualname, resolve(CASES[qualname][0], tmp_path))
+
+
+def _filled(qualname, valid, argument, value):
+    """The bad call: the valid one with ``argument`` replaced, or, where the valid call is
+    too costly to run, every required argument filled with a harmless valid value."""
+    if valid is not None:
+        return {**valid, argument: value}
+    params = inspect.signature(function(qualname)).parameters
+    kwargs = {}
+    for name, p in params.items():
+        if name == argument or p.default is not inspect.Parameter.empty \
+                or p.kind in (p.VAR_POSITIONAL, p.VAR_KEYWORD):
+            continue
+        kwargs[name] = FILLERS[name]
+    return {**kwargs, argument: value}
+
+
+# valid values for required arguments of the calls whose valid call is not run
+FILLERS = {"G": G, "H_m": H_M, "H_e": H_E, "H_y": H_Y, "K": K, "stage": STAGE, "v_r": V_R,
+           "model": DAHL, "controller": None, "study": "reference", "fs": FS,
+           "controllers": {"K": ct.ss(K)}, "records": {}, "settings": None,
+           "reference_V": np.sin(np.linspace(0, 20, 400)), "v_y_V": np.sin(np.linspace(0, 20, 400)),
+           "case": "II", "case_values": {}, "columns": ["a"], "claims": None, "section": "x",
+           "published": pd.DataFrame(), "result": None, "quantity": "q", "results": {},
+           "ours": pd.DataFrame(), "frame": pd.DataFrame({"a": [1.0]}), "name": "x",
+           "first": "reference", "second": "reference", "table": pd.DataFrame(),
+           "fig": None, "ax": None, "omega": OMEGA, "response": np.ones(20), "number": 1,
+           "what": "x", "directory": None, "tolerance": 0.25, "paths": [], "nb": None,
+           "path": None, "form": "printed", "offset": True, "start": "rest", "analyses": None,
+           "x": [1.0], "text": "x"}
+
+
+@pytest.mark.parametrize("qualname, valid, argument, value", list(bad_calls()))
+def test_bad_input_raises_naming_the_argument(qualname, valid, argument, value, tmp_path):
+    kwargs = resolve(_filled(qualname, valid, argument, value), tmp_path)
+    with pytest.raises((ValueError, TypeError, OSError)) as info:
+        call(qualname, kwargs)
+    message = str(info.value)
+    if isinstance(info.value, OSError):
+        # a file that cannot be read or written: the error names it
+        assert info.value.filename or re.search(r"/|\\", message), message
+    elif argument in ("study", "spec", "first", "second") and value is not None:
+        # a study is named by what the user gave: "study ..." or the file
+        assert re.search(r"study|\.toml", message, re.I), message
+    else:
+        assert re.search(rf"\b{re.escape(argument)}\b", message, re.I), message
+
+
+# --- the command line ---------------------------------------------------------------------
+
+def _options():
+    """(subcommand, option) for every option and positional of every subcommand."""
+    parser = cli._parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return {(name, action.dest) for name, p in sub.choices.items() for action in p._actions
+            if not isinstance(action, argparse._HelpAction)}
+
+
+# (argv, exit status, what stderr must say): every one ends in a message, not a traceback
+CLI_CASES = {
+    ("reproduce", "notebooks"): [(["reproduce", "99"], 2, "99"),
+                                 (["reproduce", "--no-data", "no_such"], 2, "no_such")],
+    ("reproduce", "timeout"): [(["reproduce", "--timeout", "0"], 2, "timeout"),
+                               (["reproduce", "--timeout", "nan"], 2, "timeout"),
+                               (["reproduce", "--timeout", "x"], 2, "timeout")],
+    ("reproduce", "jobs"): [(["reproduce", "--jobs", "0"], 2, "jobs"),
+                            (["reproduce", "--jobs", "1.5"], 2, "jobs")],
+    ("reproduce", "keep_going"): [(["reproduce", "--keep-going=yes"], 2, "keep-going")],
+    ("reproduce", "no_data"): [(["reproduce", "--no-data=1"], 2, "no-data")],
+    ("reproduce", "study"): [(["reproduce", "--study", "no_such_study"], 2, "no_such_study"),
+                             (["reproduce", "--study"], 2, "study")],
+    ("reproduce", "list"): [(["reproduce", "--list=x"], 2, "list")],
+    ("controllers", "write_reference"): [(["controllers", "--write-reference=1"], 2,
+                                          "write-reference")],
+    ("compare", "first"): [(["compare"], 2, "first"),
+                           (["compare", "no_such", "reference"], 2, "no_such")],
+    ("compare", "second"): [(["compare", "reference"], 2, "second"),
+                            (["compare", "reference", "reference"], 2, "reference"),
+                            (["compare", "reference", "no_such"], 2, "no_such")],
+}
+
+
+def test_every_cli_option_has_bad_cases():
+    missing = _options() - set(CLI_CASES)
+    assert not missing, f"command-line options with no bad-input case: {sorted(missing)}"
+    assert not set(CLI_CASES) - _options(), "cases for options that do not exist"
+
+
+@pytest.mark.parametrize("argv, status, said",
+                         [pytest.param(*case, id=" ".join(case[0]))
+                          for cases in CLI_CASES.values() for case in cases])
+def test_cli_bad_arguments_exit_with_a_message(argv, status, said, capsys):
+    try:
+        got = cli.main(argv)
+    except SystemExit as exc:                       # argparse's usage errors
+        got = exc.code
+    err = capsys.readouterr().err
+    assert got == status, err
+    assert said in err and "Traceback" not in err, err
