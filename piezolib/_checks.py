@@ -14,7 +14,7 @@ __all__ = [
     "check_positive", "check_nonnegative", "check_finite_array", "check_siso",
     "check_lti", "check_stable", "check_proper", "check_same_length",
     "check_integer", "check_continuous", "check_finite_lti", "check_signals",
-    "check_frequency_grid",
+    "check_frequency_grid", "check_type",
 ]
 
 
