@@ -6,6 +6,8 @@ scipy or SLICOT as a silent NaN or a deep traceback.
 """
 
 import numbers
+import os
+from pathlib import Path
 
 import control as ct
 import numpy as np
@@ -14,7 +16,7 @@ __all__ = [
     "check_positive", "check_nonnegative", "check_finite_array", "check_siso",
     "check_lti", "check_stable", "check_proper", "check_same_length",
     "check_integer", "check_continuous", "check_finite_lti", "check_signals",
-    "check_frequency_grid", "check_type",
+    "check_frequency_grid", "check_type", "check_path",
 ]
 
 
@@ -31,6 +33,13 @@ def check_type(name, value, types, what=None):
             what = " or ".join(names)
         raise TypeError(f"{name} must be {what}, got {type(value).__name__}")
     return value
+
+
+def check_path(name, value):
+    """Return ``value`` as a :class:`pathlib.Path` after checking it is a str or path."""
+    if isinstance(value, bool) or not isinstance(value, (str, os.PathLike)) or value == "":
+        raise TypeError(f"{name} must be a file path (str or pathlib.Path), got {value!r}")
+    return Path(value)
 
 
 def check_positive(name, value):

@@ -17,6 +17,8 @@ import inspect
 import re
 
 import control as ct
+import matplotlib.figure
+import nbformat
 import numpy as np
 import pandas as pd
 import pytest
@@ -40,6 +42,13 @@ STAGE = VirtualStage(seed=0)
 DAHL = DahlModel(alpha1=236.0, alpha2=335.4, beta1=0.0, beta2=2.56, gamma_a=30.0, g_a=1.28,
                  form="bliman_sorine", x0=-0.15, start="rest")
 V_R = np.zeros(200)
+CLAIMS = importlib.import_module("piezolib.workbook.report").ClaimTable("campaign", "reference")
+NOTEBOOK = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(
+    "study = 'reference'", metadata={"tags": ["parameters"]})])
+FIRST_NOTEBOOK = importlib.import_module("piezolib.workbook.reproduce").list_notebooks()[0]
+FIG = matplotlib.figure.Figure()
+FIG.set_label("fig99_campaign")
+AXES = FIG.add_subplot()
 OMEGA = np.logspace(2, 5, 20)
 
 
@@ -69,6 +78,7 @@ STUDY = {"unknown name": "no_such_study", "missing file": "/nonexistent/x.toml",
          "number": 3.5, "none": None, "empty": "",
          "broken file": InTmp("broken.toml", 'name = "broken"\n[weights\n'),
          "name unlike its file": InTmp("other.toml", 'name = "reference"\n')}
+STUDY_GIVEN = {k: v for k, v in STUDY.items() if k != "none"}    # where None means the reference
 POSITIVE = {"zero": 0.0, "negative": -1.0, "nan": np.nan, "inf": np.inf, "text": "x"}
 POSITIVE_INT = {"zero": 0, "negative": -1, "fraction": 1.5, "text": "x"}
 SIGNAL = {"nan": np.r_[V_R[:-1], np.nan], "empty": np.array([]), "2-D": np.c_[V_R, V_R],
@@ -76,6 +86,8 @@ SIGNAL = {"nan": np.r_[V_R[:-1], np.nan], "empty": np.array([]), "2-D": np.c_[V_
 LTI = {"nan coefficient": ct.ss([[np.nan]], [[1.0]], [[1.0]], [[0.0]]),
        "discrete": ct.ss(ct.tf([1.0], [1.0, -0.5], 1e-4)), "not a model": np.ones((2, 2)),
        "two inputs": ct.ss(np.eye(1) * -1.0, np.ones((1, 2)), np.ones((1, 1)), np.zeros((1, 2)))}
+#: a discrete model at the loop's rate is a valid controller
+LTI_CONTINUOUS_OR_LOOP_RATE = {k: v for k, v in LTI.items() if k != "discrete"}
 LTI_PROPER = {**LTI, "improper": ct.tf([1.0, 0.0, 0.0], [1.0, 1.0])}
 PLANT = {**LTI_PROPER, "improper": G * S ** 4}
 GRID = {"nan": np.r_[OMEGA[:-1], np.nan], "negative": -OMEGA, "empty": np.array([]),
@@ -208,13 +220,16 @@ CASES = {
     "pipeline.export_sections": (None, {"study": STUDY, "directory": DIRECTORY}),
     "pipeline.study_sections": (None, {"study": STUDY}),
     # workbook.loop
-    "loop.discrete_controller": (dict(K=K), {"K": LTI, "fs": POSITIVE}),
+    "loop.discrete_controller": (dict(K=K),
+                                 {"K": {**LTI_CONTINUOUS_OR_LOOP_RATE,
+                                        "other sample time": ct.ss(ct.tf([1.0], [1.0, -0.5], 1e-3))},
+                                  "fs": POSITIVE}),
     "loop.run_loop": (dict(stage=STAGE, v_r=V_R),
                       {"stage": STAGE_BAD, "v_r": SIGNAL,
                        "delay_samples": {"negative": -1, "fraction": 0.5},
                        "sections_dtype": {"unknown": "float16", "number": 3},
-                       "seeds": SEEDS, "controller": {"text": "abc", "number": 3},
-                       "feedforward": {"text": "abc", "number": 3}}),
+                       "seeds": SEEDS, "controller": {"text": "abc", "array": np.ones(2)},
+                       "feedforward": {"text": "abc", "negative gain": -2.0}}),
     # workbook.experiments
     "experiments.table4_reference": (dict(amplitude_V=5.0),
                                      {"amplitude_V": POSITIVE, "periods": POSITIVE_INT,
@@ -248,14 +263,18 @@ CASES = {
                                                    "atol": {"negative": -1.0},
                                                    "interval": {"reversed": (2.0, 1.0),
                                                                 "text": "ab"}}),
-    "report.goal_verdict": (dict(low=0.5, high=0.7, goal=1.0),
-                            {"low": {"nan": np.nan, "text": "x"}, "high": {"below low": 0.1},
+    "report.goal_verdict": (dict(low=0.5, high=0.7, goal=1.0),   # a NaN interval: undecided
+                            {"low": {"text": "x", "none": None}, "high": {"below low": 0.1},
                              "goal": {"nan": np.nan, "text": "x"}}),
     "report.side_by_side": (None, {"published": FRAME_BAD, "ours": FRAME_BAD}),
-    "report.save_results": (None, {"frame": FRAME_BAD, "name": NAME, "study": STUDY}),
+    "report.save_results": (None, {"frame": FRAME_BAD, "name": NAME,
+                                   "study": {"with a slash": "a/b", "with dots": "..",
+                                             "number": 3, "reserved": "cache"}}),
     "report.load_claims": (dict(), {"study": STUDY, "names": {"number": 3}}),
     "report.compare_studies": (None, {"first": STUDY, "second": STUDY}),
-    "report.same_result": (dict(first=1.0, second=1.0), {}),
+    "report.same_result": (dict(first=pd.Series({"ours": "1.0"}),
+                                second=pd.Series({"ours": "1.0"})),
+                           {"first": {"text": "abc", "number": 3}}),
     "report.reproduction_table": (None, {"claims": {"text": "abc", "number": 3}}),
     "report.inconsistent_verdicts": (None, {"table": FRAME_BAD}),
     "report.verdict_counts": (None, {"table": FRAME_BAD}),
@@ -271,22 +290,29 @@ CASES = {
                              {"number": {"negative": -1, "text": "x"},
                               "what": {**TEXT_BAD, "empty": ""}}),
     "plotting.save_figure": (None, {"fig": FIGURE_BAD, "directory": DIRECTORY}),
-    "plotting.same_picture": (None, {"first": PATH_MISSING, "tolerance": POSITIVE}),
+    "plotting.same_picture": (None, {"first": {"text": "abc", "not a png": b"xx", "number": 3},
+                                     "tolerance": {"negative": -1.0, "nan": np.nan,
+                                                   "inf": np.inf, "text": "x"}}),
     # workbook.reproduce, outputs, session
     "reproduce.list_notebooks": (dict(), {"selection": {"unknown prefix": ["99"],
                                                         "number": 3}}),
     "reproduce.notebook_waves": (None, {"paths": {"number": 3, "missing": ["/nope.ipynb"]}}),
     "reproduce.inject_study": (None, {"nb": {"text": "abc", "none": None}, "study": STUDY}),
     "reproduce.run_notebook": (None, {"path": {"missing": "/nonexistent.ipynb", "number": 3},
-                                      "timeout": POSITIVE, "study": STUDY}),
+                                      "timeout": POSITIVE, "study": STUDY_GIVEN}),
     "reproduce.run": (None, {"selection": {"unknown prefix": ["99"]}, "timeout": POSITIVE,
-                             "study": STUDY, "jobs": POSITIVE_INT}),
+                             "study": STUDY_GIVEN, "jobs": POSITIVE_INT}),
     "outputs.study_output_dir": (dict(name="reference"), {"name": NAME}),
     "outputs.study_results_dir": (dict(name="reference"), {"name": NAME}),
     "outputs.study_figures_dir": (dict(name="reference"), {"name": NAME}),
     "outputs.study_controllers_dir": (dict(name="reference"), {"name": NAME}),
     "session.start": (None, {"study": STUDY, "claims": {"number": 3, "empty": ""}}),
     "cli.main": (None, {}),                 # by argument below: test_cli_*
+    "outputs.study_name_problem": (dict(name="a/b"), {}),    # returns the problem as text
+    "pipeline.checked_cache_call": (None, {"func": {"not callable": 3, "text": "abc"}}),
+    "reproduce.remove_stale_temporaries": (None, {"study": STUDY,
+                                                  "older_than_s": {"negative": -1.0,
+                                                                   "nan": np.nan}}),
 }
 
 #: Public functions without an argument a user could get wrong.
@@ -380,17 +406,25 @@ def _filled(qualname, valid, argument, value):
 
 # valid values for required arguments of the calls whose valid call is not run
 FILLERS = {"G": G, "H_m": H_M, "H_e": H_E, "H_y": H_Y, "K": K, "stage": STAGE, "v_r": V_R,
-           "model": DAHL, "controller": None, "study": "reference", "fs": FS,
+           "model": DAHL, "controller": K, "study": "reference", "fs": FS,
            "controllers": {"K": ct.ss(K)}, "records": {}, "settings": None,
-           "reference_V": np.sin(np.linspace(0, 20, 400)), "v_y_V": np.sin(np.linspace(0, 20, 400)),
-           "case": "II", "case_values": {}, "columns": ["a"], "claims": None, "section": "x",
+           "reference_V": np.sin(np.linspace(0, 60, 3000)),
+           "v_y_V": np.sin(np.linspace(0, 60, 3000)),
+           "case": "II", "case_values": {"I": [1.0], "II": [1.0], "III": [1.0]},
+           "columns": ["a"], "claims": CLAIMS, "section": "x",
            "published": pd.DataFrame(), "result": None, "quantity": "q", "results": {},
            "ours": pd.DataFrame(), "frame": pd.DataFrame({"a": [1.0]}), "name": "x",
            "first": "reference", "second": "reference", "table": pd.DataFrame(),
-           "fig": None, "ax": None, "omega": OMEGA, "response": np.ones(20), "number": 1,
-           "what": "x", "directory": None, "tolerance": 0.25, "paths": [], "nb": None,
-           "path": None, "form": "printed", "offset": True, "start": "rest", "analyses": None,
+           "fig": FIG, "ax": AXES, "omega": OMEGA, "response": np.ones(20), "number": 1,
+           "what": "x", "directory": None, "tolerance": 0.25, "paths": [], "nb": NOTEBOOK, "func": len,
+           "path": FIRST_NOTEBOOK, "form": "printed", "offset": True, "start": "rest", "analyses": None,
            "x": [1.0], "text": "x"}
+
+
+#: Arguments holding a study (a name, a file or its fields).
+STUDY_ARGUMENTS = ("study", "spec", "first", "second", "data")
+#: Where a function reports an argument under the name its users know it by.
+ALIASES = {("loop.discrete_controller", "K"): r"\bcontroller\b|\bK\b"}
 
 
 @pytest.mark.parametrize("qualname, valid, argument, value", list(bad_calls()))
@@ -402,9 +436,14 @@ def test_bad_input_raises_naming_the_argument(qualname, valid, argument, value, 
     if isinstance(info.value, OSError):
         # a file that cannot be read or written: the error names it
         assert info.value.filename or re.search(r"/|\\", message), message
-    elif argument in ("study", "spec", "first", "second") and value is not None:
-        # a study is named by what the user gave: "study ..." or the file
-        assert re.search(r"study|\.toml", message, re.I), message
+    elif argument in STUDY_ARGUMENTS:
+        # a study is named by what the user gave: "study ...", the file, or the field
+        assert re.search(rf"study|\.toml|\b{argument}\b|\b[a-z]+\.[a-z_A-Z]+\b", message,
+                         re.I), message
+    elif isinstance(value, InTmp):
+        assert str(tmp_path / value) in message, message     # the file is named
+    elif (qualname, argument) in ALIASES:
+        assert re.search(ALIASES[qualname, argument], message, re.I), message
     else:
         assert re.search(rf"\b{re.escape(argument)}\b", message, re.I), message
 

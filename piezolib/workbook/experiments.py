@@ -35,7 +35,8 @@ import numpy as np
 import pandas as pd
 
 from piezolib import signals
-from piezolib._checks import check_finite_array, check_integer, check_positive, check_same_length
+from piezolib._checks import (check_finite_array, check_integer, check_positive,
+                              check_same_length, check_type)
 from piezolib.hysteresis.common import HysteresisModel
 from piezolib.hysteresis.measure import hysteresis_measure
 from piezolib.metrics import improvement_percent, mean_interval
@@ -45,7 +46,7 @@ from piezolib.problem.stage import StageBatch, VirtualStage, check_seeds
 from piezolib.robust.export import SOSController
 from piezolib.workbook.loop import (COMPUTATION_DELAY_SAMPLES, DISCARD_PERIODS,
                                     discrete_controller, run_loop)
-from piezolib.workbook.report import goal_verdict
+from piezolib.workbook.report import ClaimTable, goal_verdict
 
 __all__ = ["table4_reference", "table4_measure",
            "CASES", "MIN_MEASURED_S", "run_case", "case_table", "ExperimentResult",
@@ -188,8 +189,9 @@ def run_case(case, stage, v_r, model, controller=None, case_I_gain=None,
         An unknown case, Case III without a controller, or Case I without
         ``case_I_gain`` for a model without a ``static_part``.
     """
-    if case not in CASES:
+    if not isinstance(case, str) or case not in CASES:
         raise ValueError(f"case must be one of {sorted(CASES)}, got {case!r}")
+    delay_samples = check_integer("delay_samples", delay_samples, minimum=0)
     if model is None:
         model = workbook_dahl_fit().model
     if not isinstance(model, HysteresisModel):
@@ -225,6 +227,12 @@ def case_table(case_values, columns):
     pandas.DataFrame
         Rows as in :func:`piezolib.problem.paper.table4` (its row index).
     """
+    check_type("case_values", case_values, dict, 'a dict {"I": ..., "II": ..., "III": ...}')
+    missing = [c for c in CASES if c not in case_values]
+    if missing:
+        raise ValueError(f"case_values lacks the case(s) {missing}")
+    if isinstance(columns, (str, bytes)) or not hasattr(columns, "__len__"):
+        raise TypeError(f"columns must be a sequence of column labels, got {columns!r}")
     I, II, III = (np.asarray(case_values[c], dtype=float) for c in ("I", "II", "III"))
     data = [I, II, III, improvement_percent(I, II), improvement_percent(I, III),
             improvement_percent(II, III)]
@@ -367,6 +375,9 @@ def add_table_claims(claims, section, published, result, quantity, *, rows=None,
     reason : str, optional
         Why a row may differ (:data:`piezolib.workbook.report.REASONS`).
     """
+    check_type("claims", claims, ClaimTable, "a ClaimTable")
+    check_type("published", published, pd.DataFrame, "a pandas DataFrame (paper.table4/5)")
+    check_type("result", result, ExperimentResult, "an ExperimentResult")
     result._seeded("add_table_claims")
     for row in published.index if rows is None else rows:
         improvement = row.startswith("improvement")
@@ -403,6 +414,9 @@ def design_goal_table(results, goals=None):
     pandas.DataFrame
         One row per result; columns the errors [%], their intervals and the two verdicts.
     """
+    check_type("results", results, dict, "a dict {name: ExperimentResult}")
+    for name, result in results.items():
+        check_type(f"results[{name!r}]", result, ExperimentResult, "an ExperimentResult")
     goals = paper.DESIGN_GOALS if goals is None else goals
     goal_10 = goals["peak_to_peak_error_pct_up_to_10Hz"]
     goal_50 = goals["peak_to_peak_error_pct_at_50Hz"]
@@ -482,7 +496,21 @@ def tracking_reference(frequency_Hz, periods, amplitude_um=None, fs=paper.SAMPLI
 
 # --------------------------------------------------------------------------- the tests
 def _positive_values(name, values, default):
-    return [check_positive(name, v) for v in (default if values is None else values)]
+    values = default if values is None else values
+    if isinstance(values, (str, bytes)) or not hasattr(values, "__iter__"):
+        raise TypeError(f"{name} must be a sequence of numbers, got {values!r}")
+    values = [check_positive(name, v) for v in values]
+    if not values:
+        raise ValueError(f"{name} must hold at least one value")
+    return values
+
+
+def _check_stage_and_model(stage, model):
+    """Raise unless ``stage`` is a VirtualStage and ``model`` a hysteresis model (or None)."""
+    check_type("stage", stage, VirtualStage, "a VirtualStage")
+    if model is not None:
+        check_type("model", model, HysteresisModel, "a hysteresis model with simulate(v) and "
+                   "feedforward(x_r) (DahlModel, PIModel)")
 
 
 def _case_III_controller(controller, stage):
@@ -585,6 +613,7 @@ def hysteresis_test(stage, model, controller, amplitudes_V=None, periods=4,
     amplitudes_V = _positive_values("amplitudes_V", amplitudes_V,
                                     paper.HYSTERESIS_TEST["actuator_amplitudes_V"])
     periods = check_integer("periods", periods, minimum=discard_periods + 1)
+    _check_stage_and_model(stage, model)
     Kd = _case_III_controller(controller, stage)
     batch = _seeded_stages(stage, seeds)
     target = stage if batch is None else batch
@@ -641,6 +670,7 @@ def tracking_test(stage, model, controller, frequencies_Hz=None, amplitude_um=No
                                       paper.TRACKING_TEST["frequencies_Hz"])
     amplitude_um = check_positive("amplitude_um", paper.TRACKING_TEST["amplitude_um"]
                                   if amplitude_um is None else amplitude_um)
+    _check_stage_and_model(stage, model)
     Kd = _case_III_controller(controller, stage)
     batch = _seeded_stages(stage, seeds)
     target = stage if batch is None else batch

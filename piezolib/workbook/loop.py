@@ -31,7 +31,7 @@ from piezolib.robust.discrete import DiscreteController, discretize
 from piezolib.robust.export import SectionFilter, SectionFilterBatch, SOSController
 
 __all__ = ["LoopResult", "discrete_controller", "run_loop", "DISCARD_PERIODS",
-           "COMPUTATION_DELAY_SAMPLES"]
+           "COMPUTATION_DELAY_SAMPLES", "SECTION_DTYPES"]
 
 #: Whole samples between reading v_y[k] and applying the u_b computed from it.
 #: A real-time loop reads the ADC at tick k, computes u_b, and can write the
@@ -39,6 +39,9 @@ __all__ = ["LoopResult", "discrete_controller", "run_loop", "DISCARD_PERIODS",
 #: happened when the computation ends), so the loop's own delay is one sample;
 #: 0 reproduces the idealised loop that applies u_b[k] at once.
 COMPUTATION_DELAY_SAMPLES = 1
+
+#: Arithmetic of the controller's sections in the loop.
+SECTION_DTYPES = ("float32", "float64")
 
 #: Periods left out before measuring: the loop starts from rest and its
 #: start-up lasts into the second period (the first lower reversal of the
@@ -289,6 +292,12 @@ def run_loop(stage, v_r, *, feedforward=None, controller=None,
         controller output that stops being finite (an unstable loop).
     """
     from piezolib.problem.stage import StageBatch, VirtualStage   # imported lazily by the package
+    # the reference and the arithmetic first: both paths below would otherwise name an
+    # internal signal (u_c) or fail deep in the section filter
+    v_r = check_finite_array("v_r", v_r, ndim=1, min_length=2, real=True)
+    if sections_dtype not in SECTION_DTYPES:
+        raise ValueError(f"sections_dtype must be one of {SECTION_DTYPES}, "
+                         f"got {sections_dtype!r}")
     if isinstance(stage, StageBatch):
         if seeds is not None:
             raise ValueError("seeds must be None when stage is a StageBatch (its members "
@@ -300,7 +309,6 @@ def run_loop(stage, v_r, *, feedforward=None, controller=None,
     if seeds is not None:
         return _run_batch(stage.batch(seeds), v_r, feedforward, controller, delay_samples,
                           sections_dtype)
-    v_r = check_finite_array("v_r", v_r, ndim=1, min_length=2)
     delay = check_integer("delay_samples", delay_samples, minimum=0)
     u_f, ff_text = _feedforward_signal(feedforward, v_r)
     if isinstance(controller, SOSController):
@@ -361,7 +369,6 @@ def _closed_loop(stage, v_r, u_f, controller_step, delay):
 # --------------------------------------------------------------------------- N seeds at once
 def _run_batch(batch, v_r, feedforward, controller, delay_samples, sections_dtype):
     """:func:`run_loop` on every member of a StageBatch; a list of LoopResult."""
-    v_r = check_finite_array("v_r", v_r, ndim=1, min_length=2)
     delay = check_integer("delay_samples", delay_samples, minimum=0)
     u_f, ff_text = _feedforward_signal(feedforward, v_r)
     n = batch.size

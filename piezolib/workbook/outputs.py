@@ -8,17 +8,36 @@ name: no process-wide setting decides where an output goes.
 
 from piezolib.problem.paths import data_dir, project_root
 
-__all__ = ["REFERENCE_STUDY", "project_root", "data_dir", "runs_dir", "notebooks_dir",
-           "study_output_dir", "study_results_dir", "study_figures_dir",
-           "study_controllers_dir"]
+__all__ = ["REFERENCE_STUDY", "RESERVED_NAMES", "study_name_problem", "project_root", "data_dir",
+           "runs_dir", "notebooks_dir", "study_output_dir", "study_results_dir",
+           "study_figures_dir", "study_controllers_dir"]
 
 #: Name of the paper's reproduction: the one study that writes the committed outputs.
 REFERENCE_STUDY = "reference"
 
 
+#: Names no study may take: folders of ``runs/`` that hold something else.
+RESERVED_NAMES = {"cache": "the pipeline's disk cache"}
+
+
+def study_name_problem(name):
+    """What is wrong with ``name`` as a study name (a folder of ``runs/``), or None.
+
+    A study name is ASCII letters, digits, '_' or '-' (so it is one safe path
+    component: no '/', no '..') and not one of :data:`RESERVED_NAMES`.
+    """
+    if not isinstance(name, str) or not name or not all(
+            c.isascii() and (c.isalnum() or c in "_-") for c in name):
+        return f"must be letters, digits, '_' or '-', got {name!r}"
+    if name in RESERVED_NAMES:
+        return f"{name!r} is reserved: runs/{name}/ holds {RESERVED_NAMES[name]}"
+    return None
+
+
 def _study_name(name):
-    if not isinstance(name, str) or not name:
-        raise ValueError(f"name must be a study name, got {name!r}")
+    problem = study_name_problem(name)
+    if problem:
+        raise ValueError(f"name {problem}")
     return name
 
 

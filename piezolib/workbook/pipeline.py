@@ -34,6 +34,7 @@ from pathlib import Path
 import control as ct
 import numpy as np
 
+from piezolib._checks import check_path, check_type
 from piezolib.problem import paper
 from piezolib.problem.design import design_controller
 from piezolib.problem.hysteresis_fits import write_workbook_dahl
@@ -61,8 +62,9 @@ _DESIGN_SECTIONS = ("weights", "design", "loop")
 _CONTROLLERS = ("K_full", "K_reduced", "K_fixed", "K_nodelay_full", "K_nodelay_reduced")
 
 
-class ArtifactError(RuntimeError):
-    """A committed or cached artifact that does not fit the study asking for it."""
+class ArtifactError(ValueError):
+    """A committed or cached artifact that does not fit the study asking for it (a
+    ValueError: the file's content is the bad input)."""
 
 
 @dataclass(frozen=True)
@@ -223,6 +225,8 @@ def checked_cache_call(func, *args):
         ``"recomputed (cache entry failed its checksum)"``,
         ``"recomputed (cache entry unreadable)"`` or ``"derived (disk cache off)"``.
     """
+    if not callable(func):
+        raise TypeError(f"func must be a callable, got {func!r}")
     store = memory()
     if store.store_backend is None:
         return func(*args), "derived (disk cache off)"
@@ -406,7 +410,7 @@ def case_III_controllers(study, controllers=None):
     the published K of eq. 24, each v_e [V] -> u_b [V].
     """
     study = studies.load(study)
-    found = study_controllers(study) if controllers is None else controllers
+    found = study_controllers(study) if controllers is None else _check_controllers(controllers)
     K_pub = study_problem(study).K
     return {"K_ours": (f"ours, {found.K_deployed.nstates}th order (deployed)", found.K_deployed),
             "K_ours_full": (f"ours, full order ({found.K_full.nstates})", found.K_full),
@@ -471,12 +475,19 @@ def study_sections(study):
 _WRITE_REFERENCE = "python -m piezolib controllers --write-reference"
 
 
+def _check_controllers(controllers):
+    return check_type("controllers", controllers, StudyControllers,
+                      "StudyControllers (from study_controllers or derive_controllers)")
+
+
 def write_controllers(controllers, path, study):
     """Write ``controllers`` as JSON (matrices with full float precision); return the path.
 
     The file carries the SHA-256 of its content (:func:`piezolib.files.seal`),
     which :func:`read_controllers` checks.
     """
+    _check_controllers(controllers)
+    path = check_path("path", path)
     study = studies.load(study)
     doc = {"format": ARTIFACT_FORMAT, "study": study.name, "digest": controllers.digest,
            "choices": design_choices(study),
@@ -485,7 +496,6 @@ def write_controllers(controllers, path, study):
            "mu": controllers.mu,
            "controllers": {name: _ss_to_dict(getattr(controllers, name))
                            for name in _CONTROLLERS}}
-    path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     # json writes floats with repr: they read back bit for bit, so the checksum of the
     # document read back is the one written
@@ -501,7 +511,7 @@ def read_controllers(path):
         Naming the file: not a controller file of this format, or its content
         fails its checksum (edited or corrupted).
     """
-    path = Path(path)
+    path = check_path("path", path)
     try:
         doc = json.loads(path.read_text(encoding="utf-8"))
         if not isinstance(doc, dict):
@@ -513,6 +523,8 @@ def read_controllers(path):
         systems = {name: _ss_from_dict(doc["controllers"][name]) for name in _CONTROLLERS}
         return StudyControllers(study=doc["study"], digest=doc["digest"], source=str(path),
                                 mu={k: float(v) for k, v in doc["mu"].items()}, **systems)
+    except ArtifactError:
+        raise
     except (KeyError, TypeError, ValueError) as exc:
         raise ArtifactError(f"{path}: not a controller artifact ({exc})") from None
 

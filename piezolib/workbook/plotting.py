@@ -20,6 +20,7 @@ import matplotlib as mpl
 import matplotlib.image as mpimg
 import numpy as np
 
+from piezolib._checks import check_nonnegative
 from piezolib.files import atomic_write
 from piezolib.workbook.style import apply_unit_text
 
@@ -113,6 +114,22 @@ def same_picture(first, second, tolerance=PIXEL_TOLERANCE):
     fraction of a pixel only changes the shades of its antialiased edge
     (seen: at most 0.19); a curve, a marker or a text that moved by a
     visible amount changes some pixel by more than a quarter.
+
+    Parameters
+    ----------
+    first, second : bytes
+        PNG files' contents.
+    tolerance : float, optional
+        Largest accepted difference of a channel (0..1 scale), >= 0.
     """
-    a, b = (mpimg.imread(io.BytesIO(x), format="png") for x in (first, second))
+    tolerance = check_nonnegative("tolerance", tolerance)
+    images = []
+    for name, data in (("first", first), ("second", second)):
+        if not isinstance(data, (bytes, bytearray)):
+            raise TypeError(f"{name} must be PNG bytes, got {type(data).__name__}")
+        try:
+            images.append(mpimg.imread(io.BytesIO(data), format="png"))
+        except (ValueError, SyntaxError, OSError) as exc:   # Pillow's "not a PNG file"
+            raise ValueError(f"{name} is not a PNG image ({exc})") from None
+    a, b = images
     return a.shape == b.shape and float(np.max(np.abs(a - b), initial=0.0)) <= tolerance

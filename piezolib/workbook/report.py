@@ -20,11 +20,12 @@ when a row changed beyond that, or its verdict or text changed
 import functools
 import io
 import numbers
+from collections.abc import Iterable
 
 import numpy as np
 import pandas as pd
 
-from piezolib._checks import check_nonnegative
+from piezolib._checks import check_nonnegative, check_type
 from piezolib.files import atomic_write
 from piezolib.workbook import outputs
 from piezolib.workbook.outputs import REFERENCE_STUDY
@@ -84,6 +85,13 @@ def goal_verdict(low, high, goal):
     >>> goal_verdict(0.8, 0.9, 1.0), goal_verdict(1.0, 1.2, 1.0), goal_verdict(0.9, 1.1, 1.0)
     ('met', 'missed', 'undecided')
     """
+    for name, value in (("low", low), ("high", high), ("goal", goal)):
+        if not _is_number(value):
+            raise TypeError(f"{name} must be a real number, got {value!r}")
+    if not np.isfinite(goal):
+        raise ValueError(f"goal must be finite, got {goal!r}")
+    if low > high:                   # False for NaN: a NaN interval stays undecided
+        raise ValueError(f"high = {high!r} lies below low = {low!r}: not an interval")
     return "met" if high < goal else "missed" if low >= goal else "undecided"
 
 
@@ -101,8 +109,19 @@ def side_by_side(published, ours):
         Columns in the published table's sorted order, the paper's value
         before ours.
     """
+    _check_frame("published", published)
+    _check_frame("ours", ours, published.columns)
     both = pd.concat({"paper": published, "ours": ours}, axis=1).swaplevel(axis=1)
     return both[sorted(published.columns)]
+
+
+def _check_frame(name, frame, columns=()):
+    """Raise unless ``frame`` is a DataFrame holding ``columns``."""
+    check_type(name, frame, pd.DataFrame, "a pandas DataFrame")
+    missing = [c for c in columns if c not in frame.columns]
+    if missing:
+        raise ValueError(f"{name} lacks the column(s) {missing}")
+    return frame
 
 
 def _interval(interval):
@@ -223,8 +242,12 @@ def save_results(frame, name, study):
     (:func:`same_result`): a rerun on another machine, whose rounding moves
     a value within its precision, leaves the committed table unchanged.
     """
-    if not isinstance(frame, pd.DataFrame):
-        raise TypeError(f"frame must be a pandas DataFrame, got {type(frame).__name__}")
+    _check_frame("frame", frame)
+    if not isinstance(name, str) or not name.isidentifier():
+        raise ValueError(f"name must be an identifier-like file stem, got {name!r}")
+    problem = outputs.study_name_problem(study)
+    if problem:
+        raise ValueError(f"study {problem}")
     directory = outputs.study_results_dir(study)
     directory.mkdir(parents=True, exist_ok=True)
     path = directory / f"{name}.csv"
@@ -257,6 +280,8 @@ def same_result(first, second):
     the larger of the two rows' ``precision`` (empty: one unit of the 4th
     significant digit of the larger value).
     """
+    check_type("first", first, pd.Series, "a row (pandas Series) of a claim table")
+    check_type("second", second, pd.Series, "a row (pandas Series) of a claim table")
     for col in first.index:
         if col == "precision":
             continue
@@ -339,8 +364,11 @@ def load_claims(names=None, study=REFERENCE_STUDY):
     FileNotFoundError
         Naming the notebook to run when a table is missing.
     """
+    if isinstance(names, str) or not (names is None or isinstance(names, Iterable)):
+        raise TypeError(f"names must be a sequence of table names, got {names!r}")
     names = list(NOTEBOOK_TABLES) if names is None else list(names)
     tables = {**NOTEBOOK_TABLES, **OTHER_TABLES}
+    _check_study_exists(study)
     frames = []
     for name in names:
         if name not in tables:
@@ -358,6 +386,18 @@ def load_claims(names=None, study=REFERENCE_STUDY):
         frame.insert(1, "study", origin)
         frames.append(frame[["source", "study"] + COLUMNS])
     return pd.concat(frames, ignore_index=True)
+
+
+def _check_study_exists(study):
+    """Raise unless ``study`` names the reference, a study that has run, or a study file:
+    a misspelt name must not silently read the reference's tables."""
+    problem = outputs.study_name_problem(study)
+    if problem:
+        raise ValueError(f"study {problem}")
+    if study != REFERENCE_STUDY and not outputs.study_output_dir(study).is_dir():
+        from piezolib.workbook import study as studies
+
+        studies.load(study)          # StudyError for an unknown study
 
 
 def _study_table(study, name):
@@ -388,6 +428,9 @@ def compare_studies(first, second, names=None, changed_only=True):
         Index (source, quantity); columns ``unit``, ``paper``, the two
         studies' values and verdicts.
     """
+    for name, value in (("first", first), ("second", second)):
+        if not isinstance(value, str):
+            raise TypeError(f"{name} must be a study name, got {type(value).__name__}")
     if first == second:
         raise ValueError(f"first and second name the same study {first!r}")
     key = ["source", "section", "quantity"]
@@ -419,6 +462,7 @@ def reproduction_table(claims):
     A row that differs without a reason is marked ``"unexplained"`` in the
     ``reason`` column so that it cannot pass unnoticed.
     """
+    _check_frame("claims", claims, ["verdict", "reason"])
     published = claims[claims["verdict"] != "not published"].copy()
     unexplained = (published["verdict"] == "differs") & (published["reason"] == "")
     published.loc[unexplained, "reason"] = "unexplained"
@@ -444,6 +488,7 @@ def inconsistent_verdicts(table):
     pandas.DataFrame
         The offending rows (empty when every verdict is consistent).
     """
+    _check_frame("table", table, ["paper", "ours", "tolerance", "verdict"])
     bad = []
     for index, row in table.iterrows():
         tol = str(row["tolerance"])
@@ -469,6 +514,7 @@ def inconsistent_verdicts(table):
 
 def verdict_counts(table):
     """Agrees / differs counts per source notebook (rows) as a DataFrame."""
+    _check_frame("table", table, ["source", "verdict"])
     counts = pd.crosstab(table["source"], table["verdict"])
     counts.loc["all"] = counts.sum()
     return counts

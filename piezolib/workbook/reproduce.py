@@ -16,6 +16,7 @@ cell tagged ``parameters`` (as papermill does), the figures and tables go to
 ``runs/<study>/`` and the executed notebooks to ``runs/<study>/notebooks/``.
 """
 
+import errno
 import importlib
 import os
 import subprocess
@@ -25,6 +26,7 @@ from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from pathlib import Path
 
 from piezolib import files, progress
+from piezolib._checks import check_path, check_positive, check_type
 from piezolib.workbook import study as studies
 from piezolib.workbook.outputs import (data_dir, notebooks_dir, project_root,
                                        study_figures_dir, study_results_dir)
@@ -61,10 +63,37 @@ def list_notebooks(selection=None):
     """The numbered notebooks in pipeline order, optionally only those whose
     name starts with one of the prefixes in ``selection`` (e.g. ``["00"]``)."""
     paths = sorted(notebooks_dir().glob("[0-9][0-9]_*.ipynb"))
+    selection = _prefixes(selection)
     if selection:
         paths = [p for p in paths if any(p.name.startswith(s) for s in selection)]
         if not paths:
-            raise ValueError(f"no notebook matches {selection!r}")
+            raise ValueError(f"selection: no notebook matches {selection!r}")
+    return paths
+
+
+def _prefixes(selection):
+    """None or a list of name prefixes; one string is one prefix (not its characters)."""
+    if selection is None or isinstance(selection, str):
+        return None if selection is None else [selection]
+    if not hasattr(selection, "__iter__"):
+        raise TypeError(f"selection must be notebook name prefixes such as ['05'], "
+                        f"got {selection!r}")
+    selection = list(selection)
+    bad = [s for s in selection if not isinstance(s, str)]
+    if bad:
+        raise TypeError(f"selection must hold text prefixes such as '05', got {bad[0]!r}")
+    return selection
+
+
+def _notebook_paths(paths, name="paths"):
+    """``paths`` as a list of existing notebook files (``name``: the argument, for errors)."""
+    if isinstance(paths, (str, os.PathLike)) or not hasattr(paths, "__iter__"):
+        raise TypeError(f"{name} must be a list of notebook paths, got {paths!r}")
+    paths = [check_path(name, p) for p in paths]
+    missing = [p for p in paths if not p.is_file()]
+    if missing:
+        raise FileNotFoundError(errno.ENOENT, f"{name}: there is no notebook",
+                                str(missing[0]))
     return paths
 
 
@@ -76,6 +105,7 @@ def notebook_waves(paths):
     cache) and may run side by side; the notebooks named in
     :data:`GATHERING` form a last wave.  Empty waves are left out.
     """
+    paths = _notebook_paths(paths)
     first = [p for p in paths if not p.name.startswith(GATHERING)]
     last = [p for p in paths if p.name.startswith(GATHERING)]
     return [wave for wave in (first, last) if wave]
@@ -101,6 +131,8 @@ def inject_study(nb, study):
     """
     import nbformat
 
+    check_type("nb", nb, nbformat.NotebookNode, "a notebook read with nbformat")
+    studies.load(study)                   # an unknown or broken study fails here, not in a cell
     for index, cell in enumerate(nb.cells):
         if "parameters" in cell.get("metadata", {}).get("tags", []):
             break
@@ -134,6 +166,10 @@ def run_notebook(path, timeout=600, study=None, save_to=None):
     from nbclient import NotebookClient
     from nbclient.exceptions import CellExecutionError
 
+    path = _notebook_paths([path], "path")[0]
+    timeout = check_positive("timeout", timeout)
+    if study is not None:
+        studies.load(study)                   # before a kernel starts
     nb = nbformat.read(path, as_version=4)
     if study is not None:
         inject_study(nb, study)
@@ -169,6 +205,8 @@ def run(selection=None, timeout=600, keep_going=False, data=True, stream=sys.std
     jobs = default_jobs() if jobs is None else jobs
     if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
         raise ValueError(f"jobs must be a positive integer, got {jobs!r}")
+    timeout = check_positive("timeout", timeout)
+    selection = _prefixes(selection)
     chosen = studies.load(studies.REFERENCE if study is None else study)
     spec = None if study is None else (str(Path(study).resolve()) if str(study).endswith(".toml")
                                        else str(study))

@@ -44,6 +44,9 @@ class Session:
 
     def __init__(self, study, claims=None):
         self.study = studies.load(study)
+        if claims is not None and not (isinstance(claims, str) and claims.isidentifier()):
+            raise ValueError(f"claims must be the name of the notebook's claim table, e.g. "
+                             f"'tracking', got {claims!r}")
         self.claims = None if claims is None else report.ClaimTable(claims, self.study.name)
         self.started = time.perf_counter()
 

@@ -36,7 +36,7 @@ __all__ = ["Study", "UncertaintyChoice", "WeightChoice", "DesignChoice", "LoopCh
 #: Name of the paper's reproduction; only this study writes the committed outputs.
 REFERENCE = outputs.REFERENCE_STUDY
 #: Names no study may take, with what their folder under ``runs/`` already holds.
-RESERVED_NAMES = {"cache": "the pipeline's disk cache"}
+RESERVED_NAMES = outputs.RESERVED_NAMES
 
 
 class StudyError(ValueError):
@@ -268,12 +268,9 @@ class Study:
     experiments: ExperimentChoice = field(default_factory=ExperimentChoice)
 
     def __post_init__(self):
-        if not isinstance(self.name, str) or not self.name or not all(
-                c.isascii() and (c.isalnum() or c in "_-") for c in self.name):
-            raise StudyError(f"study name must be letters, digits, '_' or '-', got {self.name!r}")
-        if self.name in RESERVED_NAMES:
-            raise StudyError(f"study name {self.name!r} is reserved: runs/{self.name}/ holds "
-                             f"{RESERVED_NAMES[self.name]}")
+        problem = outputs.study_name_problem(self.name)
+        if problem:
+            raise StudyError(f"study name {problem}")
         for section, cls in _SECTIONS.items():
             value = getattr(self, section)
             if not isinstance(value, cls):
@@ -446,7 +443,13 @@ def from_dict(data):
 def choices_digest(choices):
     """Short SHA-256 (16 hex digits) of a dict of choices; numbers hash as floats,
     so 2500 and 2500.0 give the same digest."""
-    text = json.dumps(_canonical(choices), sort_keys=True)
+    if not isinstance(choices, dict):
+        raise TypeError(f"choices must be a dict, got {type(choices).__name__}")
+    try:
+        text = json.dumps(_canonical(choices), sort_keys=True)
+    except TypeError as exc:      # a value JSON cannot hold: it could not key a design
+        raise TypeError(f"choices must hold numbers, text, lists and dicts only ({exc})") \
+            from None
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 

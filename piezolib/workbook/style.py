@@ -24,6 +24,8 @@ import matplotlib as mpl
 import matplotlib.pyplot as plt
 import numpy as np
 
+from piezolib._checks import check_finite_array, check_integer, check_type
+
 __all__ = ["Palette", "PALETTE", "STYLE", "use_style", "new_figure", "unit_text",
            "apply_unit_text", "db", "plot_magnitude"]
 
@@ -130,6 +132,8 @@ def use_style():
 
 def new_figure(nrows=1, ncols=1, **kwargs):
     """``plt.subplots`` in the workbook style (``constrained`` layout)."""
+    nrows = check_integer("nrows", nrows, minimum=1)
+    ncols = check_integer("ncols", ncols, minimum=1)
     use_style()
     kwargs.setdefault("layout", "constrained")
     return plt.subplots(nrows, ncols, **kwargs)
@@ -179,12 +183,24 @@ def apply_unit_text(fig):
 
 
 def db(x):
-    """Magnitude in decibels, 20 log10 |x|."""
-    return 20 * np.log10(np.abs(x))
+    """Magnitude in decibels, 20 log10 |x| (-inf for 0; NaN and inf pass through)."""
+    x = np.asarray(x)
+    if not np.issubdtype(x.dtype, np.number):
+        raise TypeError(f"x must be numeric, got dtype {x.dtype}")
+    with np.errstate(divide="ignore"):
+        return 20 * np.log10(np.abs(x))
 
 
 def plot_magnitude(ax, omega, response, label=None, **kwargs):
     """Plot |response| in dB against omega [rad/s] on a log axis."""
+    check_type("ax", ax, mpl.axes.Axes, "a matplotlib Axes")
+    omega = check_finite_array("omega", omega, ndim=1, min_length=1, real=True)
+    if np.any(omega <= 0):
+        raise ValueError("omega must be positive frequencies [rad/s] (a log axis)")
+    response = np.asarray(response)
+    if response.shape != omega.shape:
+        raise ValueError(f"response must have the shape of omega {omega.shape}, "
+                         f"got {response.shape}")
     line, = ax.semilogx(omega, db(response), label=label, **kwargs)
     ax.set_xlabel("frequency [rad/s]")
     ax.set_ylabel("magnitude [dB]")
