@@ -21,7 +21,7 @@ import control as ct
 import numpy as np
 import pandas as pd
 
-from piezolib._checks import check_finite_array, check_siso
+from piezolib._checks import check_frequency_grid, check_model, check_positive, check_siso
 from piezolib.problem.genplant import BLOCK_STRUCTURE, check_models, generalized_plant
 from piezolib.robust.lft import lft_response
 from piezolib.robust.mu import mussv
@@ -97,6 +97,14 @@ def _refined_peak(P, K, omega, res, points=201, lower=True):
     return float(res.upper[k]), float(omega[k]), lower_peak
 
 
+def _analysis_grid(omega):
+    """:data:`ANALYSIS_GRID` for None, else ``omega`` checked: the peak refinement spans
+    the cells next to the grid peak geometrically, so the grid must be positive and
+    increasing (a negative one used to give NaN peaks)."""
+    return ANALYSIS_GRID if omega is None else check_frequency_grid("omega", omega,
+                                                                    min_length=16)
+
+
 def robust_performance_peak(K, G, H_m, H_e, H_y, *, omega=None):
     """Peak of the mu_RP upper bound and its frequency [rad/s] (inf, nan if K destabilises).
 
@@ -111,8 +119,7 @@ def robust_performance_peak(K, G, H_m, H_e, H_y, *, omega=None):
     """
     check_siso("K", K)
     G, H_m, H_e, H_y = check_models(G, H_m, H_e, H_y)
-    omega = ANALYSIS_GRID if omega is None else check_finite_array("omega", omega, ndim=1,
-                                                                     min_length=16)
+    omega = _analysis_grid(omega)
     if not is_stable(G, K):
         return float("inf"), float("nan")
     P = generalized_plant(G, H_m, H_e, H_y)
@@ -131,7 +138,8 @@ def analyze(K, G, H_m, H_e, H_y, *, omega=None, name=None):
         Plant (u_c [V] -> v_y [V]) and the weights of the problem, e.g. those
         of :func:`piezolib.problem.paper.problem`.
     omega : array_like, optional
-        Analysis grid [rad/s]; default :data:`ANALYSIS_GRID`.
+        Analysis grid [rad/s], positive and increasing, at least 16 points; default
+        :data:`ANALYSIS_GRID`.
     name : str, optional
         Label used by :func:`table3` (default ``K.name``).
 
@@ -150,8 +158,7 @@ def analyze(K, G, H_m, H_e, H_y, *, omega=None, name=None):
     """
     check_siso("K", K)
     G, H_m, H_e, H_y = check_models(G, H_m, H_e, H_y)
-    omega = ANALYSIS_GRID if omega is None else check_finite_array("omega", omega, ndim=1,
-                                                                     min_length=16)
+    omega = _analysis_grid(omega)
     loop = loop_functions(G, K)
     poles = closed_loop_poles(G, K)
     # NS asks all four closed-loop functions to be stable (hidden modes included)
@@ -228,7 +235,8 @@ def table3_peaks(*analyses):
 def _analyses(what, analyses):
     for a in analyses:
         if not isinstance(a, RobustnessAnalysis):
-            raise TypeError(f"{what} takes RobustnessAnalysis results, got {type(a).__name__}")
+            raise TypeError(f"{what}: analyses must be RobustnessAnalysis results, got "
+                            f"{type(a).__name__}")
     return analyses
 
 
@@ -256,12 +264,9 @@ def margins_table(controllers, G, fs, *, delays=MARGIN_DELAYS):
         loop's delay margin [samples] and, per delay d, its spectral radius
         and stability.
     """
-    check_siso("G", G)
-    if not isinstance(controllers, dict) or not controllers:
-        raise TypeError("controllers must be a non-empty dict {name: K}")
+    _check_margins_arguments(controllers, G, fs)
     data = {}
     for name, K in controllers.items():
-        check_siso(f"controllers[{name!r}]", K)
         col = loop_margins(G, K).as_dict()
         tol = delay_tolerance(G, discretize(K, fs).K, delays=delays)
         col["sampled loop delay margin [samples]"] = tol.delay_margin_samples
@@ -270,6 +275,22 @@ def margins_table(controllers, G, fs, *, delays=MARGIN_DELAYS):
             col[f"stable, delay {d}"] = bool(ok)
         data[name] = col
     return pd.DataFrame(data)
+
+
+def _check_margins_arguments(controllers, G, fs):
+    """Check the models of :func:`margins_table` before any of them is analysed.
+
+    Each must be SISO, continuous-time, finite and proper: an improper G otherwise fails
+    in python-control's conversion with a message that names no argument.
+    """
+    check_siso("G", G)
+    check_model("G", G, proper=True)
+    if not isinstance(controllers, dict) or not controllers:
+        raise TypeError("controllers must be a non-empty dict {name: K}")
+    for name, K in controllers.items():
+        check_siso(f"controllers[{name!r}]", K)
+        check_model(f"controllers[{name!r}]", K, proper=True)
+    check_positive("fs", fs)
 
 
 def achievable_mu_lower_bound(G, H_m, H_e, H_y, **kwargs):

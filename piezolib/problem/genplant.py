@@ -13,9 +13,9 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
-from piezolib._checks import (check_continuous, check_finite_array, check_finite_lti,
-                              check_integer, check_nonnegative, check_positive, check_proper,
-                              check_siso)
+from piezolib._checks import (check_continuous, check_finite_lti, check_frequency_grid,
+                              check_integer, check_model, check_nonnegative, check_positive,
+                              check_proper, check_siso, check_type)
 from piezolib.robust.lft import lower_lft
 from piezolib.robust.lti import (balance, from_scaled, scaled_coefficients, time_scale_of,
                                  to_scaled, with_signals)
@@ -243,7 +243,7 @@ def closed_loop_matrix(K, G, H_m, H_e, H_y, *, omega_s=None):
     Parameters
     ----------
     K : control.LTI
-        SISO controller, v_e [V] -> u_b [V].
+        Continuous-time SISO controller, v_e [V] -> u_b [V].
     G, H_m, H_e, H_y : control.LTI
         As in :func:`generalized_plant`.
     omega_s : float, optional
@@ -254,12 +254,22 @@ def closed_loop_matrix(K, G, H_m, H_e, H_y, *, omega_s=None):
     control.StateSpace
         Inputs ``u_Delta, v_r``; outputs ``y_Delta, y1, y2``; named ``M``.
     """
-    check_siso("K", K)
+    _check_controller(K)
     G, H_m, H_e, H_y = check_models(G, H_m, H_e, H_y)
     omega_s = (time_scale_of(G, H_m, H_e, H_y, K) if omega_s is None
                else check_positive("omega_s", omega_s))
     P = generalized_plant(G, H_m, H_e, H_y, omega_s=omega_s)
     return lower_lft(P, K, omega_s)
+
+
+def _check_controller(K):
+    """Check K: SISO, continuous-time, finite coefficients.
+
+    A NaN coefficient would otherwise first show in the time scale chosen from all the
+    models ("systems[4] has a NaN coefficient") or as NaN responses, without naming K.
+    """
+    check_siso("K", K)
+    return check_model("K", K)
 
 
 def effective_delay(fs, delay_samples):
@@ -304,17 +314,24 @@ def rolloff_weight(params=DESIGN_ROLLOFF):
 
     Raises
     ------
+    TypeError
+        ``params`` is not a :class:`RolloffWeight`.
     ValueError
         Non-positive gains or frequency, ``lf_gain <= hf_gain`` or order < 1.
     """
-    if not isinstance(params, RolloffWeight):
-        raise TypeError(f"rolloff must be a RolloffWeight, got {type(params).__name__}")
-    k_hf = check_positive("rolloff.hf_gain", params.hf_gain)
-    k_lf = check_positive("rolloff.lf_gain", params.lf_gain)
-    w_u = check_positive("rolloff.frequency", params.frequency)
-    n = check_integer("rolloff.order", params.order, minimum=1)
+    return _rolloff_weight(params, "params")
+
+
+def _rolloff_weight(params, name):
+    """:func:`rolloff_weight` with errors naming the argument ``name`` (``rolloff`` in the
+    functions that take the parameters under that name)."""
+    check_type(name, params, RolloffWeight, "a RolloffWeight")
+    k_hf = check_positive(f"{name}.hf_gain", params.hf_gain)
+    k_lf = check_positive(f"{name}.lf_gain", params.lf_gain)
+    w_u = check_positive(f"{name}.frequency", params.frequency)
+    n = check_integer(f"{name}.order", params.order, minimum=1)
     if k_lf <= k_hf:
-        raise ValueError(f"rolloff.lf_gain ({k_lf}) must exceed rolloff.hf_gain ({k_hf})")
+        raise ValueError(f"{name}.lf_gain ({k_lf}) must exceed {name}.hf_gain ({k_hf})")
     r = (k_hf / k_lf) ** (1.0 / n)
     factor = ct.tf([1.0 / w_u, r], [1.0 / w_u, 1.0])
     W = ct.tf([1.0 / k_hf], [1.0])
@@ -365,7 +382,7 @@ def delay_aware_plant(G, H_m, H_e, H_y, *, fs, delay_samples=DESIGN_DELAY_SAMPLE
     G, H_m, H_e, H_y = check_models(G, H_m, H_e, H_y)
     tau = effective_delay(fs, delay_samples)
     pade_order = check_integer("pade_order", pade_order, minimum=1)
-    W_u = rolloff_weight(rolloff)
+    W_u = _rolloff_weight(rolloff, "rolloff")
     omega_s = (time_scale_of(G, H_m, H_e, H_y) if omega_s is None
                else check_positive("omega_s", omega_s))
     P0 = with_signals(to_scaled(generalized_plant(G, H_m, H_e, H_y, omega_s=omega_s), omega_s),
@@ -396,7 +413,7 @@ def delayed_closed_loop_response(K, G, H_m, H_e, H_y, omega, *, fs, delay_sample
     G, H_m, H_e, H_y : control.LTI
         As in :func:`generalized_plant`.
     omega : array_like
-        Frequencies [rad/s].
+        Frequencies [rad/s], positive and increasing.
     fs : float
         Sampling rate [Hz].
     delay_samples : int
@@ -409,15 +426,16 @@ def delayed_closed_loop_response(K, G, H_m, H_e, H_y, omega, *, fs, delay_sample
     ndarray, shape (len(omega), 3 or 4, 2)
         Inputs ``u_Delta, v_r``.
     """
-    check_siso("K", K)
+    _check_controller(K)
     G, H_m, H_e, H_y = check_models(G, H_m, H_e, H_y)
-    omega = check_finite_array("omega", omega, ndim=1)
+    omega = check_frequency_grid("omega", omega, min_length=1)
     tau = effective_delay(fs, delay_samples)
+    W_u = None if rolloff is None else _rolloff_weight(rolloff, "rolloff")
     P = generalized_plant(G, H_m, H_e, H_y)
     R = np.moveaxis(P(1j * omega, squeeze=False), -1, 0)
     R[:, :, 2] *= np.exp(-1j * omega * tau)[:, None]        # u_b arrives tau later
-    if rolloff is not None:
-        w_u = np.ravel(rolloff_weight(rolloff)(1j * omega))
+    if W_u is not None:
+        w_u = np.ravel(W_u(1j * omega))
         extra = np.zeros((omega.size, 1, 3), complex)
         extra[:, 0, 2] = w_u
         R = np.concatenate([R[:, :3], extra, R[:, 3:]], axis=1)

@@ -13,6 +13,7 @@ validation, notebook 03).  Background: ``docs/hysteresis.md``.
 
 import functools
 import json
+import os
 from dataclasses import fields
 from pathlib import Path
 
@@ -20,10 +21,10 @@ import numpy as np
 
 
 from piezolib.problem import paper
-from piezolib._checks import check_integer
+from piezolib._checks import check_integer, check_type
 from piezolib.hysteresis.dahl import FORMS, STARTS, DahlModel
 from piezolib.hysteresis.fit import check_fit_options, fit_dahl, rescore_dahl
-from piezolib.problem.paths import data_dir
+from piezolib.problem.paths import check_directory, data_dir
 from piezolib.files import CONTENT_KEY, atomic_write, seal, seal_problem
 from piezolib.hysteresis.pi import fit_pi
 
@@ -93,7 +94,7 @@ def fit_case_I_loops(form, offset, start, directory=None, stride=10):
     DahlFit
     """
     form, offset, start = check_fit_options(form, offset, start)
-    directory = None if directory is None else str(directory)
+    directory = _directory_key(directory)
     return _fit_case_I_loops(form, offset, start, directory,
                              check_integer("stride", stride, minimum=1))
 
@@ -110,6 +111,12 @@ def _case_I_loops(directory):
     from piezolib.problem import stage_data     # lazy: the stage modules are heavier than this one
     loops = stage_data.load_hysteresis_loops(None if directory is None else Path(directory))
     return [(rec.u_c_V, rec.v_y_V) for rec in loops.values()]
+
+
+def _directory_key(directory):
+    """``directory`` as the str the caches key on, checked first: ``str()`` would make a
+    number a folder name and fail later as a missing file."""
+    return None if directory is None else str(check_directory(directory))
 
 
 def clear_cache():
@@ -135,7 +142,7 @@ def workbook_pi_fit(directory=None, n_plays=PI_PLAYS):
     -------
     PIFit
     """
-    directory = None if directory is None else str(directory)
+    directory = _directory_key(directory)
     return _workbook_pi_fit(directory, check_integer("n_plays", n_plays, minimum=1))
 
 
@@ -164,10 +171,16 @@ def validation_loops(stage=None):
     -------
     dict
         {label: (u_c [V], v_y [V], first scored sample)}.
+
+    Raises
+    ------
+    TypeError
+        ``stage`` is not a :class:`~piezolib.problem.stage.VirtualStage`.
     """
     from piezolib import signals
     from piezolib.problem.stage import VirtualStage
-    stage = VirtualStage(seed=1) if stage is None else stage
+    stage = VirtualStage(seed=1) if stage is None else check_type("stage", stage, VirtualStage,
+                                                                  "a VirtualStage")
     fs = stage.fs
     f = paper.HYSTERESIS_TEST["frequency_Hz"]
     first = int(round(fs / f))
@@ -257,11 +270,15 @@ def read_dahl_model(path):
 
     Raises
     ------
+    TypeError
+        ``path`` is not a str or path object.
+    OSError
+        The file cannot be read (missing, a folder), naming it.
     ValueError
         Naming the file: not a Dahl model file of this format, or its content
         fails its checksum (edited or corrupted), with the way to write it anew.
     """
-    path = Path(path)
+    path = _file_path(path)
     doc = _read_model_document(path)
     problem = seal_problem(doc)
     if problem is not None:
@@ -287,6 +304,11 @@ def _read_model_document(path):
         raise ValueError(f"{path}: not a Dahl model file ({exc})") from None
 
 
+def _file_path(path):
+    """``path`` as a Path, checked to be one (a number fails here, naming the argument)."""
+    return Path(check_type("path", path, (str, os.PathLike), "a file path (str or os.PathLike)"))
+
+
 def _rewrite_hint(path):
     """How to write the Dahl model file ``path`` anew."""
     if path.resolve() == workbook_dahl_path().resolve():
@@ -299,9 +321,29 @@ def write_dahl_model(model, path, about=""):
 
     The file carries the SHA-256 of its content (:func:`piezolib.files.seal`),
     which :func:`read_dahl_model` checks.
+
+    Parameters
+    ----------
+    model : DahlModel
+    path : str or os.PathLike
+        The JSON file (written atomically).
+    about : str, optional
+        What the model is, stored with it.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+
+    Raises
+    ------
+    TypeError
+        ``model`` not a DahlModel, ``path`` not a path or ``about`` not text (it would
+        otherwise be written as whatever JSON makes of it).
     """
-    if not isinstance(model, DahlModel):
-        raise TypeError(f"model must be a DahlModel, got {type(model).__name__}")
+    check_type("model", model, DahlModel, "a DahlModel")
+    path = _file_path(path)
+    check_type("about", about, str, "text (str)")
     doc = {"format": _MODEL_FORMAT, "about": about,
            "model": {f.name: getattr(model, f.name) for f in fields(model)}}
     return atomic_write(path, json.dumps(seal(doc), indent=1) + "\n")

@@ -25,7 +25,7 @@ import scipy.signal as sg
 
 from piezolib import signals
 from piezolib._checks import (check_finite_array, check_integer, check_nonnegative,
-                              check_positive, check_siso, check_stable)
+                              check_positive, check_siso, check_stable, check_type)
 from piezolib.identification import zoh_coefficients
 from piezolib.hysteresis.measure import hysteresis_percent
 from piezolib.problem import paper
@@ -1129,14 +1129,43 @@ def case_I_input(amplitude_V, stage=None, periods=3, frequency_Hz=None):
 def run_case_I(stage, amplitudes_V=None, periods=3):
     """Run the Table 4 Case I experiment (open loop, no compensator).
 
+    Parameters
+    ----------
+    stage : VirtualStage
+    amplitudes_V : sequence of float, optional
+        Actuator amplitudes [V], each positive; default Table 4's 10 ... 40 V.
+    periods : int, optional
+        Periods of the triangle per amplitude.
+
     Returns
     -------
     dict
         {actuator amplitude [V]: StageRecord}.
+
+    Raises
+    ------
+    TypeError, ValueError
+        Naming the argument, before any run: ``stage`` not a :class:`VirtualStage`,
+        ``amplitudes_V`` empty or with an amplitude that is not positive, ``periods``
+        not a positive integer.
     """
-    amplitudes_V = paper.HYSTERESIS_TEST["actuator_amplitudes_V"] if amplitudes_V is None \
-        else amplitudes_V
-    return {float(A): stage.run(case_I_input(A, stage, periods)) for A in amplitudes_V}
+    check_type("stage", stage, VirtualStage, "a VirtualStage")
+    amplitudes_V = _check_amplitudes(
+        paper.HYSTERESIS_TEST["actuator_amplitudes_V"] if amplitudes_V is None
+        else amplitudes_V)
+    check_integer("periods", periods, minimum=1)
+    return {A: stage.run(case_I_input(A, stage, periods)) for A in amplitudes_V}
+
+
+def _check_amplitudes(amplitudes_V):
+    """The amplitudes as floats, all checked before the first (slow) run."""
+    if isinstance(amplitudes_V, (str, bytes)) or not isinstance(amplitudes_V, Iterable):
+        raise TypeError("amplitudes_V must be a sequence of amplitudes [V], got "
+                        f"{type(amplitudes_V).__name__}")
+    amplitudes_V = [check_positive(f"amplitudes_V[{i}]", A) for i, A in enumerate(amplitudes_V)]
+    if not amplitudes_V:
+        raise ValueError("amplitudes_V must hold at least one amplitude, got none")
+    return amplitudes_V
 
 
 def case_I_hysteresis(records):
@@ -1153,7 +1182,17 @@ def case_I_hysteresis(records):
     -------
     dict
         {amplitude [V]: hysteresis %}.
+
+    Raises
+    ------
+    TypeError, ValueError
+        ``records`` is not a non-empty dict of :class:`StageRecord`.
     """
+    check_type("records", records, dict, "a dict {amplitude [V]: StageRecord}")
+    if not records:
+        raise ValueError("records must hold at least one StageRecord, got an empty dict")
+    for A, rec in records.items():
+        check_type(f"records[{A!r}]", rec, StageRecord, "a StageRecord")
     return {A: hysteresis_percent(rec.v_a_V, rec.x_measured_um) for A, rec in records.items()}
 
 
@@ -1192,8 +1231,10 @@ def calibrate_hysteresis(law=CALIBRATED_HYSTERESIS, targets=None):
     Raises
     ------
     TypeError, ValueError
-        ``targets`` not a dict of positive, finite amplitudes and percentages.
+        ``law`` not a :class:`HysteresisLaw`; ``targets`` not a dict of positive, finite
+        amplitudes and percentages.
     """
+    check_type("law", law, HysteresisLaw, "a HysteresisLaw")
     if targets is None:
         targets = paper.table4().loc["case_I"].to_dict()
     targets = _check_targets(targets)

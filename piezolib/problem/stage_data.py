@@ -12,14 +12,16 @@ file format is described in ``data/README.md``.
 
 import io
 import json
+import os
 from dataclasses import dataclass, fields
 from pathlib import Path
 
 import numpy as np
 
 from piezolib import files, records, signals
+from piezolib._checks import check_positive, check_type
 from piezolib.problem import paper
-from piezolib.problem.paths import data_dir
+from piezolib.problem.paths import check_directory, data_dir
 from piezolib.problem.stage import (ADC_RANGE_V, RECORD_COLUMNS, Saturation, StageRecord,
                                     VirtualStage, case_I_hysteresis, case_I_input)
 
@@ -83,7 +85,14 @@ def chirp_input(settings, fs=paper.SAMPLING_FREQUENCY_HZ):
         Control input [V]: ramp, hold, sweep.
     start : int
         Index of the first sweep sample.
+
+    Raises
+    ------
+    TypeError, ValueError
+        ``settings`` is not a :class:`ChirpSettings` or ``fs`` is not positive.
     """
+    check_type("settings", settings, ChirpSettings, "a ChirpSettings")
+    fs = check_positive("fs", fs)
     n_ramp = int(round(settings.ramp_s * fs))
     n_hold = int(round(settings.hold_s * fs))
     ramp = settings.top_V * (1 - np.cos(np.pi * np.arange(n_ramp) / n_ramp)) / 2
@@ -147,6 +156,11 @@ class ChirpExperiment:
 
 
 # --- experiment files ---------------------------------------------------------------
+def _folder(directory, default):
+    """``default()`` for None, else ``directory`` checked to be usable as a folder."""
+    return default() if directory is None else check_directory(directory)
+
+
 _COLUMNS = RECORD_COLUMNS
 _FORMATS = ("%.4f", "%.7f", "%.6f", "%.6f", "%.7f")
 _UNITS = ("time [s]", "control input u_c as produced by the DAC [V]",
@@ -168,8 +182,14 @@ def experiment_paths(directory=None):
     dict
         {key: Path} with keys ``"identification"``, ``"validation"`` and the
         Case I amplitudes 10.0 ... 40.0 [V].
+
+    Raises
+    ------
+    TypeError, NotADirectoryError
+        ``directory`` is not a path, or is a file (as in every function here that takes
+        a ``directory``: :func:`piezolib.problem.paths.check_directory`).
     """
-    d = data_dir() if directory is None else Path(directory)
+    d = _folder(directory, data_dir)
     paths = {"identification": d / "chirp_identification.csv",
              "validation": d / "chirp_validation.csv"}
     for A in paper.HYSTERESIS_TEST["actuator_amplitudes_V"]:
@@ -241,7 +261,7 @@ MANIFEST_NAME = "manifest.json"
 
 def manifest_path(directory=None):
     """Path of the manifest of the experiment files (``data/manifest.json``)."""
-    return (data_dir() if directory is None else Path(directory)) / MANIFEST_NAME
+    return _folder(directory, data_dir) / MANIFEST_NAME
 
 
 def _data_rows(path):
@@ -328,6 +348,8 @@ def load_record(path):
 
     Raises
     ------
+    TypeError
+        ``path`` is not a str or path object.
     FileNotFoundError
         When the file is missing (regenerate with ``python -m piezolib data``).
     piezolib.records.RecordError
@@ -335,7 +357,7 @@ def load_record(path):
         text or NaN in a number column, too few rows, or a file that differs
         from its manifest entry (truncated, changed).
     """
-    path = Path(path)
+    path = Path(check_type("path", path, (str, os.PathLike), "a file path (str or os.PathLike)"))
     if not path.exists():
         raise FileNotFoundError(f"{path} is missing: regenerate the experiment files with "
                                 "`python -m piezolib data`")
@@ -421,7 +443,7 @@ _FOREIGN_RUNS = {
 
 def foreign_record_paths(directory=None):
     """Paths of the foreign-form records (default ``data/own_stage/``), by file name."""
-    d = data_dir() / "own_stage" if directory is None else Path(directory)
+    d = _folder(directory, lambda: data_dir() / "own_stage")
     return {name: d / name for name in _FOREIGN_RUNS}
 
 

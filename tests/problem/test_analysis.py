@@ -70,7 +70,7 @@ def test_table3_side_by_side(models, published):
     assert peaks.loc["omega of mu_RP peak [rad/s]", "K"] == published.omega_RP
     assert peaks.loc["mu_RP lower bound", "lag"] == other.mu_RP_lower
     assert peaks.loc["omega of ||H_y T|| [rad/s]", "lag"] == other.omega_Hy_T
-    with pytest.raises(TypeError, match="table3_peaks takes RobustnessAnalysis"):
+    with pytest.raises(TypeError, match="table3_peaks: analyses must be RobustnessAnalysis"):
         analysis.table3_peaks(published, "K")
 
 

@@ -130,6 +130,14 @@ def test_an_edited_dahl_model_file_is_refused(tmp_path, monkeypatch):
         ph.read_dahl_model(copy)
 
 
+@pytest.mark.parametrize("text", ["{not json", ""])
+def test_a_file_that_is_no_model_is_refused_naming_it(tmp_path, text):
+    path = tmp_path / "bad.json"
+    path.write_text(text)
+    with pytest.raises(ValueError, match=r"bad\.json: not a Dahl model file"):
+        ph.read_dahl_model(path)
+
+
 def test_workbook_pi_fit_and_validation_records():
     fit = ph.workbook_pi_fit()
     assert ph.workbook_pi_fit() is fit                         # cached

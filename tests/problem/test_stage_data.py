@@ -107,6 +107,15 @@ def test_truncated_or_corrupted_file_names_the_file_and_line(data_copy):
         D.load_record(path)
 
 
+def test_a_file_that_is_no_record_names_the_file(tmp_path):
+    path = tmp_path / "r.csv"
+    path.write_text("a,b\nx,y\n")
+    with pytest.raises(ValueError, match=r"r\.csv, line 1: missing column 't_s'"):
+        D.load_record(path)
+    with pytest.raises(NotADirectoryError, match="directory must be a folder"):
+        D.load_hysteresis_loops(path)
+
+
 def test_foreign_records_are_reproducible_and_current(tmp_path):
     written = D.write_foreign_records(tmp_path)
     committed = D.foreign_record_paths()
