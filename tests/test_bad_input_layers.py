@@ -303,7 +303,8 @@ CASES = {
     # workbook.reproduce, outputs, session
     "reproduce.list_notebooks": (dict(), {"selection": {"unknown prefix": ["99"],
                                                         "number": 3}}),
-    "reproduce.notebook_waves": (None, {"paths": {"number": 3, "missing": ["/nope.ipynb"]}}),
+    "reproduce.notebook_waves": (None, {"paths": {"number": 3, "one path": "00_a.ipynb",
+                                                  "not paths": [3]}}),
     "reproduce.inject_study": (None, {"nb": {"text": "abc", "none": None}, "study": STUDY}),
     "reproduce.run_notebook": (None, {"path": {"missing": "/nonexistent.ipynb", "number": 3},
                                       "timeout": POSITIVE, "study": STUDY_GIVEN}),
@@ -338,7 +339,8 @@ EXEMPT = {
     "pipeline.reference_design_path": "no arguments",
     "pipeline.write_reference_design": "only cache, a flag (a whole design run)",
     "style.use_style": "no arguments",
-    "reproduce.check_data": "no arguments", "reproduce.default_jobs": "no arguments",
+    "reproduce.check_data": "no arguments", "cli.parser": "no arguments",
+    "reproduce.default_jobs": "no arguments",
     "outputs.project_root": "no arguments", "outputs.data_dir": "no arguments",
     "outputs.runs_dir": "no arguments", "outputs.notebooks_dir": "no arguments",
 }
@@ -459,7 +461,7 @@ def test_bad_input_raises_naming_the_argument(qualname, valid, argument, value, 
 
 def _options():
     """(subcommand, option) for every option and positional of every subcommand."""
-    parser = cli._parser()
+    parser = cli.parser()
     sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
     return {(name, action.dest) for name, p in sub.choices.items() for action in p._actions
             if not isinstance(action, argparse._HelpAction)}

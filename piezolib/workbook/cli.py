@@ -4,10 +4,11 @@ import argparse
 import sys
 import time
 
-__all__ = ["main"]
+__all__ = ["main", "parser"]
 
 
-def _parser():
+def parser():
+    """The command line's :class:`argparse.ArgumentParser` (its subcommands and options)."""
     parser = argparse.ArgumentParser(
         prog="python -m piezolib",
         description="piezo-mu workbook: reproduce the paper's results.")
@@ -142,7 +143,7 @@ def _data(stream):
 
 def main(argv=None, stream=sys.stdout):
     """Run the command line; return the exit status (0 ok, 1 failure, 2 usage)."""
-    args = _parser().parse_args(argv)
+    args = parser().parse_args(argv)
     if args.command == "data":
         return _data(stream)
     if args.command == "controllers":

@@ -85,12 +85,13 @@ def _prefixes(selection):
     return selection
 
 
-def _notebook_paths(paths, name="paths"):
-    """``paths`` as a list of existing notebook files (``name``: the argument, for errors)."""
+def _notebook_paths(paths, name="paths", must_exist=True):
+    """``paths`` as a list of notebook paths, existing files if ``must_exist`` (``name``:
+    the argument, for errors)."""
     if isinstance(paths, (str, os.PathLike)) or not hasattr(paths, "__iter__"):
         raise TypeError(f"{name} must be a list of notebook paths, got {paths!r}")
     paths = [check_path(name, p) for p in paths]
-    missing = [p for p in paths if not p.is_file()]
+    missing = [p for p in paths if must_exist and not p.is_file()]
     if missing:
         raise FileNotFoundError(errno.ENOENT, f"{name}: there is no notebook",
                                 str(missing[0]))
@@ -105,7 +106,7 @@ def notebook_waves(paths):
     cache) and may run side by side; the notebooks named in
     :data:`GATHERING` form a last wave.  Empty waves are left out.
     """
-    paths = _notebook_paths(paths)
+    paths = _notebook_paths(paths, must_exist=False)
     first = [p for p in paths if not p.name.startswith(GATHERING)]
     last = [p for p in paths if p.name.startswith(GATHERING)]
     return [wave for wave in (first, last) if wave]

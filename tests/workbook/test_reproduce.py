@@ -146,6 +146,8 @@ def test_study_is_injected_after_the_parameters_cell(workbook):
     nb.cells[1].metadata["tags"] = ["parameters"]
     path = workbook / "notebooks" / "00_param.ipynb"
     nbformat.write(nb, path)
+    (workbook / "studies").mkdir(exist_ok=True)
+    (workbook / "studies" / "other.toml").write_text('name = "other"\n')
     out = reproduce.run_notebook(path, study="other", save_to=workbook / "runs" / "x")
     assert [c.metadata.get("tags") for c in out.cells[1:3]] == [["parameters"],
                                                                ["injected-parameters"]]
@@ -153,6 +155,8 @@ def test_study_is_injected_after_the_parameters_cell(workbook):
     assert nbformat.read(path, as_version=4).cells[2].source == "result = study"   # untouched
     with pytest.raises(ValueError, match="no cell tagged 'parameters'"):
         reproduce.inject_study(nbformat.v4.new_notebook(), "other")
+    with pytest.raises(ValueError, match="no study named 'missing'"):   # before any kernel
+        reproduce.run_notebook(path, study="missing")
 
 
 def test_every_workbook_notebook_has_a_parameters_cell_naming_the_study():
