@@ -47,6 +47,7 @@ import scipy.signal as sig
 
 from piezolib._checks import (check_finite_array, check_finite_lti, check_integer, check_positive,
                               check_proper, check_siso)
+from piezolib.files import CONTENT_KEY, atomic_write, seal, seal_problem
 
 __all__ = ["SOSController", "controller_sos", "SectionFilter", "SectionFilterBatch",
            "sos_filter", "write_json",
@@ -899,8 +900,8 @@ def _write_json(controller, path, meta):
            # float32 values written as the exact decimal of the rounded number
            "sos_float32": [[float(np.float32(v)) for v in row] for row in controller.sos],
            "meta": meta}
-    path.write_text(json.dumps(doc, indent=1) + "\n")
-    return path
+    # sealed (a content SHA-256 that read_json checks) and written atomically
+    return atomic_write(path, json.dumps(seal(doc), indent=1) + "\n")
 
 
 def read_json(path, dtype="float64"):
@@ -909,8 +910,10 @@ def read_json(path, dtype="float64"):
     Raises
     ------
     ValueError
-        Not such a file, or its sections are not normalised (a0 != 1: the
-        file names the section and the value; write_json always writes 1).
+        Not such a file, its content differs from the checksum write_json
+        stored in it (edited or corrupted), or its sections are not
+        normalised (a0 != 1: the file names the section and the value;
+        write_json always writes 1).
     """
     key = {"float64": "sos_float64", "float32": "sos_float32"}[_dtype(dtype).__name__]
     path = _path("path", path)
@@ -918,6 +921,9 @@ def read_json(path, dtype="float64"):
         doc = json.loads(path.read_text())
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise ValueError(f"path {path} is not a JSON file: {exc}") from None
+    if isinstance(doc, dict) and CONTENT_KEY in doc and (problem := seal_problem(doc)):
+        # a file written by write_json and changed since (a hand-written one has no checksum)
+        raise ValueError(f"path {path}: {problem}")
     try:
         sos, fs, name = np.array(doc[key], float), float(doc["fs_Hz"]), doc["name"]
     except (KeyError, TypeError, ValueError) as err:
@@ -1006,8 +1012,7 @@ static inline float {controller.name.lower()}_step_f32(float state[{n}][2], floa
 
 #endif /* {guard} */
 """
-    path.write_text(text)
-    return path
+    return atomic_write(path, text)
 
 
 def export_controller(Kd, directory, name, meta=None, dtype="float32", rtol=None):

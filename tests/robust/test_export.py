@@ -299,12 +299,27 @@ def test_project_controllers_pass_the_float32_check_silently(exported, tmp_path)
     assert np.max(check.error[known & (check.omega < 0.9 * np.pi * FS)]) < 1e-3
 
 
+# --- a written file carries its checksum ---------------------------------------------------
+def test_an_edited_section_file_is_refused(exported, tmp_path):
+    # write_json seals the file with a SHA-256 of its content; a changed coefficient (one
+    # step to the next double) is an edited or corrupted file, not a controller to run
+    _, sos = exported
+    path = write_json(sos, tmp_path / "k.json")
+    read_json(path, "float32")
+    doc = json.loads(path.read_text())
+    doc["sos_float64"][0][1] = float(np.nextafter(doc["sos_float64"][0][1], np.inf))
+    path.write_text(json.dumps(doc, indent=1))
+    with pytest.raises(ValueError, match=rf"path {re.escape(str(path))}: content differs"):
+        read_json(path)
+
+
 # --- sections must be normalised: a0 = 1 --------------------------------------------------
 def test_sections_with_a0_other_than_one_are_refused(exported, tmp_path):
     _, sos = exported
     path = write_json(sos, tmp_path / "k.json")
     doc = json.loads(path.read_text())
     doc["sos_float32"][2][3] = 2.0
+    del doc["content_sha256"]                 # as a hand-written file: no checksum
     path.write_text(json.dumps(doc))
     read_json(path, "float64")
     with pytest.raises(ValueError, match=rf"path {re.escape(str(path))}: section 2 of "
