@@ -19,6 +19,8 @@ import control as ct
 import numpy as np
 import pytest
 
+from sweep import bad_calls
+
 TOOLKIT = ("piezolib.robust", "piezolib.identification", "piezolib.hysteresis",
            "piezolib.uncertainty", "piezolib.signals", "piezolib.metrics")
 
@@ -404,14 +406,6 @@ def public_functions():
     return names
 
 
-def bad_calls():
-    for qualname, (valid, corrupt) in CASES.items():
-        for argument, values in corrupt.items():
-            for kind, value in values.items():
-                yield pytest.param(qualname, valid, argument, value,
-                                   id=f"{qualname}-{argument}-{kind}")
-
-
 def test_every_public_function_is_swept():
     public = public_functions()
     assert not (set(CASES) - public), "cases for names that are not public"
@@ -425,7 +419,7 @@ def test_the_valid_call_works(qualname, tmp_path):
     call(qualname, resolve(valid, tmp_path))
 
 
-@pytest.mark.parametrize("qualname, valid, argument, value", list(bad_calls()))
+@pytest.mark.parametrize("qualname, valid, argument, value", list(bad_calls(CASES)))
 def test_bad_input_raises_naming_the_argument(qualname, valid, argument, value, tmp_path):
     with pytest.raises((ValueError, TypeError)) as info:
         call(qualname, resolve({**valid, argument: value}, tmp_path))

@@ -23,6 +23,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from sweep import bad_calls
 from piezolib.hysteresis import DahlModel
 from piezolib.problem import paper
 from piezolib.problem.stage import VirtualStage
@@ -373,14 +374,6 @@ def call(qualname, kwargs):
     return f(**kwargs)
 
 
-def bad_calls():
-    for qualname, (valid, corrupt) in CASES.items():
-        for argument, values in corrupt.items():
-            for kind, value in values.items():
-                yield pytest.param(qualname, valid, argument, value,
-                                   id=f"{qualname}-{argument}-{kind}")
-
-
 def test_every_public_function_is_covered():
     public = public_functions()
     assert not (set(CASES) | set(EXEMPT)) - public, "entries for names that are not public"
@@ -436,7 +429,7 @@ STUDY_ARGUMENTS = ("study", "spec", "first", "second", "data")
 ALIASES = {("loop.discrete_controller", "K"): r"\bcontroller\b|\bK\b"}
 
 
-@pytest.mark.parametrize("qualname, valid, argument, value", list(bad_calls()))
+@pytest.mark.parametrize("qualname, valid, argument, value", list(bad_calls(CASES)))
 def test_bad_input_raises_naming_the_argument(qualname, valid, argument, value, tmp_path):
     kwargs = resolve(_filled(qualname, valid, argument, value), tmp_path)
     with pytest.raises((ValueError, TypeError, OSError)) as info:
