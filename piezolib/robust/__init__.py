@@ -19,6 +19,8 @@ performance_weights
             templates on S and T (``sensitivity_weight``,
             ``complementary_sensitivity_weight``)
 export      second-order sections: JSON, C header, reference filter
+float32_check
+            what rounding the sections to float32 does (poles, response), refused or warned
 mu/         the mu wing (:mod:`piezolib.robust.mu`): structured singular value bounds,
             entry point ``mussv`` (ssv), one module per bound (upper_complex,
             upper_mixed, lower), research refinements that ``mussv(refine=...)``
