@@ -126,10 +126,13 @@ def _compare(args, stream):
 
 
 def _data(stream):
+    from piezolib import files
     from piezolib.problem import paper
     from piezolib.problem import stage, stage_data
+    from piezolib.workbook.outputs import data_dir
 
     start = time.perf_counter()
+    files.remove_stale_temporaries(data_dir())       # what a killed earlier run left
     for path in stage_data.write_experiment_files():
         print(path, file=stream)
     got = stage.case_I_hysteresis(stage_data.load_hysteresis_loops())

@@ -1,8 +1,10 @@
 """The command line: ``python -m piezolib {reproduce,data}``."""
 
 import io
+import os
 import subprocess
 import sys
+import time
 
 import pytest
 
@@ -36,6 +38,11 @@ def test_commands_and_usage(capsys):
 
 def test_data_writes_the_experiment_files(tmp_path, monkeypatch):
     monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
+    # what a run killed inside atomic_path leaves, an hour old: removed by the next data run
+    stale = tmp_path / "data" / ".chirp_identification.csv.abcd1234.tmp.csv"
+    stale.parent.mkdir()
+    stale.write_text("t,u\n")
+    os.utime(stale, (time.time() - 3600,) * 2)
     lines = []
 
     class Stream:
@@ -47,6 +54,7 @@ def test_data_writes_the_experiment_files(tmp_path, monkeypatch):
     assert "chirp_identification.csv" in written and "hysteresis_loop_40V.csv" in written
     text = "".join(lines)
     assert "Case I hysteresis at   40 V" in text and text.rstrip().splitlines()[-1].startswith("done")
+    assert not stale.exists()
 
 
 def test_list_studies_and_bad_study(capsys):
