@@ -312,6 +312,18 @@ def _add_metadata(metadata, body):
         metadata[key.strip()] = _parse_value(value.strip())
 
 
+def _is_data(line, comment, metadata):
+    """False for a blank line or a comment (whose ``key = value`` goes into ``metadata``);
+    True for a line of fields.  Both readers classify lines by this one rule."""
+    stripped = line.strip()
+    if not stripped:
+        return False
+    if comment and stripped.startswith(comment):
+        _add_metadata(metadata, stripped[len(comment):])
+        return False
+    return True
+
+
 def _read_head(stream, path, header, delimiter, comment):
     """Read comments, blank lines and the header up to the first data row (see _Head)."""
     metadata, names, header_line, number = {}, None, None, 0
@@ -319,11 +331,7 @@ def _read_head(stream, path, header, delimiter, comment):
         number += 1
         if "\x00" in line:
             raise _nul_error(path, number)
-        stripped = line.strip()
-        if not stripped:
-            continue
-        if comment and stripped.startswith(comment):
-            _add_metadata(metadata, stripped[len(comment):])
+        if not _is_data(line, comment, metadata):
             continue
         fields = line.rstrip("\n").split(delimiter)
         if header and names is None:
@@ -580,13 +588,7 @@ def _read_slow(stream, path, head, index, labels, delimiter, comment, decimal, t
     width = max(index.values()) + 1
     columns, numbers, metadata = {key: array("d") for key in index}, array("q"), {}
     for number, line in enumerate(stream, start=1):
-        stripped = line.strip()
-        if not stripped:
-            continue
-        if comment and stripped.startswith(comment):
-            _add_metadata(metadata, stripped[len(comment):])
-            continue
-        if number == head.header_line:
+        if not _is_data(line, comment, metadata) or number == head.header_line:
             continue
         fields = line.rstrip("\n").split(delimiter)
         _check_fields(fields, width, head, delimiter, path, number)

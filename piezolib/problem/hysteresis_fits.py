@@ -13,7 +13,6 @@ validation, notebook 03).  Background: ``docs/hysteresis.md``.
 
 import functools
 import json
-import os
 from dataclasses import fields
 from pathlib import Path
 
@@ -21,7 +20,7 @@ import numpy as np
 
 
 from piezolib.problem import paper
-from piezolib._checks import check_integer, check_type
+from piezolib._checks import check_integer, check_path, check_type
 from piezolib.hysteresis.dahl import FORMS, STARTS, DahlModel
 from piezolib.hysteresis.fit import check_fit_options, fit_dahl, rescore_dahl
 from piezolib.problem.paths import check_directory, data_dir
@@ -278,7 +277,7 @@ def read_dahl_model(path):
         Naming the file: not a Dahl model file of this format, or its content
         fails its checksum (edited or corrupted), with the way to write it anew.
     """
-    path = _file_path(path)
+    path = check_path("path", path)
     doc = _read_model_document(path)
     problem = seal_problem(doc)
     if problem is not None:
@@ -302,11 +301,6 @@ def _read_model_document(path):
         return doc
     except ValueError as exc:
         raise ValueError(f"{path}: not a Dahl model file ({exc})") from None
-
-
-def _file_path(path):
-    """``path`` as a Path, checked to be one (a number fails here, naming the argument)."""
-    return Path(check_type("path", path, (str, os.PathLike), "a file path (str or os.PathLike)"))
 
 
 def _rewrite_hint(path):
@@ -342,7 +336,7 @@ def write_dahl_model(model, path, about=""):
         otherwise be written as whatever JSON makes of it).
     """
     check_type("model", model, DahlModel, "a DahlModel")
-    path = _file_path(path)
+    path = check_path("path", path)
     check_type("about", about, str, "text (str)")
     doc = {"format": _MODEL_FORMAT, "about": about,
            "model": {f.name: getattr(model, f.name) for f in fields(model)}}

@@ -12,14 +12,13 @@ file format is described in ``data/README.md``.
 
 import io
 import json
-import os
 from dataclasses import dataclass, fields
 from pathlib import Path
 
 import numpy as np
 
 from piezolib import files, records, signals
-from piezolib._checks import check_positive, check_type
+from piezolib._checks import check_path, check_positive, check_type
 from piezolib.problem import paper
 from piezolib.problem.paths import check_directory, data_dir
 from piezolib.problem.stage import (ADC_RANGE_V, RECORD_COLUMNS, Saturation, StageRecord,
@@ -357,7 +356,7 @@ def load_record(path):
         text or NaN in a number column, too few rows, or a file that differs
         from its manifest entry (truncated, changed).
     """
-    path = Path(check_type("path", path, (str, os.PathLike), "a file path (str or os.PathLike)"))
+    path = check_path("path", path)
     if not path.exists():
         raise FileNotFoundError(f"{path} is missing: regenerate the experiment files with "
                                 "`python -m piezolib data`")
