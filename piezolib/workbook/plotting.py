@@ -20,7 +20,7 @@ import matplotlib as mpl
 import matplotlib.image as mpimg
 import numpy as np
 
-from piezolib._checks import check_nonnegative
+from piezolib._checks import check_nonnegative, check_type
 from piezolib.files import atomic_write
 from piezolib.workbook.style import apply_unit_text
 
@@ -58,8 +58,7 @@ def name_figure(fig, number, what):
     what : str
         Short lower-case description, e.g. ``"step_responses"``.
     """
-    if not isinstance(fig, mpl.figure.Figure):
-        raise TypeError(f"fig must be a matplotlib Figure, got {type(fig).__name__}")
+    check_type("fig", fig, mpl.figure.Figure, "a matplotlib Figure")
     fig.set_label(figure_name(number, what))
     return fig
 
@@ -83,8 +82,7 @@ def save_figure(fig, directory):
     pathlib.Path
         The file written or kept.
     """
-    if not isinstance(fig, mpl.figure.Figure):
-        raise TypeError(f"fig must be a matplotlib Figure, got {type(fig).__name__}")
+    check_type("fig", fig, mpl.figure.Figure, "a matplotlib Figure")
     name = fig.get_label()
     if not name or not _WHAT.match(name):
         raise ValueError("fig has no file name: draw it with a figure function or call "

@@ -172,8 +172,7 @@ def unit_text(text):
 
 def apply_unit_text(fig):
     """Apply :func:`unit_text` to every text of ``fig`` (in place) and return ``fig``."""
-    if not isinstance(fig, mpl.figure.Figure):
-        raise TypeError(f"fig must be a matplotlib Figure, got {type(fig).__name__}")
+    check_type("fig", fig, mpl.figure.Figure, "a matplotlib Figure")
     for text in fig.findobj(mpl.text.Text):
         old = text.get_text()
         new = unit_text(old)

@@ -14,7 +14,7 @@ import matplotlib as mpl
 import numpy as np
 
 from piezolib.problem import paper
-from piezolib._checks import check_integer
+from piezolib._checks import check_integer, check_type
 from piezolib.hysteresis.dahl import DahlModel, check_dahl_model, simulate_dahl
 from piezolib.workbook.interactive._panel import (LivePanel, finish, import_ipywidgets,
                                                   linear_slider, log_slider, panel_figure,
@@ -164,8 +164,7 @@ def draw_dahl(view, fig=None):
     -------
     matplotlib.figure.Figure
     """
-    if not isinstance(view, DahlView):
-        raise TypeError(f"view must be a DahlView, got {type(view).__name__}")
+    check_type("view", view, DahlView, "a DahlView")
     d = view.discard
     with mpl.rc_context(STYLE):
         fig, (ax_loop, ax_err) = panel_figure(fig, 2, (9.0, 3.8))

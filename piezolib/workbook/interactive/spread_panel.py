@@ -16,7 +16,8 @@ import numpy as np
 
 from piezolib.problem import paper
 from piezolib import uncertainty as unc
-from piezolib._checks import check_frequency_grid, check_integer, check_positive, check_siso
+from piezolib._checks import (check_frequency_grid, check_integer, check_positive, check_siso,
+                              check_type)
 from piezolib.robust.lti import frequency_grid
 from piezolib.workbook.interactive._panel import (LivePanel, curve_db, finish, import_ipywidgets,
                                                   linear_slider, magnitude, panel_figure,
@@ -152,8 +153,7 @@ def draw_spread(view, H_m=None, fig=None):
     -------
     matplotlib.figure.Figure
     """
-    if not isinstance(view, SpreadView):
-        raise TypeError(f"view must be a SpreadView, got {type(view).__name__}")
+    check_type("view", view, SpreadView, "a SpreadView")
     if H_m is not None:
         check_siso("H_m", H_m)
     with mpl.rc_context(STYLE):

@@ -18,7 +18,7 @@ import matplotlib as mpl
 import numpy as np
 
 from piezolib.problem import paper
-from piezolib._checks import check_frequency_grid, check_positive, check_siso
+from piezolib._checks import check_frequency_grid, check_positive, check_siso, check_type
 from piezolib.problem.analysis import RobustnessAnalysis, analyze, robust_performance_peak
 from piezolib.problem.design import design_controller
 from piezolib.robust.lti import frequency_grid, loop_functions
@@ -229,8 +229,7 @@ def draw_weight_design(view, fig=None):
     -------
     matplotlib.figure.Figure
     """
-    if not isinstance(view, WeightDesignView):
-        raise TypeError(f"view must be a WeightDesignView, got {type(view).__name__}")
+    check_type("view", view, WeightDesignView, "a WeightDesignView")
     with mpl.rc_context(STYLE):
         fig, (ax_s, ax_t) = panel_figure(fig, 2, (9.0, 3.8))
         w = view.omega
