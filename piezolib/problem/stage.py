@@ -55,7 +55,8 @@ class StageSettings:
     Attributes
     ----------
     plant : control.LTI
-        Linear dynamics from u_c [V] to v_y [V] (strictly proper, stable).
+        Linear dynamics from u_c [V] to v_y [V] (strictly proper; stable
+        unless ``unstable_plant_ok``).
     sample_rate_Hz : float
     amplifier_gain : float
         v_a / u_c [V/V].
@@ -69,6 +70,11 @@ class StageSettings:
         White Gaussian sensor noise on v_y [V rms].
     hysteresis : HysteresisLaw, PlayHysteresis or None
         Hysteresis truth; ``None`` gives a linear stage (H = identity).
+    unstable_plant_ok : bool
+        Accept an unstable ``plant`` (default False: refused).  For closed-loop
+        studies over a model set, some of whose members are unstable on their
+        own and only a controller stabilises; run open loop, such a stage
+        diverges (its output leaves the ADC range at once).
     """
 
     plant: object = field(default_factory=paper.plant)
@@ -81,6 +87,7 @@ class StageSettings:
     adc_bits: int = paper.DAQ_BITS
     noise_rms_V: float = 0.5e-3
     hysteresis: object = CALIBRATED_HYSTERESIS
+    unstable_plant_ok: bool = False
 
 
 class StageSaturationWarning(UserWarning):
@@ -268,7 +275,8 @@ class VirtualStage:
         else:
             raise TypeError("hysteresis must be a HysteresisLaw, a PlayHysteresis or "
                             f"None, got {type(s.hysteresis).__name__}")
-        self.b, self.a = _zoh_filter(s.plant, 1.0 / self.fs)
+        check_type("unstable_plant_ok", s.unstable_plant_ok, bool, "True or False")
+        self.b, self.a = _zoh_filter(s.plant, 1.0 / self.fs, s.unstable_plant_ok)
 
     def __repr__(self):
         return f"VirtualStage(seed={self.seed})"
@@ -372,14 +380,22 @@ class VirtualStage:
     def _noise_free(self, u):
         """(u_dac, v_a, y, input saturation, output saturation) of the input u [V]:
         everything of :meth:`run` before the sensor noise and the ADC."""
+        u_dac, v_a, v_h, sat_in, sat_out = self._before_plant(u)
+        return u_dac, v_a, self._plant_output(v_h), sat_in, sat_out
+
+    def _before_plant(self, u):
+        """(u_dac, v_a, v_h, input saturation, output saturation): DAC, amplifier, hysteresis."""
         u_dac = self.dac.convert(u)
         sat_in = Saturation.of("DAC/amplifier input", self.dac.limits, u)
         v_cmd = self.gain * u_dac
         v_a = np.minimum(np.maximum(v_cmd, self.out_lo), self.out_hi)
         sat_out = Saturation.of("amplifier output", (self.out_lo, self.out_hi), v_cmd)
         v_h = v_a if self.hysteresis is None else self.hysteresis.apply(v_a)[0]
-        y = sg.lfilter(self.b, self.a, v_h / self.gain)
-        return u_dac, v_a, y, sat_in, sat_out
+        return u_dac, v_a, v_h, sat_in, sat_out
+
+    def _plant_output(self, v_h):
+        """y [V]: the linear dynamics G on v_h / gain (noise-free sensor output)."""
+        return sg.lfilter(self.b, self.a, v_h / self.gain)
 
     def start(self):
         """Begin a sample-by-sample simulation (for closed loops); see
@@ -432,6 +448,51 @@ class VirtualStage:
             Member i is ``self.replace(seed=seeds[i])``.
         """
         return StageBatch([self.replace(seed=s) for s in check_seeds(seeds)])
+
+    def over_model_set(self, mset, seeds=None):
+        """One copy of this stage per member of a model set, as a batch.
+
+        Member k has the exact ZOH model of ``mset``'s member k as its linear
+        dynamics (:func:`piezolib.uncertainty.sampled.member_zoh_coefficients`,
+        all members in one batched call) and everything else of this stage:
+        hysteresis, amplifier, converters, noise level.  Members may be
+        unstable on their own (``unstable_plant_ok``): run them in a loop
+        that stabilises them.
+
+        Parameters
+        ----------
+        mset : piezolib.uncertainty.ModelSet
+            Perturbations of this stage's plant (``mset.plant`` is normally
+            ``settings.plant``; any plant of the same order works).
+        seeds : sequence of int, optional
+            One noise seed per member; default: this stage's seed for every
+            member (the same noise, so that members differ by their plant
+            only).
+
+        Returns
+        -------
+        StageBatch
+        """
+        from piezolib.uncertainty.modelset import check_model_set
+        from piezolib.uncertainty.sampled import member_zoh_coefficients
+
+        check_model_set(mset)
+        if seeds is None:
+            seeds = [self.seed] * mset.size
+        else:
+            seeds = [check_integer("seeds[i]", s, minimum=0) for s in seeds]
+            if len(seeds) != mset.size:
+                raise ValueError(f"seeds must hold one seed per member ({mset.size}), got "
+                                 f"{len(seeds)}")
+        b, a = member_zoh_coefficients(mset, 1.0 / self.fs)
+        members = []
+        for k, seed in enumerate(seeds):
+            new = object.__new__(VirtualStage)
+            new.__dict__.update(self.__dict__)
+            new.settings = replace(self.settings, plant=mset.member(k), unstable_plant_ok=True)
+            new.seed, new.b, new.a = seed, b[k], a[k]
+            members.append(new)
+        return StageBatch(members)
 
     def _warn(self, record):
         for sat in (record.input_saturation, record.output_saturation,
@@ -763,12 +824,16 @@ class StageBatch:
         u = check_finite_array("u_c", u_c, ndim=1, min_length=1, real=True)
         n = len(u)
         t = np.arange(n) / self.fs
-        records, truths = [], {}
+        records, fronts, truths = [], {}, {}
         for st in self.stages:
-            key = self._truth_key(st)
-            if key not in truths:
-                truths[key] = st._noise_free(u)
-            u_dac, v_a, y, sat_in, sat_out = truths[key]
+            # the hysteresis is shared by members that differ only in the plant (a model set)
+            front_key, plant_key = self._truth_key(st)
+            if front_key not in fronts:
+                fronts[front_key] = st._before_plant(u)
+            u_dac, v_a, v_h, sat_in, sat_out = fronts[front_key]
+            if (front_key, plant_key) not in truths:
+                truths[front_key, plant_key] = st._plant_output(v_h)
+            y = truths[front_key, plant_key]
             # the arithmetic of VirtualStage.run, member by member
             noise = st.noise_rms * np.random.default_rng(st.seed).standard_normal(n)
             analog = y + noise
@@ -781,9 +846,10 @@ class StageBatch:
 
     @staticmethod
     def _truth_key(st):
+        """(hysteresis key, plant key) of a member's noise-free output."""
         h = st.hysteresis
-        return (st.b.tobytes(), st.a.tobytes(),
-                None if h is None else (h.thresholds_V, h.weights, h.linear_weight))
+        return (None if h is None else (h.thresholds_V, h.weights, h.linear_weight),
+                (st.b.tobytes(), st.a.tobytes()))
 
 
     def start(self):
@@ -877,7 +943,8 @@ class StageBatchSimulation:
             self._pm_r = np.stack([-r, r])          # v_a + (-r) is v_a - r exactly
             self._bounds = np.empty_like(self._pm_r)
             self._h = np.empty((r.shape[0] + 1, n))
-            self._h_sum = np.empty_like(self._h)
+            self._h_sum = np.empty(n)
+            self._h_rows = list(self._h[2:])
         self._blocks = []               # (7, BLOCK, N): the signals of _SIGNALS by sample
         self._k = 0
         self._j = 0                     # row of sample k in the last block
@@ -985,12 +1052,15 @@ class StageBatchSimulation:
             plays, bounds, h = self._plays, self._bounds, self._h
             np.add(v_a, self._pm_r, bounds)
             _clip(plays, bounds[0], bounds[1], plays)
-            # v_h = w0 v_a, then + w_i (y_i - r_i) play by play: the cumulative sum
-            # adds in that order, as StageSimulation.step does
+            # v_h = w0 v_a, then + w_i (y_i - r_i) play by play, in that order as
+            # StageSimulation.step adds them (row by row: cheaper than a cumulative sum
+            # over axis 0 for N in the hundreds)
             np.multiply(self._w0, v_a, h[0])
             np.subtract(plays, self._r, h[1:])
             np.multiply(h[1:], self._w, h[1:])
-            v_h = np.add.accumulate(h, 0, None, self._h_sum)[-1]
+            v_h = np.add(h[0], h[1], self._h_sum)
+            for row in self._h_rows:
+                np.add(v_h, row, v_h)
         else:
             v_h = v_a
         x_in = np.divide(v_h, self._gain, self._x)
@@ -1101,13 +1171,15 @@ def _range(name, limits):
     return lo, hi
 
 
-def _zoh_filter(plant, dt):
-    """Exact ZOH discretisation of a strictly proper stable plant as (b, a)
-    of a direct-form filter with b[0] = 0 (no direct feedthrough)."""
+def _zoh_filter(plant, dt, unstable_ok=False):
+    """Exact ZOH discretisation of a strictly proper (stable, unless
+    ``unstable_ok``) plant as (b, a) of a direct-form filter with b[0] = 0
+    (no direct feedthrough)."""
     check_siso("plant", plant)
     if not plant.isctime(strict=True):
         raise ValueError("plant must be a continuous-time model")
-    check_stable("plant", plant)
+    if not unstable_ok:
+        check_stable("plant", plant)
     sys = realize(plant)
     if sys.nstates == 0 or np.any(sys.D != 0):
         raise ValueError("plant must be strictly proper (no direct feedthrough), so "

@@ -1,13 +1,16 @@
-"""Figures of notebook 06 (tracking experiments): Fig. 14 and Fig. 15."""
+"""Figures of the tracking experiments: Fig. 14 and Fig. 15 (notebook 06), tracking over
+the uncertainty set (notebook 12)."""
 
 from string import ascii_lowercase
 
+import numpy as np
+
 from piezolib.problem import paper
 from piezolib.workbook import plotting
-from piezolib.workbook.style import new_figure
+from piezolib.workbook.style import PALETTE, new_figure
 from piezolib.workbook.experiments import CASES
 
-__all__ = ["fig14_hysteresis_cases", "fig15_tracking_error"]
+__all__ = ["fig14_hysteresis_cases", "fig15_tracking_error", "tracking_over_set"]
 
 
 def fig14_hysteresis_cases(result, frequency_Hz=None, controller="our 6th-order mu controller"):
@@ -103,3 +106,59 @@ def _seeds_note(result):
         return ""
     return (f"\ncurves: noise seed {result.seeds[0]}; numbers: mean over {len(result.seeds)} "
             "noise seeds")
+
+
+def tracking_over_set(results, nominal=None, goals=None):
+    """Tracking error over a model set, per frequency: the spread, the worst member, the goals.
+
+    One group of bars per frequency, one bar per result: a thick bar from the
+    5th to the 95th percentile of the members' errors, a tick at the median,
+    a cross at the worst member and a dot at the nominal plant; the goals
+    of Sec. IV-B as a dashed line.
+
+    Parameters
+    ----------
+    results : dict
+        {label: :class:`~piezolib.workbook.set_tracking.SetTracking`} (same
+        frequencies), at most four.
+    nominal : dict, optional
+        {label: pandas.Series of the nominal stage's error per frequency [%]}.
+    goals : dict, optional
+        The paper's :data:`~piezolib.problem.paper.DESIGN_GOALS` by default.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Named ``extra_tracking_over_set``.
+    """
+    goals = paper.DESIGN_GOALS if goals is None else goals
+    fig, ax = new_figure(figsize=(9.0, 5.6))
+    labels = list(results)
+    freqs = list(next(iter(results.values())).errors.columns)
+    width = 0.8 / len(labels)
+    for i, (label, colour) in enumerate(zip(labels, PALETTE.peers)):
+        res = results[label]
+        x = np.arange(len(freqs)) + (i - (len(labels) - 1) / 2) * width
+        e = res.errors
+        low, mid, high = e.quantile(0.05), e.median(), e.quantile(0.95)
+        run, size = int(e.notna().all(axis=1).sum()), res.mset.size
+        ax.vlines(x, low, high, color=colour, lw=7, alpha=0.55,
+                  label=f"{label}: 5-95 % of {run} stable members ({size - run} unstable)")
+        ax.scatter(x, mid, marker="_", s=120, color=colour, zorder=3)
+        ax.scatter(x, e.max(), marker="x", s=30, color=colour, zorder=3)
+        if nominal is not None and label in nominal:
+            ax.scatter(x, nominal[label].reindex(freqs), marker="o", s=18, color=PALETTE.wire,
+                       zorder=4)
+    goal = [goals["peak_to_peak_error_pct_up_to_10Hz"] if f <= 10 else
+            goals["peak_to_peak_error_pct_at_50Hz"] if f >= 50 else np.nan for f in freqs]
+    ax.step(np.arange(len(freqs)), goal, where="mid", ls="--", color=PALETTE.seventh, lw=1.2,
+            label="goals of Sec. IV-B (< 1 % up to 10 Hz, < 5 % at 50 Hz)")
+    ax.set_yscale("log")
+    ax.set_xticks(np.arange(len(freqs)), [f"{f:g} Hz" for f in freqs])
+    ax.set_ylabel("tracking error max|e| / 12 um [%]")
+    ax.set_title("Tracking over the model set: bar 5-95 %, tick median, x worst member, "
+                 "dot nominal stage", fontsize="medium")
+    # below the axes: the worst members reach the top of the plot at every frequency
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=2, fontsize="small")
+    plotting.name_figure(fig, None, "tracking_over_set")
+    return fig

@@ -1,0 +1,115 @@
+"""Case IV's feedforward: the stage's linear dynamics inverted with preview, then its hysteresis.
+
+The virtual stage, like the paper's, is a hysteresis followed by linear
+dynamics: v_y = G_n(s) H[u_c], with G_n = G / G(0) the dynamics of unit DC
+gain and H the static hysteretic map (with G(0) inside it) that a hysteresis
+model is fitted to.  Cases II–III invert H only (eq. 14), so the dynamics'
+lag and ringing are left to the feedback, which one sample of computation
+delay slows down.  :class:`TwoDofFeedforward` inverts both, in the order
+the signal meets them backwards: w = G_n^-1 v_r by zero-phase-error tracking
+with preview (:func:`piezolib.robust.preview.zpetc` on the exact ZOH model,
+run as exported float32 sections), then u_f = H^-1 w (the hysteresis model's
+feedforward).  The references of the tracking test are known in advance,
+so the preview costs nothing.  With the feedback K on v_e = v_r - v_y it is
+the two-degree-of-freedom loop of Case IV (:func:`two_dof_feedforward`;
+``docs/controller_design.md`` argues the choice).
+
+A :class:`TwoDofFeedforward` is itself a model of the stage with an inverse
+(``simulate``: H, then G_n), so every experiment that takes a hysteresis
+model runs it: Case II of :func:`piezolib.workbook.experiments.tracking_test`
+becomes the 2-DOF feedforward alone and Case III the 2-DOF loop, Case IV.
+"""
+
+from dataclasses import dataclass
+
+import control as ct
+import numpy as np
+import scipy.signal as sg
+
+from piezolib._checks import check_positive, check_type
+from piezolib.hysteresis.common import HysteresisModel
+from piezolib.identification import zoh_coefficients
+from piezolib.robust.export import SOSController, controller_sos, sos_filter
+from piezolib.robust.preview import PreviewFeedforward, zpetc
+
+__all__ = ["TwoDofFeedforward", "two_dof_feedforward"]
+
+
+@dataclass(frozen=True, eq=False)
+class TwoDofFeedforward:
+    """u_f = H^-1(F(z) v_r[k + preview]): dynamics inverse with preview, then hysteresis inverse.
+
+    Attributes
+    ----------
+    dynamics : PreviewFeedforward
+        ZPETC of the unit-DC-gain ZOH model G_n = G / G(0), v_r [V] -> w [V].
+    sections : SOSController
+        ``dynamics.F`` as second-order sections, run in float32 as a target would.
+    model : HysteresisModel
+        The hysteresis model (workbook convention v = u_c, x = v_y [V]) whose
+        feedforward maps w to u_f.
+    plant_b, plant_a : ndarray
+        Direct-form coefficients of G_n's ZOH model (for :meth:`simulate`).
+    """
+
+    dynamics: PreviewFeedforward
+    sections: SOSController
+    model: object
+    plant_b: np.ndarray
+    plant_a: np.ndarray
+
+    @property
+    def preview(self):
+        """Samples of the reference used ahead [samples]."""
+        return self.dynamics.preview
+
+    def dynamics_inverse(self, v_r):
+        """w [V]: the reference through the float32 sections of G_n^-1, ``preview`` samples ahead."""
+        return sos_filter(self.sections, self.dynamics.shifted(v_r), "float32")
+
+    def feedforward(self, v_r):
+        """u_f [V] for the reference v_r [V] (sensor volts, x_r = 3 um/V v_r)."""
+        return self.model.feedforward(self.dynamics_inverse(v_r))
+
+    def simulate(self, u_c):
+        """The stage this feedforward inverts: v_y [V] = G_n(z) of the model's output."""
+        return sg.lfilter(self.plant_b, self.plant_a, self.model.simulate(u_c))
+
+    @property
+    def static_part(self):
+        """(g, x0) of the hysteresis model's static line (Case I applies it)."""
+        return self.model.static_part
+
+
+def two_dof_feedforward(G, model, fs, radius=1.0):
+    """The Case IV feedforward for the plant G and a hysteresis model.
+
+    Parameters
+    ----------
+    G : control.LTI
+        Continuous SISO model u_c [V] -> v_y [V] with a nonzero DC gain (the
+        study's identified or published G); only G / G(0) is inverted, the
+        static gain belongs to the hysteresis model.
+    model : HysteresisModel
+        With ``feedforward(x_r)`` (the workbook's Dahl or PI model).
+    fs : float
+        Loop rate [Hz].
+    radius : float
+        Passed to :func:`~piezolib.robust.preview.zpetc`.
+
+    Returns
+    -------
+    TwoDofFeedforward
+    """
+    check_type("model", model, HysteresisModel, "a hysteresis model with simulate(v) and "
+               "feedforward(x_r) (DahlModel, PIModel)")
+    fs = check_positive("fs", fs)
+    dc = float(np.real(ct.dcgain(G)))
+    if not np.isfinite(dc) or dc == 0:
+        raise ValueError(f"G must have a finite nonzero DC gain, got {dc!r}")
+    # the exact ZOH model from a scaled realisation (G's coefficients reach 1e23)
+    b, a = zoh_coefficients(G * (1.0 / dc), 1.0 / fs)
+    dynamics = zpetc(ct.tf(b, a, 1.0 / fs), radius=radius)
+    sections = controller_sos(ct.ss(dynamics.F), name="F_zpetc")
+    sections.check_float32(what="the dynamics inverse")
+    return TwoDofFeedforward(dynamics, sections, model, b, a)
