@@ -132,8 +132,8 @@ def readable(frame, digits=DIGITS, index=False, units=UNITS_COLUMNS):
     styler = frame.style.format(lambda v: html.escape(format_number(v, digits)))
     if spell:
         styler = styler.format(lambda v: html.escape(_spelled(v, digits)), subset=spell)
-    for axis in (0, 1):
-        styler = styler.format_index(escape="html", axis=axis)
+    for axis in (0, 1):          # labels too: an amplitude 10.0 reads "10", not "10.000000"
+        styler = styler.format_index(lambda v: html.escape(format_number(v, digits)), axis=axis)
     if not index:
         styler = styler.hide(axis="index")
     styler = styler.set_table_styles([

@@ -60,6 +60,15 @@ def test_readable_shows_whole_notes_whatever_the_display_width():
     assert ">41<" in tables.readable(frame, index=True).to_html()
 
 
+def test_readable_formats_labels_and_table_cells_alike():
+    frame = pd.DataFrame({(10.0, "paper"): [9.15, 0.31], (10.0, "ours"): [9.148, 0.0073]},
+                         index=["case_I", "case_III"])
+    page = tables.readable(frame, index=True).to_html()
+    cells = re.findall(r"<td[^>]*>([^<]*)</td>", page)
+    assert cells == ["9.15", "9.148", "0.31", "0.0073"]
+    assert ">10<" in page and "10.000000" not in page and ">case_I<" in page
+
+
 def test_readable_needs_a_frame():
     with pytest.raises(TypeError, match="frame"):
         tables.readable([[1, 2]])
