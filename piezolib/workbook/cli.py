@@ -41,6 +41,21 @@ def parser():
     ctl.add_argument("--write-reference", action="store_true",
                      help="re-derive them (Dahl fit, DK-iteration, fixed order) and rewrite "
                           "those files")
+    doc = sub.add_parser("report",
+                         help="the reproduction report (notebook 07) as an HTML document "
+                              "without code: runs/report/<study>.html")
+    doc.add_argument("--study", metavar="STUDY",
+                     help="a study in studies/ (name) or a .toml file (default: reference)")
+    doc.add_argument("--output", metavar="PATH",
+                     help="the HTML file to write (default: runs/report/<study>.html)")
+    doc.add_argument("--executed", metavar="NOTEBOOK",
+                     help="export this executed copy of notebook 07 instead of executing it "
+                          "(run with inline figures, e.g. saved from JupyterLab)")
+    doc.add_argument("--pdf", action="store_true",
+                     help="also print it to PDF beside the HTML file (needs Chromium on the "
+                          "PATH; Debian: apt-get install chromium)")
+    doc.add_argument("--timeout", type=_positive_seconds, default=600,
+                     help="per-cell time limit in seconds (default 600)")
     cmp_ = sub.add_parser("compare", help="key numbers of two studies side by side")
     cmp_.add_argument("first", help="study name (e.g. reference)")
     cmp_.add_argument("second", help="study name")
@@ -125,6 +140,27 @@ def _compare(args, stream):
     return 0
 
 
+def _report(args, stream):
+    """Write the report document; print its path (and the PDF's)."""
+    from piezolib.workbook import document, reproduce
+    from piezolib.workbook import study as studies
+
+    try:
+        if args.study is not None:
+            studies.load(args.study)                 # a bad study is a usage error
+        written = document.build(args.study, executed=args.executed, output=args.output,
+                                 pdf=args.pdf, timeout=args.timeout)
+    except (ValueError, FileNotFoundError, studies.StudyError) as exc:
+        print(f"python -m piezolib report: {exc}", file=sys.stderr)
+        return 2
+    except (reproduce.NotebookFailure, RuntimeError) as exc:
+        print(f"python -m piezolib report: FAILED: {exc}", file=sys.stderr)
+        return 1
+    for path in written:
+        print(path, file=stream)
+    return 0
+
+
 def _data(stream):
     from piezolib import files
     from piezolib.problem import paper
@@ -153,6 +189,8 @@ def main(argv=None, stream=sys.stdout):
         return _controllers(args, stream)
     if args.command == "compare":
         return _compare(args, stream)
+    if args.command == "report":
+        return _report(args, stream)
     if args.list:
         return _list_studies(stream)
     from piezolib.workbook import reproduce

@@ -9,7 +9,7 @@ name: no process-wide setting decides where an output goes.
 from piezolib.problem.paths import data_dir, project_root
 
 __all__ = ["REFERENCE_STUDY", "RESERVED_NAMES", "study_name_problem", "project_root", "data_dir",
-           "runs_dir", "notebooks_dir", "study_output_dir", "study_results_dir",
+           "runs_dir", "report_dir", "notebooks_dir", "study_output_dir", "study_results_dir",
            "study_figures_dir", "study_controllers_dir"]
 
 #: Name of the paper's reproduction: the one study that writes the committed outputs.
@@ -17,7 +17,8 @@ REFERENCE_STUDY = "reference"
 
 
 #: Names no study may take: folders of ``runs/`` that hold something else.
-RESERVED_NAMES = {"cache": "the pipeline's disk cache"}
+RESERVED_NAMES = {"cache": "the pipeline's disk cache",
+                  "report": "the report documents (python -m piezolib report)"}
 
 
 def study_name_problem(name):
@@ -44,6 +45,11 @@ def _study_name(name):
 def runs_dir():
     """``runs/``: outputs of every study but the reference, and the cache (git-ignored)."""
     return project_root() / "runs"
+
+
+def report_dir():
+    """``runs/report/``: the report documents, one per study (git-ignored; not created here)."""
+    return runs_dir() / "report"
 
 
 def notebooks_dir():

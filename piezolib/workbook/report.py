@@ -32,7 +32,8 @@ from piezolib.workbook.outputs import REFERENCE_STUDY
 
 __all__ = ["COLUMNS", "REASONS", "NOTEBOOK_TABLES", "OTHER_TABLES", "SIGNIFICANT_DIGITS",
            "verdict", "goal_verdict", "side_by_side", "ClaimTable", "save_results", "load_claims", "compare_studies",
-           "same_result", "reproduction_table", "inconsistent_verdicts", "verdict_counts"]
+           "same_result", "reproduction_table", "inconsistent_verdicts", "verdict_counts",
+           "summary"]
 
 COLUMNS = ["section", "quantity", "unit", "paper", "ours", "low", "high", "precision",
            "tolerance", "verdict", "reason", "note"]
@@ -519,3 +520,46 @@ def verdict_counts(table):
     counts = pd.crosstab(table["source"], table["verdict"])
     counts.loc["all"] = counts.sum()
     return counts
+
+
+def summary(table, study=REFERENCE_STUDY):
+    """The reproduction in a few sentences (Markdown), computed from its table.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        :func:`reproduction_table` output (columns ``source``, ``study``,
+        ``verdict``, ``reason``).
+    study : str
+        The study whose run the table reports.
+
+    Returns
+    -------
+    str
+        Counts of agreeing and differing claims, the reasons of the
+        differences (the unexplained ones named first), the counts per
+        notebook and, when the study has not written some tables, how many
+        rows come from the reference's.
+    """
+    _check_frame("table", table, ["source", "study", "verdict", "reason"])
+    counts = table["verdict"].value_counts()
+    agree, differ = int(counts.get("agrees", 0)), int(counts.get("differs", 0))
+    reasons = table.loc[table["verdict"] == "differs", "reason"].value_counts()
+    unexplained = int(reasons.pop("unexplained")) if "unexplained" in reasons else 0
+    lines = [f"**{len(table)} published numbers recomputed** (study `{study}`): "
+             f"**{agree} agree** with the paper within their tolerance, **{differ} differ**.", ""]
+    why = ", ".join(f"{n} {reason}" for reason, n in reasons.items())
+    if unexplained:
+        lines.append(f"- **{unexplained} difference{'s have' if unexplained > 1 else ' has'} "
+                     "no reason**: see the table.")
+    if why:
+        lines.append(("- Reasons of the others: " if unexplained
+                      else "- Every difference has a reason: ") + why + ".")
+    per = table.groupby("source", sort=True)["verdict"]
+    lines.append("- Per notebook (agree of published): " + ", ".join(
+        f"{source[:2]}: {int((v == 'agrees').sum())} of {len(v)}" for source, v in per) + ".")
+    borrowed = int((table["study"] != study).sum())
+    if borrowed:
+        lines.append(f"- {borrowed} row{'s come' if borrowed > 1 else ' comes'} from the "
+                     "reference study's tables: this study has not written them.")
+    return "\n".join(lines)

@@ -31,9 +31,9 @@ from piezolib.workbook import study as studies
 from piezolib.workbook.outputs import (data_dir, notebooks_dir, project_root,
                                        study_figures_dir, study_results_dir)
 
-__all__ = ["DATA_STEPS", "DATA_CHECKS", "GATHERING", "check_data", "list_notebooks",
-           "notebook_waves", "default_jobs", "inject_study", "run_notebook", "run",
-           "remove_stale_temporaries", "NotebookFailure"]
+__all__ = ["DATA_STEPS", "DATA_CHECKS", "GATHERING", "KERNEL_ENVIRONMENT", "check_data",
+           "list_notebooks", "notebook_waves", "default_jobs", "inject_study", "study_spec",
+           "run_notebook", "run", "remove_stale_temporaries", "NotebookFailure"]
 
 #: Data-generating steps run before the notebooks, as "module:function" names
 #: of functions that take no arguments and return the list of files written.
@@ -47,6 +47,11 @@ DATA_CHECKS = ["piezolib.problem.stage_data:check_experiment_files"]
 #: Name prefixes of the notebooks that read every other notebook's table
 #: (the reproduction report): they run after all the others have finished.
 GATHERING = ("07_",)
+
+#: Environment variables a headless run sets for its kernels unless already set:
+#: figures are saved, not drawn (Agg); widgets have no frontend, so controls draw
+#: their static figure; threaded BLAS on small problems is slower on 2 cores.
+KERNEL_ENVIRONMENT = {"MPLBACKEND": "Agg", "PIEZOLIB_STATIC": "1", "OPENBLAS_NUM_THREADS": "1"}
 
 
 class NotebookFailure(RuntimeError):
@@ -145,7 +150,15 @@ def inject_study(nb, study):
     return nb
 
 
-def run_notebook(path, timeout=600, study=None, save_to=None):
+def study_spec(study):
+    """What :func:`inject_study` writes for ``study``: a name as it is, a TOML file as an
+    absolute path (the kernel runs in ``notebooks/``, where a relative path means another file)."""
+    if study is None:
+        return None
+    return str(Path(study).resolve()) if str(study).endswith(".toml") else str(study)
+
+
+def run_notebook(path, timeout=600, study=None, save_to=None, env=None):
     """Execute one notebook in memory with the current interpreter.
 
     Parameters
@@ -157,6 +170,8 @@ def run_notebook(path, timeout=600, study=None, save_to=None):
         Study to inject (:func:`inject_study`); default: the notebook's own.
     save_to : pathlib.Path, optional
         Folder to write the executed notebook to (also when it fails).
+    env : dict, optional
+        Environment variables of the kernel process (default: this process's).
 
     Raises
     ------
@@ -169,6 +184,9 @@ def run_notebook(path, timeout=600, study=None, save_to=None):
 
     path = _notebook_paths([path], "path")[0]
     timeout = check_positive("timeout", timeout)
+    if env is not None and not (isinstance(env, dict)
+                                and all(isinstance(v, str) for v in env.values())):
+        raise TypeError(f"env must be a dict of environment variables (text values), got {env!r}")
     if study is not None:
         studies.load(study)                   # before a kernel starts
     nb = nbformat.read(path, as_version=4)
@@ -179,7 +197,7 @@ def run_notebook(path, timeout=600, study=None, save_to=None):
     try:
         # the kernel process's own log (a TCP-transport notice) is noise here;
         # cell output, including stderr, still reaches the notebook
-        client.execute(stderr=subprocess.DEVNULL)
+        client.execute(stderr=subprocess.DEVNULL, **({} if env is None else {"env": env}))
     except CellExecutionError as exc:
         index, source = _failed_cell(nb)
         raise NotebookFailure(path.name, index, source,
@@ -209,14 +227,10 @@ def run(selection=None, timeout=600, keep_going=False, data=True, stream=sys.std
     timeout = check_positive("timeout", timeout)
     selection = _prefixes(selection)
     chosen = studies.load(studies.REFERENCE if study is None else study)
-    spec = None if study is None else (str(Path(study).resolve()) if str(study).endswith(".toml")
-                                       else str(study))
+    spec = study_spec(study)
     save_to = chosen.output_dir / "notebooks" if not chosen.is_reference else None
-    os.environ.setdefault("MPLBACKEND", "Agg")
-    # widgets have no frontend here: controls draw their static figure
-    os.environ.setdefault("PIEZOLIB_STATIC", "1")
-    # kernels inherit this: threaded BLAS on small problems is slower on 2 cores
-    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    for name, value in KERNEL_ENVIRONMENT.items():          # the kernels inherit these
+        os.environ.setdefault(name, value)
     os.environ.setdefault("PIEZOLIB_ROOT", str(project_root()))
     # before anything writes: what a killed earlier run left half-written
     remove_stale_temporaries(chosen)

@@ -27,7 +27,7 @@ def test_commands_and_usage(capsys):
         cli.main(["--help"])
     assert exc.value.code == 0
     out = capsys.readouterr().out
-    assert "reproduce" in out and "data" in out
+    assert "reproduce" in out and "data" in out and "report" in out
     with pytest.raises(SystemExit) as exc:
         cli.main(["data", "--help"])
     assert exc.value.code == 0

@@ -201,3 +201,33 @@ def test_side_by_side_pairs_each_published_column_with_ours():
     both = report.side_by_side(published, ours)
     assert list(both.columns) == [(10.0, "paper"), (10.0, "ours"), (20.0, "paper"), (20.0, "ours")]
     assert both.loc["case_I", (20.0, "ours")] == 1.5
+
+
+def _published(verdicts, reasons, sources, study="reference"):
+    return pd.DataFrame({"source": sources, "study": study, "verdict": verdicts,
+                         "reason": reasons})
+
+
+def test_summary_counts_verdicts_reasons_and_notebooks():
+    table = _published(["agrees", "differs", "differs", "differs"],
+                       ["", "typo", "method", "method"],
+                       ["00_a", "00_a", "05_b", "05_b"])
+    text = report.summary(table)
+    first, *rest = text.splitlines()
+    assert "**4 published numbers recomputed** (study `reference`)" in first
+    assert "**1 agree**" in first and "**3 differ**" in first
+    assert "- Every difference has a reason: 2 method, 1 typo." in rest
+    assert "- Per notebook (agree of published): 00: 1 of 2, 05: 0 of 2." in rest
+    assert "reference study's tables" not in text
+
+
+def test_summary_names_unexplained_differences_and_borrowed_rows():
+    table = _published(["differs", "differs"], ["unexplained", "method"], ["00_a", "06_c"],
+                       study="mine")
+    table.loc[1, "study"] = "reference"              # a table the study has not written
+    text = report.summary(table, "mine")
+    assert "**1 difference has no reason**" in text
+    assert "- Reasons of the others: 1 method." in text
+    assert "- 1 row comes from the reference study's tables" in text
+    with pytest.raises(ValueError, match="reason"):
+        report.summary(table.drop(columns="reason"))

@@ -103,6 +103,8 @@ def test_a_study_file_cannot_pose_as_another_study(checkout):
         study.load("mine")
     with pytest.raises(study.StudyError, match="reserved"):
         study.Study(name="cache")
+    with pytest.raises(study.StudyError, match="report documents"):
+        study.Study(name="report")                 # runs/report/ holds the report documents
     (studies / "cache.toml").write_text("name = 'cache'\n")
     with pytest.raises(study.StudyError, match="cache.toml: study name 'cache' is reserved"):
         study.load("cache")

@@ -3,6 +3,7 @@ design, Fig. 10 and Fig. 12."""
 
 import control as ct
 import numpy as np
+from matplotlib.lines import Line2D
 
 from piezolib.robust.lti import loop_functions
 from piezolib.workbook import plotting
@@ -119,15 +120,22 @@ def fig12_mu_bounds(results):
     Returns
     -------
     matplotlib.figure.Figure
-        Saved as ``fig12_mu_bounds.png``.
+        Saved as ``fig12_mu_bounds.png``.  One legend below both panels: a
+        colour per controller, and the line styles of the upper and lower
+        bounds of (b); it covers no curve.
     """
-    fig, (ax_rs, ax_rp) = new_figure(1, 2, figsize=(10, 3.8), sharey=True)
+    fig, (ax_rs, ax_rp) = new_figure(1, 2, figsize=(10, 4.4), sharey=True)
+    handles = []
     for name, a in results.items():
         line, = ax_rs.semilogx(a.omega, a.mu_RS_curve, label=name)
+        handles.append(line)
         ax_rp.semilogx(a.omega, a.mu_RP_upper, color=line.get_color(), lw=2.4, alpha=0.45,
                        label=f"{name}, upper")
         ax_rp.semilogx(a.omega, a.mu_RP_lower_curve, color=line.get_color(), ls="--", lw=1.0,
                        label=f"{name}, lower")
+    # the two line styles of (b), drawn in grey: the colours name the controllers
+    handles += [Line2D([], [], color="0.4", lw=2.4, alpha=0.45, label="(b) upper bound"),
+                Line2D([], [], color="0.4", ls="--", lw=1.0, label="(b) lower bound")]
     for ax, title in ((ax_rs, "(a) robust stability: mu(M11) = |H_m T|"),
                       (ax_rp, "(b) robust performance: mu(M), upper and lower bounds")):
         ax.axhline(1.0, color="k", lw=0.8, ls="--")
@@ -135,7 +143,9 @@ def fig12_mu_bounds(results):
         ax.set_xlabel("frequency [rad/s]")
         ax.set_title(title)
     ax_rs.set_ylabel("μ")
-    ax_rp.legend(fontsize=7, loc="lower left", ncol=2)
+    # below both panels: inside, any study's curves may run where a legend sits
+    fig.legend(handles=handles, loc="outside lower center", ncol=min(len(handles), 4),
+               fontsize=7)
     plotting.name_figure(fig, 12, "mu_bounds")
     return fig
 

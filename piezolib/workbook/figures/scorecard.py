@@ -22,6 +22,15 @@ def _ratio_band(paper_value, tolerance):
     return low, high
 
 
+def _ratio_limits(ratios, bands, margin=0.15):
+    """Limits of the log ratio axis: whole decades around 1, every ratio and every positive
+    band end, at least ``margin`` decades beyond the outermost (no dot on the edge)."""
+    values = np.concatenate([[1.0], np.ravel(ratios), np.ravel(bands)])
+    values = values[np.isfinite(values) & (values > 0)]
+    low, high = np.log10(values.min()) - margin, np.log10(values.max()) + margin
+    return 10.0 ** np.floor(low), 10.0 ** np.ceil(high)
+
+
 def extra_reproduction_scorecard(table, seed=0):
     """Each numeric published number as a dot: our value / the paper's, per source notebook.
 
@@ -41,8 +50,11 @@ def extra_reproduction_scorecard(table, seed=0):
     Returns
     -------
     matplotlib.figure.Figure
-        Saved as ``extra_reproduction_scorecard.png``.  Ratios and bands are
-        clipped to 1e-2 ... 1e2.
+        Saved as ``extra_reproduction_scorecard.png``.  The ratio axis spans
+        every dot and band end with a margin (:func:`_ratio_limits`), so no dot
+        sits on its edge; a band that reaches zero runs to the left edge, and a
+        ratio that is not positive (a sign change) cannot be drawn on the log axis
+        and is counted as not drawn.
     """
     missing = {"source", "paper", "ours", "tolerance", "verdict"} - set(table.columns)
     if missing:
@@ -52,14 +64,18 @@ def extra_reproduction_scorecard(table, seed=0):
     # booleans read as 1/0 by to_numeric: keep only real numbers
     is_bool = table.paper.astype(str).isin(["True", "False"])
     numeric = numeric[(numeric.paper_value.abs() > 0) & numeric.our_value.notna() & ~is_bool]
-    ratio = (numeric.our_value / numeric.paper_value).clip(1e-2, 1e2)
+    ratio = numeric.our_value / numeric.paper_value
+    numeric, ratio = numeric[ratio > 0], ratio[ratio > 0]       # a log axis holds no sign change
     bands = np.array([_ratio_band(p, t) for p, t in zip(numeric.paper_value, numeric.tolerance)])
+    bands = bands.reshape(-1, 2)
+    x_low, x_high = _ratio_limits(ratio.to_numpy(), bands)
     sources = list(dict.fromkeys(table.source))
     fig, ax = new_figure(figsize=(9.5, 4.2))
     rng = np.random.default_rng(seed)
     y = numeric.source.map(sources.index).to_numpy() + rng.uniform(-0.3, 0.3, len(numeric))
     if len(numeric):
-        ax.hlines(y, np.clip(bands[:, 0], 1e-2, 1e2), np.clip(bands[:, 1], 1e-2, 1e2),
+        # a band that reaches zero (or below) runs to the left edge
+        ax.hlines(y, np.clip(bands[:, 0], x_low, x_high), np.clip(bands[:, 1], x_low, x_high),
                   color="0.55", lw=2.2, alpha=0.6, label="agreement band of each claim")
     for verdict, colour in (("agrees", PALETTE.agreement), ("differs", PALETTE.contrast)):
         pick = (numeric.verdict == verdict).to_numpy()
@@ -67,13 +83,13 @@ def extra_reproduction_scorecard(table, seed=0):
         ax.scatter(ratio[pick], y[pick], s=14, color=colour, zorder=3,
                    label=f"{verdict}: {pick.sum()} drawn of {total}")
     ax.set_xscale("log")
-    ax.set_xlim(1e-2, 1e2)
+    ax.set_xlim(x_low, x_high)
     ax.axvline(1.0, color="k", lw=0.8)
     ax.set_yticks(range(len(sources)), sources)
     ax.set_ylim(len(sources) - 0.5, -0.5)
     ax.set_xlabel("our value / paper value")
-    ax.set_title(f"{len(numeric)} of {len(table)} published claims are nonzero numbers and "
-                 "drawn; a dot agrees when it lies on its grey band")
+    ax.set_title(f"{len(numeric)} of {len(table)} published claims drawn (nonzero numbers, "
+                 "ratio > 0); a dot agrees when it lies on its grey band")
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7)
     plotting.name_figure(fig, None, "reproduction_scorecard")
     return fig

@@ -353,7 +353,8 @@ def weight_design_control(G, H_m, K, params=None, omega=None, *, design_options=
     }
     for slider in sliders.values():
         slider.description = unit_text(slider.description)
-    given = f"given K ({K.name})" if K.name else "given K"
+    # the menu names the controller as the text does (K_mu6 -> K_μ6)
+    given = unit_text(f"given K ({K.name})" if K.name else "given K")
     controllers = {given: K}
     menu = w.Dropdown(options=[given], value=given, description="controller")
     button = w.Button(description="re-design", tooltip="mu-synthesis for these weights",

@@ -4,6 +4,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
+from figure_checks import text_overlaps
 from piezolib import paper
 from piezolib.problem import analysis, design
 from piezolib.workbook import plotting
@@ -62,4 +63,21 @@ def test_step_responses_and_mu_bounds(figures_dir, result):
     assert upper.get_linestyle() != lower.get_linestyle()
     assert upper.get_linewidth() > lower.get_linewidth()
     assert ax_rs.get_ylabel() == "μ"
+    plt.close(fig)
+
+
+def test_mu_bounds_legend_sits_below_the_panels(figures_dir, result):
+    G, H_m, H_e, H_y, K = paper.problem()
+    omega = np.logspace(0, 7, 120)
+    results = {name: analysis.analyze(K_, G, H_m, H_e, H_y, omega=omega, name=name)
+               for name, K_ in {"published": K, "ours": result.K_reduced}.items()}
+    fig = F.fig12_mu_bounds(results)
+    plotting.save_figure(fig, figures_dir)
+    assert all(ax.get_legend() is None for ax in fig.axes)        # none inside a panel
+    legend, = fig.legends
+    labels = [t.get_text() for t in legend.get_texts()]
+    assert labels == ["published", "ours", "(b) upper bound", "(b) lower bound"]
+    box = legend.get_window_extent()
+    assert all(box.y1 <= ax.get_window_extent().y0 for ax in fig.axes)   # below both panels
+    assert text_overlaps(fig) == []
     plt.close(fig)

@@ -43,3 +43,25 @@ def test_scorecard_one_dot_and_one_band_per_numeric_claim(figures_dir):
 def test_scorecard_needs_the_tolerance_column(figures_dir):
     with pytest.raises(ValueError, match="tolerance"):
         F.extra_reproduction_scorecard(TABLE.drop(columns="tolerance"))
+
+
+def test_scorecard_axis_holds_every_dot_with_a_margin(figures_dir):
+    # ratios far beyond the old fixed 1e-2 ... 1e2 axis: none sits on an edge
+    table = pd.DataFrame({"source": ["06_c"] * 4,
+                          "paper": ["0.44", "2", "1", "-3"],
+                          "ours": ["0.003", "900", "1", "3"],       # the last changes sign
+                          "tolerance": ["+-0.5", "+-20%", "+-1%", "+-1%"],
+                          "verdict": ["differs", "differs", "agrees", "differs"]})
+    fig = F.extra_reproduction_scorecard(table)
+    ax = fig.axes[0]
+    low, high = ax.get_xlim()
+    dots = np.concatenate([c.get_offsets()[:, 0] for c in ax.collections[1:]])
+    assert sorted(dots) == pytest.approx([0.003 / 0.44, 1.0, 450.0])   # no sign change drawn
+    # a margin beyond the outermost dots, in decades of the log axis
+    assert np.log10(dots.min() / low) >= 0.15 and np.log10(high / dots.max()) >= 0.15
+    # the band 0.44 +- 0.5 reaches below zero: it runs to the left edge
+    band_low = min(seg[:, 0].min() for seg in ax.collections[0].get_segments())
+    assert band_low == pytest.approx(low)
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "differs: 2 drawn of 3" in labels
+    plt.close(fig)

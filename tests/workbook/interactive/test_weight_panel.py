@@ -3,6 +3,7 @@ the static fallback and the widget."""
 
 import types
 
+import control as ct
 import matplotlib.pyplot as plt
 import numpy as np
 import pytest
@@ -157,3 +158,12 @@ def test_weight_widget_follows_its_sliders(problem, published_analysis, widgets)
     menu.value = menu.options[0]                                    # back to the given K
     assert panel.view.controller == menu.options[0]
     assert panel.view.norm_He_S > published_analysis.norm_He_S      # faster template on S
+
+
+def test_controller_menu_spells_the_name_as_the_text_does(problem, widgets):
+    G, H_m, _, _, K = problem
+    named = ct.tf(K.num, K.den, name="K_mu6")
+    box = I.weight_design_control(G, H_m, named, interactive=True)
+    menu = box.controls["controller"]
+    assert menu.options == ("given K (K_μ6)",) and menu.value == "given K (K_μ6)"
+    assert box.panel.view.controller == menu.value
