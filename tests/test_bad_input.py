@@ -81,6 +81,7 @@ LTI_PROPER = {**LTI, "improper": ct.tf([1.0, 0.0, 0.0], [1.0, 1.0])}
 LTI_STABLE = {**LTI_PROPER, "unstable": ct.ss(ct.tf([1.0], [1.0, -1.0]))}
 LTI_DISCRETE = {"nan coefficient": ct.ss([[np.nan]], [[1.0]], [[1.0]], [[0.0]], 1 / FS),
                 "continuous": K, "not a model": np.ones((2, 2))}
+SAMPLED_CONTROLLER = {**LTI_DISCRETE, "another sample time": ct.ss(ct.c2d(K, 2 / FS, "tustin"))}
 MATRIX_STACK = {"nan": np.where(np.eye(3) == 1, np.nan, M3), "empty": np.zeros((0, 3, 3)),
                 "1-D": np.ones(3), "text": "abc"}
 
@@ -217,6 +218,32 @@ CASES = {
     "uncertainty.envelope_peak": (dict(mset=MSET, omega=OMEGA), {"omega": GRID}),
     "uncertainty.member_closed_loop_poles": (dict(mset=MSET, K=K), {"K": LTI_PROPER}),
     "uncertainty.unstable_members": (dict(mset=MSET, K=K), {"K": LTI_PROPER}),
+    # tracking over a model set: sampled members and loops, reference feedforward
+    "uncertainty.random_model_set": (dict(G=G3, spread=0.05, count=5),
+                                     {"G": LTI_PROPER, "spread": POSITIVE,
+                                      "count": {"zero": 0, "fraction": 2.5, "text": "x"},
+                                      "seed": {"negative": -1, "text": "x"}}),
+    "uncertainty.member_zoh_coefficients": (dict(mset=MSET, dt=1 / FS),
+                                            {"mset": {"a plant": G3, "text": "x"},
+                                             "dt": POSITIVE}),
+    "uncertainty.sampled_loop_poles": (dict(mset=MSET, Kd=KD, dt=1 / FS),
+                                       {"mset": {"a plant": G3}, "Kd": SAMPLED_CONTROLLER,
+                                        "dt": POSITIVE,
+                                        "delay_samples": {"negative": -1, "fraction": 1.5}}),
+    "uncertainty.sampled_loop_unstable": (dict(mset=MSET, Kd=KD, dt=1 / FS),
+                                          {"mset": {"a plant": G3}, "Kd": SAMPLED_CONTROLLER,
+                                           "dt": POSITIVE, "delay_samples": {"negative": -1}}),
+    "uncertainty.sampled_loop_spread": (dict(G=G3, Kd=KD, dt=1 / FS),
+                                        {"G": LTI_PROPER, "Kd": SAMPLED_CONTROLLER,
+                                         "dt": POSITIVE, "levels": {"one": 1, "text": "x"},
+                                         "spread_max": {**POSITIVE, "one": 1.0},
+                                         "rtol": POSITIVE}),
+    "robust.zpetc": (dict(Gd=ct.c2d(G3, 1 / FS, "zoh")),
+                     {"Gd": {"continuous": G3, "not a model": np.ones((2, 2)),
+                             "zero at z = 1": ct.tf([1.0, -1.0], [1.0, -0.5], 1 / FS),
+                             "improper": ct.tf([1.0, 0.0, 0.0], [1.0, -0.5], 1 / FS),
+                             "no sample time": ct.tf([1.0], [1.0, -0.5], True)},
+                      "radius": {**POSITIVE, "above one": 2.0}}),
     "hysteresis.simulate_dahl": (dict(model=DAHL, v=3 * np.sin(np.linspace(0, 13, 400))),
                                  {"v": SIGNAL}),
     "hysteresis.feedforward": (dict(model=DAHL, x_r=3 * np.sin(np.linspace(0, 13, 400))),

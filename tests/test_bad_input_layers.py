@@ -33,7 +33,7 @@ LAYERS = {
     "problem": ("paper", "genplant", "stage", "stage_data", "design", "analysis",
                 "hysteresis_fits", "stage_hysteresis", "paths"),
     "workbook": ("study", "pipeline", "loop", "experiments", "report", "style", "plotting",
-                 "reproduce", "cli", "outputs", "session"),
+                 "reproduce", "cli", "outputs", "session", "two_dof", "set_tracking"),
 }
 
 G, H_M, H_E, H_Y, K = paper.problem()
@@ -51,6 +51,7 @@ FIG = matplotlib.figure.Figure()
 FIG.set_label("fig99_campaign")
 AXES = FIG.add_subplot()
 OMEGA = np.logspace(2, 5, 20)
+MEMBERS = importlib.import_module("piezolib.uncertainty").random_model_set(G, 0.05, 2)
 
 
 class InTmp(str):
@@ -318,6 +319,22 @@ CASES = {
     "session.start": (None, {"study": STUDY, "claims": {"number": 3, "empty": ""}}),
     "cli.main": (None, {}),                 # by argument below: test_cli_*
     "outputs.study_name_problem": (dict(name="a/b"), {}),    # returns the problem as text
+    # workbook.two_dof, set_tracking
+    "two_dof.two_dof_feedforward": (dict(G=G, model=DAHL, fs=FS),
+                                    {"G": {"zero DC gain": S / (S + 1), "text": "x",
+                                           "discrete": ct.tf([1.0], [1.0, -0.5], 1 / FS)},
+                                     "model": {"text": "x", "number": 3}, "fs": POSITIVE,
+                                     "radius": {**POSITIVE, "above one": 2.0}}),
+    "set_tracking.tracking_over_set": (
+        dict(stage=STAGE, mset=MEMBERS, model=DAHL, controller=K, frequencies_Hz=[50.0]),
+        {"stage": {"text": "x", "a batch": STAGE.batch([0, 1])}, "mset": {"a plant": G},
+         "model": {"text": "x"}, "controller": {"text": "x"},
+         "case": {"unknown": "V", "number": 3}, "frequencies_Hz": {"empty": [], "negative": [-1.0],
+                                                                   "text": "x"},
+         "amplitude_um": POSITIVE, "delay_samples": {"negative": -1, "fraction": 0.5},
+         "discard_periods": {"negative": -1}, "min_measured_s": POSITIVE}),
+    "report.summary": (None, {"table": {"text": "x",
+                                        "no verdicts": pd.DataFrame({"quantity": ["a"]})}}),
     "pipeline.checked_cache_call": (None, {"func": {"not callable": 3, "text": "abc"}}),
     "reproduce.remove_stale_temporaries": (None, {"study": STUDY,
                                                   "older_than_s": {"negative": -1.0,
@@ -344,6 +361,8 @@ EXEMPT = {
     "reproduce.default_jobs": "no arguments",
     "outputs.project_root": "no arguments", "outputs.data_dir": "no arguments",
     "outputs.runs_dir": "no arguments", "outputs.notebooks_dir": "no arguments",
+    "outputs.report_dir": "no arguments",
+    "reproduce.study_spec": "formats the study for inject_study, which loads (checks) it",
 }
 
 
@@ -481,6 +500,13 @@ CLI_CASES = {
     ("compare", "second"): [(["compare", "reference"], 2, "second"),
                             (["compare", "reference", "reference"], 2, "reference"),
                             (["compare", "reference", "no_such"], 2, "no_such")],
+    ("report", "study"): [(["report", "--study", "no_such_study"], 2, "no_such_study"),
+                          (["report", "--study"], 2, "study")],
+    ("report", "timeout"): [(["report", "--timeout", "0"], 2, "timeout"),
+                            (["report", "--timeout", "x"], 2, "timeout")],
+    ("report", "executed"): [(["report", "--executed", "/nonexistent.ipynb"], 2, "executed")],
+    ("report", "output"): [(["report", "--output"], 2, "output")],
+    ("report", "pdf"): [(["report", "--pdf=1"], 2, "pdf")],
 }
 
 

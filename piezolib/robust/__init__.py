@@ -19,6 +19,7 @@ performance_weights
             templates on S and T (``sensitivity_weight``,
             ``complementary_sensitivity_weight``)
 export      second-order sections: JSON, C header, reference filter
+preview     reference feedforward with preview: zero-phase-error tracking (``zpetc``)
 float32_check
             what rounding the sections to float32 does (poles, response), refused or warned
 mu/         the mu wing (:mod:`piezolib.robust.mu`): structured singular value bounds,
@@ -44,10 +45,11 @@ from piezolib.robust.margins import *      # noqa: F401,F403
 from piezolib.robust.achievable import *   # noqa: F401,F403
 from piezolib.robust.performance_weights import *  # noqa: F401,F403
 from piezolib.robust.export import *       # noqa: F401,F403
+from piezolib.robust.preview import *      # noqa: F401,F403
 from piezolib.robust import (achievable, blocks, dfit, discrete, dk, export, fixed_order, hinf,
-                             lft, lti, margins, mu, performance_weights, reduction)
+                             lft, lti, margins, mu, performance_weights, preview, reduction)
 
 __all__ = (lti.__all__ + lft.__all__ + blocks.__all__ + mu.__all__ + hinf.__all__
            + dfit.__all__ + dk.__all__ + fixed_order.__all__ + reduction.__all__
            + discrete.__all__ + margins.__all__ + achievable.__all__ + export.__all__
-           + performance_weights.__all__)
+           + performance_weights.__all__ + preview.__all__)

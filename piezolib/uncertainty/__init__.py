@@ -5,6 +5,8 @@ envelope     relative errors, their envelope and its refined peak, the exact box
 weight       the inverse-notch weight shape, and the fit of a stable minimum-phase weight
              covering an envelope
 margin       exact parametric stability margin (zero exclusion) and small-gain certificates
+sampled      the members at a sampling rate: exact ZOH models, sampled loops with a delay,
+             random draws from the box
 polynomials  polynomial helpers shared by the modules above
 
 Every model is passed explicitly; nothing here knows the paper.  Methods and
@@ -21,6 +23,9 @@ from piezolib.uncertainty.weight import fit_covering_weight, inverse_notch_weigh
 from piezolib.uncertainty.margin import (
     ParametricMargin, parametric_stability_margin, small_gain_spread, stability_gauge,
     weight_certified_spread)
+from piezolib.uncertainty.sampled import (
+    member_zoh_coefficients, random_model_set, sampled_loop_poles, sampled_loop_spread,
+    sampled_loop_unstable)
 
 __all__ = [
     "ModelSet", "model_set", "level_offsets", "perturbed_plant", "set_response",
@@ -30,4 +35,6 @@ __all__ = [
     "SpreadBracket", "largest_covered_spread", "inverse_notch_weight", "fit_covering_weight",
     "ParametricMargin", "stability_gauge", "parametric_stability_margin",
     "small_gain_spread", "weight_certified_spread", "MAX_MEMBERS",
+    "random_model_set", "member_zoh_coefficients", "sampled_loop_poles", "sampled_loop_unstable",
+    "sampled_loop_spread",
 ]

@@ -26,7 +26,7 @@ import control as ct
 import numpy as np
 import scipy.signal as sg
 
-from piezolib._checks import check_positive, check_type
+from piezolib._checks import check_positive, check_siso, check_type
 from piezolib.hysteresis.common import HysteresisModel
 from piezolib.identification import zoh_coefficients
 from piezolib.robust.export import SOSController, controller_sos, sos_filter
@@ -101,6 +101,9 @@ def two_dof_feedforward(G, model, fs, radius=1.0):
     -------
     TwoDofFeedforward
     """
+    check_siso("G", G)
+    if not G.isctime(strict=True):
+        raise ValueError("G must be a continuous-time model (u_c [V] -> v_y [V])")
     check_type("model", model, HysteresisModel, "a hysteresis model with simulate(v) and "
                "feedforward(x_r) (DahlModel, PIModel)")
     fs = check_positive("fs", fs)

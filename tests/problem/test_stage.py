@@ -124,6 +124,7 @@ def test_amplifier_output_limit_is_reported():
     (dict(plant=ct.tf([1.0], [1.0, -1.0])), ValueError, "stable"),
     (dict(plant=ct.tf([1.0, 0.0], [1.0, 1.0])), ValueError, "strictly proper"),
     (dict(hysteresis="PI"), TypeError, "hysteresis"),
+    (dict(unstable_plant_ok=1), TypeError, "unstable_plant_ok"),
 ])
 def test_bad_settings_raise(kwargs, error, match):
     with pytest.raises(error, match=match):
@@ -336,3 +337,39 @@ def test_calibration_refuses_impossible_targets(targets, match):
     # a negative target used to be fitted (to whatever least squares found)
     with pytest.raises((TypeError, ValueError), match=match):
         S.calibrate_hysteresis(targets=targets)
+
+
+def test_an_unstable_plant_is_accepted_only_when_asked_for():
+    with pytest.raises(ValueError, match="plant must be stable"):
+        S.VirtualStage(plant=ct.tf([1.0], [1.0, 0.5, -1.0]))
+    unstable = ct.tf([1.0], [1.0, 0.5, -1.0])
+    stage = S.VirtualStage(plant=unstable, unstable_plant_ok=True)
+    b, a = identification.zoh_coefficients(unstable, 1.0 / stage.fs)
+    np.testing.assert_array_equal(stage.a, a)
+
+
+def test_a_model_set_batch_has_each_members_exact_zoh_plant_and_the_stages_rest(stage):
+    from piezolib.uncertainty import model_set
+    mset = model_set(stage.settings.plant, 0.05)
+    members = [0, 364, 728]                          # a corner, the nominal, the other corner
+    batch = stage.over_model_set(type(mset)(mset.plant, 0.05, 3, mset.offsets[members]))
+    for member, k in zip(batch.stages, members):
+        b, a = identification.zoh_coefficients(mset.member(k), 1.0 / stage.fs)
+        np.testing.assert_allclose(member.a, a, rtol=0, atol=1e-12 * np.abs(a).max())
+        np.testing.assert_allclose(member.b, b, rtol=0, atol=1e-12 * np.abs(a).max())
+        assert member.seed == stage.seed and member.hysteresis is stage.hysteresis
+        assert member.settings.unstable_plant_ok
+    # members that share the hysteresis: the batch run is still each member's own run
+    u = 0.5 + 0.4 * np.sin(np.linspace(0, 30, 3000))
+    for record, member in zip(batch.run(u), batch.stages):
+        np.testing.assert_array_equal(record.v_y_V, member.run(u).v_y_V)
+
+
+def test_a_model_set_batch_checks_its_seeds(stage):
+    from piezolib.uncertainty import model_set
+    mset = model_set(stage.settings.plant, 0.05, 2)
+    with pytest.raises(ValueError, match="one seed per member"):
+        stage.over_model_set(mset, seeds=[1, 2])
+    with pytest.raises(TypeError, match="mset"):
+        stage.over_model_set(stage.settings.plant)
+    assert stage.over_model_set(mset, seeds=range(mset.size)).seeds == tuple(range(mset.size))

@@ -120,7 +120,7 @@ def tracking_over_set(results, nominal=None, goals=None):
     ----------
     results : dict
         {label: :class:`~piezolib.workbook.set_tracking.SetTracking`} (same
-        frequencies), at most four.
+        frequencies), at most seven.
     nominal : dict, optional
         {label: pandas.Series of the nominal stage's error per frequency [%]}.
     goals : dict, optional
@@ -136,7 +136,10 @@ def tracking_over_set(results, nominal=None, goals=None):
     labels = list(results)
     freqs = list(next(iter(results.values())).errors.columns)
     width = 0.8 / len(labels)
-    for i, (label, colour) in enumerate(zip(labels, PALETTE.peers)):
+    if len(labels) > len(PALETTE.cycle):
+        raise ValueError(f"results must hold at most {len(PALETTE.cycle)} results, got {len(labels)}")
+    colours = PALETTE.peers if len(labels) <= len(PALETTE.peers) else PALETTE.cycle
+    for i, (label, colour) in enumerate(zip(labels, colours)):
         res = results[label]
         x = np.arange(len(freqs)) + (i - (len(labels) - 1) / 2) * width
         e = res.errors
