@@ -61,7 +61,7 @@ import numpy as np
 import pandas as pd
 
 from piezolib import files, progress
-from piezolib._checks import check_type
+from piezolib._checks import check_path, check_type
 from piezolib.workbook import outputs
 from piezolib.workbook import study as studies
 
@@ -288,7 +288,8 @@ def spec_from_dict(data, relative_to=None):
         repeated list of values, a bad range, or a value the study refuses.
     """
     if not isinstance(data, dict):
-        raise SweepError(f"a sweep spec is a table of keys, got {type(data).__name__}")
+        raise SweepError(f"data must be a sweep spec, a dict of keys, got {type(data).__name__}")
+    relative_to = None if relative_to is None else check_path("relative_to", relative_to)
     unknown = set(data) - _TOP_KEYS
     if unknown:
         raise SweepError(f"unknown key(s) {sorted(unknown)}; a sweep spec has "
