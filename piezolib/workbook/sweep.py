@@ -501,7 +501,9 @@ def evaluate_point(study, controller="fixed_order"):
 
     The design is :func:`piezolib.workbook.pipeline.derive_controllers`
     (DK-iteration, reduction, fixed order; through the disk cache, so a point
-    a notebook or an earlier sweep designed is not designed again).  The
+    a notebook or an earlier sweep designed is not designed again; derived
+    also for a point whose choices equal the reference's, so that every
+    point comes from the same design path).  The
     reported controller is analysed on the study's plant: margins of the
     continuous loop and of the sampled loop at ``loop.fs_Hz``
     (:func:`piezolib.problem.analysis.margins_table`), and Case III tracking
@@ -848,7 +850,8 @@ def _write_outputs(spec, table):
         from piezolib.workbook import plotting
         from piezolib.workbook.figures import sweeps as sweep_figures
 
-        fig = sweep_figures.extra_sweep_pareto(table, title=f"sweep {spec.name}")
+        # no sweep name in the title: the units rule would respell a name like omega_e_sweep
+        fig = sweep_figures.extra_sweep_pareto(table)
         figure = plotting.save_figure(fig, directory)
         plt.close(fig)
     return {"table": csv, "parquet": parquet, "figure": figure}

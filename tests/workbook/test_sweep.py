@@ -304,7 +304,8 @@ def test_the_pareto_front_keeps_the_undominated_rows_and_skips_missing_values():
 # --------------------------------------------------------------------------- the real one
 @pytest.mark.slow
 def test_a_real_point_gives_its_design_margins_and_tracking(checkout, monkeypatch):
-    monkeypatch.setenv("PIEZOLIB_CACHE", str(checkout / "cache"))
+    monkeypatch.setenv("PIEZOLIB_ROOT", str(REPOSITORY))       # the committed Dahl model and data
+    monkeypatch.setenv("PIEZOLIB_CACHE", str(checkout / "cache"))     # a fresh design, written here
     point = studies.Study().replace(name="real_point", design={"max_iter": 1, "order": 4})
     metrics = sweep.evaluate_point(point)
     assert set(metrics) == set(sweep.METRICS)
