@@ -33,7 +33,8 @@ LAYERS = {
     "problem": ("paper", "genplant", "stage", "stage_data", "design", "analysis",
                 "hysteresis_fits", "stage_hysteresis", "paths"),
     "workbook": ("study", "pipeline", "loop", "experiments", "report", "style", "plotting",
-                 "reproduce", "cli", "outputs", "session", "two_dof", "set_tracking"),
+                 "reproduce", "cli", "outputs", "session", "two_dof", "set_tracking", "sweep",
+                 "tables", "document"),
 }
 
 G, H_M, H_E, H_Y, K = paper.problem()
@@ -317,6 +318,33 @@ CASES = {
     "outputs.study_figures_dir": (dict(name="reference"), {"name": NAME}),
     "outputs.study_controllers_dir": (dict(name="reference"), {"name": NAME}),
     "session.start": (None, {"study": STUDY, "claims": {"number": 3, "empty": ""}}),
+    "outputs.sweep_output_dir": (dict(name="x"), {"name": NAME}),
+    # workbook.sweep
+    "sweep.load_spec": (dict(spec="omega_spread_order"), {"spec": STUDY}),
+    "sweep.spec_from_dict": (dict(data={"name": "x", "grid": {"design.order": [4]}}),
+                             {"data": {"not a mapping": [1, 2],
+                                       "unknown parameter": {"name": "x",
+                                                             "grid": {"weights.nope": [1.0]}},
+                                       "bad value": {"name": "x",
+                                                     "grid": {"weights.omega_e": [-1.0]}},
+                                       "unknown study": {"name": "x", "study": "no_such",
+                                                         "grid": {"design.order": [4]}}},
+                              "relative_to": {"number": 3}}),
+    "sweep.evaluate_point": (None, {"study": STUDY, "controller": {"unknown": "reduced",
+                                                                   "number": 3}}),
+    "sweep.run_sweep": (None, {"spec": {"unknown name": "no_such_sweep", "number": 3},
+                               "jobs": POSITIVE_INT,
+                               "scheduler": {"no protocol": "localhost:8786",
+                                             "no port": "tcp://localhost", "number": 3},
+                               "evaluate": {"not callable": 3}}),
+    "sweep.read_record": (dict(path=InTmp("record.json", "{}")), {"path": {"number": 3,
+                                                                           "none": None}}),
+    "sweep.pareto_front": (dict(table=pd.DataFrame({"a": [1.0], "b": [2.0]}), x="a", y="b"),
+                           {"table": FRAME_BAD, "x": {"missing": "nope"},
+                            "y": {"missing": "nope"}}),
+    "sweep.check_scheduler_address": (dict(address="tcp://127.0.0.1:8786"),
+                                      {"address": {"no port": "tcp://localhost",
+                                                   "text": "scheduler", "number": 3}}),
     "cli.main": (None, {}),                 # by argument below: test_cli_*
     "outputs.study_name_problem": (dict(name="a/b"), {}),    # returns the problem as text
     # workbook.two_dof, set_tracking
@@ -333,6 +361,16 @@ CASES = {
                                                                    "text": "x"},
          "amplitude_um": POSITIVE, "delay_samples": {"negative": -1, "fraction": 0.5},
          "discard_periods": {"negative": -1}, "min_measured_s": POSITIVE}),
+    "document.default_output": (dict(study="reference"), {"study": STUDY}),
+    "document.execute_report": (None, {"study": STUDY_GIVEN, "timeout": POSITIVE}),
+    "document.read_executed": (None, {"path": {"missing": "/nonexistent.ipynb", "number": 3}}),
+    "document.export_html": (None, {"nb": {"text": "abc", "none": None},
+                                    "path": {"number": 3, "empty": ""}}),
+    "document.print_pdf": (None, {"html_path": {"number": 3}, "pdf_path": {"number": 3},
+                                  "timeout": POSITIVE, "chromium": {"number": 3}}),
+    "document.build": (None, {"study": STUDY_GIVEN, "output": {"number": 3},
+                              "executed": {"missing": "/nonexistent.ipynb", "number": 3}}),
+    "tables.readable": (None, {"frame": {"text": "x", "number": 3}}),
     "report.summary": (None, {"table": {"text": "x",
                                         "no verdicts": pd.DataFrame({"quantity": ["a"]})}}),
     "pipeline.checked_cache_call": (None, {"func": {"not callable": 3, "text": "abc"}}),
@@ -351,7 +389,8 @@ EXEMPT = {
     "hysteresis_fits.clear_cache": "no arguments",
     "paths.project_root": "no arguments", "paths.data_dir": "no arguments",
     "study.list_studies": "no arguments", "study.study_files": "no arguments",
-    "study.studies_dir": "no arguments",
+    "study.studies_dir": "no arguments", "study.section_fields": "no arguments",
+    "sweep.specs_dir": "no arguments",
     "pipeline.memory": "no arguments (its location comes from PIEZOLIB_CACHE)",
     "pipeline.library_fingerprint": "no arguments",
     "pipeline.reference_design_path": "no arguments",
@@ -362,6 +401,8 @@ EXEMPT = {
     "outputs.project_root": "no arguments", "outputs.data_dir": "no arguments",
     "outputs.runs_dir": "no arguments", "outputs.notebooks_dir": "no arguments",
     "outputs.report_dir": "no arguments",
+    "document.report_notebook": "no arguments", "document.find_chromium": "no arguments",
+    "tables.format_number": "any value is a cell: non-numbers are shown as they are",
     "reproduce.study_spec": "formats the study for inject_study, which loads (checks) it",
 }
 
@@ -439,7 +480,8 @@ FILLERS = {"G": G, "H_m": H_M, "H_e": H_E, "H_y": H_Y, "K": K, "stage": STAGE, "
            "fig": FIG, "ax": AXES, "omega": OMEGA, "response": np.ones(20), "number": 1,
            "what": "x", "directory": None, "tolerance": 0.25, "paths": [], "nb": NOTEBOOK, "func": len,
            "path": FIRST_NOTEBOOK, "form": "printed", "offset": True, "start": "rest", "analyses": None,
-           "x": [1.0], "text": "x"}
+           "x": [1.0], "text": "x", "spec": "omega_spread_order",
+           "html_path": "report.html", "pdf_path": "report.pdf"}
 
 
 #: Arguments holding a study (a name, a file or its fields).
@@ -495,6 +537,13 @@ CLI_CASES = {
     ("reproduce", "list"): [(["reproduce", "--list=x"], 2, "list")],
     ("controllers", "write_reference"): [(["controllers", "--write-reference=1"], 2,
                                           "write-reference")],
+    ("sweep", "spec"): [(["sweep"], 2, "spec"), (["sweep", "no_such_sweep"], 2, "no_such_sweep"),
+                        (["sweep", "/nonexistent/s.toml"], 2, "s.toml")],
+    ("sweep", "jobs"): [(["sweep", "omega_spread_order", "--jobs", "0"], 2, "jobs")],
+    ("sweep", "scheduler"): [(["sweep", "omega_spread_order", "--scheduler", "localhost"], 2,
+                              "scheduler"),
+                             (["sweep", "omega_spread_order", "--scheduler"], 2, "scheduler")],
+    ("sweep", "dry_run"): [(["sweep", "omega_spread_order", "--dry-run=1"], 2, "dry-run")],
     ("compare", "first"): [(["compare"], 2, "first"),
                            (["compare", "no_such", "reference"], 2, "no_such")],
     ("compare", "second"): [(["compare", "reference"], 2, "second"),

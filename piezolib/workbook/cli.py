@@ -1,4 +1,5 @@
-"""The command line of the workbook (``python -m piezolib``)."""
+"""The command line of the workbook (``python -m piezolib``): reproduce, data, controllers,
+sweep, compare."""
 
 import argparse
 import sys
@@ -56,6 +57,19 @@ def parser():
                           "PATH; Debian: apt-get install chromium)")
     doc.add_argument("--timeout", type=_positive_seconds, default=600,
                      help="per-cell time limit in seconds (default 600)")
+    swp = sub.add_parser(
+        "sweep", help="run many studies at once (a grid or random sample over a base study), "
+                      "locally or on a dask cluster; table and Pareto figure in "
+                      "runs/sweeps/<name>/")
+    swp.add_argument("spec", help="a sweep in studies/sweeps/ (name) or a .toml file")
+    swp.add_argument("--jobs", type=_positive_int, default=None, metavar="N",
+                     help="local worker processes (default: one per core; 1 runs the points "
+                          "one by one)")
+    swp.add_argument("--scheduler", metavar="ADDRESS", type=_scheduler_address,
+                     help="run the points on a dask cluster, e.g. tcp://127.0.0.1:8786 "
+                          "(instead of local workers)")
+    swp.add_argument("--dry-run", action="store_true",
+                     help="list the points and whether each is stored; run nothing")
     cmp_ = sub.add_parser("compare", help="key numbers of two studies side by side")
     cmp_.add_argument("first", help="study name (e.g. reference)")
     cmp_.add_argument("second", help="study name")
@@ -80,6 +94,38 @@ def _positive_int(text):
     if value < 1:
         raise argparse.ArgumentTypeError(f"must be a positive integer, got {text!r}")
     return value
+
+
+def _scheduler_address(text):
+    from piezolib.workbook.sweep import check_scheduler_address
+
+    try:
+        return check_scheduler_address(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc).replace("scheduler must", "must")) from None
+
+
+def _sweep(args, stream):
+    from piezolib.workbook import sweep
+
+    try:
+        spec = sweep.load_spec(args.spec)
+    except sweep.SweepError as exc:
+        print(f"python -m piezolib sweep: {exc}", file=sys.stderr)
+        return 2
+    try:
+        result = sweep.run_sweep(spec, jobs=args.jobs, scheduler=args.scheduler,
+                                 dry_run=args.dry_run, stream=stream)
+    except OSError as exc:                      # an unreachable scheduler, a full disk
+        print(f"python -m piezolib sweep: {exc}", file=sys.stderr)
+        return 2 if args.scheduler and "scheduler" in str(exc) else 1
+    except KeyboardInterrupt:
+        stored = len(list((spec.directory / "points").glob("*.json")))
+        print(f"python -m piezolib sweep: interrupted; {stored} point record(s) stored in "
+              f"{spec.directory / 'points'}: run the same command again to resume",
+              file=sys.stderr)
+        return 130
+    return 1 if result.failed else 0
 
 
 def _list_studies(stream):
@@ -191,6 +237,8 @@ def main(argv=None, stream=sys.stdout):
         return _compare(args, stream)
     if args.command == "report":
         return _report(args, stream)
+    if args.command == "sweep":
+        return _sweep(args, stream)
     if args.list:
         return _list_studies(stream)
     from piezolib.workbook import reproduce

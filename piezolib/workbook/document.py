@@ -89,17 +89,17 @@ def read_executed(path):
     Raises
     ------
     ValueError
-        When no code cell of it has an output: an unexecuted notebook would
-        make a document of headings only.
+        When there is no such file, or no code cell of it has an output: an
+        unexecuted notebook would make a document of headings only.
     """
     import nbformat
 
     path = check_path("path", path)
     if not path.is_file():
-        raise FileNotFoundError(f"executed: there is no notebook {path}")
+        raise ValueError(f"executed notebook: there is no file at path {path}")
     nb = nbformat.read(path, as_version=4)
     if not any(cell.get("outputs") for cell in nb.cells if cell.cell_type == "code"):
-        raise ValueError(f"executed: {path} has no outputs; execute it first "
+        raise ValueError(f"executed notebook: {path} has no outputs; execute it first "
                          "(or leave --executed out and the report is executed)")
     return nb
 
@@ -220,7 +220,8 @@ def build(study=None, executed=None, output=None, pdf=False, timeout=600):
     """
     chosen = studies.load(studies.REFERENCE if study is None else study)
     output = default_output(chosen) if output is None else check_path("output", output)
-    nb = read_executed(executed) if executed is not None else execute_report(study, timeout)
+    nb = (read_executed(check_path("executed", executed)) if executed is not None
+          else execute_report(study, timeout))
     heading = _first_heading(nb)
     title = heading if chosen.is_reference else f"{heading} (study {chosen.name})"
     written = [export_html(nb, output, title=title)]

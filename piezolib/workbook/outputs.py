@@ -10,7 +10,7 @@ from piezolib.problem.paths import data_dir, project_root
 
 __all__ = ["REFERENCE_STUDY", "RESERVED_NAMES", "study_name_problem", "project_root", "data_dir",
            "runs_dir", "report_dir", "notebooks_dir", "study_output_dir", "study_results_dir",
-           "study_figures_dir", "study_controllers_dir"]
+           "study_figures_dir", "study_controllers_dir", "sweep_output_dir"]
 
 #: Name of the paper's reproduction: the one study that writes the committed outputs.
 REFERENCE_STUDY = "reference"
@@ -18,7 +18,8 @@ REFERENCE_STUDY = "reference"
 
 #: Names no study may take: folders of ``runs/`` that hold something else.
 RESERVED_NAMES = {"cache": "the pipeline's disk cache",
-                  "report": "the report documents (python -m piezolib report)"}
+                  "report": "the report documents (python -m piezolib report)",
+                  "sweeps": "the design sweeps (python -m piezolib sweep)"}
 
 
 def study_name_problem(name):
@@ -81,3 +82,9 @@ def study_controllers_dir(name):
     if _study_name(name) == REFERENCE_STUDY:
         return data_dir() / "controllers"
     return study_output_dir(name) / "controllers"
+
+
+def sweep_output_dir(name):
+    """Sweep ``name``'s table, figure and point records: ``runs/sweeps/<name>/`` (not
+    created here; a sweep never writes ``figures/`` or ``data/results/``)."""
+    return runs_dir() / "sweeps" / _study_name(name)

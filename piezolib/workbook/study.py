@@ -31,7 +31,8 @@ from piezolib.workbook.loop import COMPUTATION_DELAY_SAMPLES
 
 __all__ = ["Study", "UncertaintyChoice", "WeightChoice", "DesignChoice", "LoopChoice",
            "ExperimentChoice", "StudyError", "REFERENCE", "RESERVED_NAMES", "UNCERTAINTY_WEIGHTS",
-           "load", "list_studies", "study_files", "from_dict", "studies_dir", "choices_digest"]
+           "load", "list_studies", "study_files", "from_dict", "studies_dir", "choices_digest",
+           "section_fields"]
 
 #: Name of the paper's reproduction; only this study writes the committed outputs.
 REFERENCE = outputs.REFERENCE_STUDY
@@ -438,6 +439,12 @@ def from_dict(data):
         raise StudyError("the study has no name")
     sections = {s: _section(s, data.get(s, {})) for s in _SECTIONS}
     return Study(name=data["name"], description=data.get("description", ""), **sections)
+
+
+def section_fields():
+    """``{section: {field: type}}`` of every choice a study holds (``int``, ``float``,
+    ``str`` or ``tuple``): what a sweep can vary, and how to draw it."""
+    return {section: {f.name: f.type for f in fields(cls)} for section, cls in _SECTIONS.items()}
 
 
 def choices_digest(choices):

@@ -1,0 +1,317 @@
+"""Design sweeps: spec parsing and its errors, runs on local workers and on a dask cluster,
+resuming from the per-point records, the Pareto front."""
+
+import io
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from piezolib.workbook import cli, sweep
+from piezolib.workbook import study as studies
+
+REPOSITORY = Path(__file__).resolve().parents[2]
+
+#: What the fake evaluation does: ``calls`` counts them, ``stop_after`` interrupts the
+#: sweep like Ctrl-C after that many calls, ``fail`` makes those omega_e values fail.
+FAKE = {"calls": 0, "stop_after": None, "fail": ()}
+
+
+def fake_evaluate(study, controller="fixed_order"):
+    """Cheap, deterministic numbers of a point (module level: workers import it)."""
+    FAKE["calls"] += 1
+    if FAKE["stop_after"] is not None and FAKE["calls"] > FAKE["stop_after"]:
+        raise KeyboardInterrupt
+    omega_e = study.weights.omega_e
+    if omega_e in FAKE["fail"]:
+        raise RuntimeError(f"no design for omega_e {omega_e}")
+    order = study.design.order if controller == "fixed_order" else 20
+    return {"mu_RP": omega_e / 1000 + 0.01 * order, "controller_states": order,
+            "tracking_error_50Hz_percent": 5000 / omega_e + 0.1 * study.uncertainty.spread,
+            "tracking_error_50Hz_low_percent": 5000 / omega_e - 0.01,
+            "tracking_error_50Hz_high_percent": 5000 / omega_e + 0.01}
+
+
+@pytest.fixture(autouse=True)
+def checkout(tmp_path, monkeypatch):
+    """Outputs under tmp_path (never the repository), a fresh fake evaluation."""
+    monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
+    monkeypatch.setitem(FAKE, "calls", 0)
+    monkeypatch.setitem(FAKE, "stop_after", None)
+    monkeypatch.setitem(FAKE, "fail", ())
+    return tmp_path
+
+
+def grid_spec(name="small", **changes):
+    data = {"name": name, "study": "reference", "set": {"design": {"max_iter": 2}},
+            "grid": {"weights": {"omega_e": [1000.0, 1260.0, 1600.0]}, "design.order": [4, 6]}}
+    return sweep.spec_from_dict({**data, **changes})
+
+
+def write(path, text):
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+# --------------------------------------------------------------------------- specs
+def test_a_grid_is_the_cartesian_product_of_the_values_over_the_base_study():
+    spec = grid_spec()
+    points = spec.points()
+    assert spec.parameters == ("weights.omega_e", "design.order")
+    assert [(p.params["weights.omega_e"], p.params["design.order"]) for p in points] == [
+        (1000.0, 4), (1000.0, 6), (1260.0, 4), (1260.0, 6), (1600.0, 4), (1600.0, 6)]
+    assert [p.index for p in points] == list(range(1, 7))
+    third = points[2].study
+    assert (third.weights.omega_e, third.design.order, third.design.max_iter) == (1260.0, 4, 2)
+    assert third.weights.M_e == studies.Study().weights.M_e           # the rest: the base's
+    assert third.name == "small-0003" and points[2].options == {"controller": "fixed_order"}
+    assert len({p.key("e") for p in points}) == 6                     # one record each
+
+
+def test_the_shipped_spec_has_twelve_points(checkout):
+    shipped = REPOSITORY / "studies" / "sweeps" / "omega_spread_order.toml"
+    path = write(checkout / shipped.name, shipped.read_text(encoding="utf-8"))
+    spec = sweep.load_spec(path)
+    points = spec.points()
+    assert spec.name == "omega_spread_order" and len(points) == 12
+    assert {p.study.uncertainty.weight for p in points} == {"fitted"}
+    assert {p.study.uncertainty.spread for p in points} == {0.02, 0.03}
+    assert spec.directory == checkout / "runs" / "sweeps" / "omega_spread_order"
+
+
+def test_a_spec_file_names_its_sweep_and_reads_a_relative_base_study(checkout):
+    mine = studies.Study().replace(name="mine", weights={"omega_e": 1500.0})
+    mine.save(checkout / "mine.toml")
+    path = write(checkout / "near.toml", 'study = "mine.toml"\n[grid]\ndesign.order = [4, 6]\n')
+    spec = sweep.load_spec(path)
+    assert spec.name == "near"
+    assert {p.study.weights.omega_e for p in spec.points()} == {1500.0}
+    (checkout / "studies" / "sweeps").mkdir(parents=True)
+    write(checkout / "studies" / "sweeps" / "by_name.toml", '[grid]\ndesign.order = [5]\n')
+    assert sweep.load_spec("by_name").points()[0].study.design.order == 5
+
+
+@pytest.mark.parametrize("changes, said", [
+    ({"grid": {"weights.omega_x": [1.0]}}, "'weights.omega_x'"),
+    ({"grid": {"nowhere.omega_e": [1.0]}}, "'nowhere.omega_e'"),
+    ({"grid": {"omega_e": [1.0]}}, "'omega_e'"),
+    ({"grid": {"weights.omega_e": []}}, "weights.omega_e must be a non-empty list"),
+    ({"grid": {"weights.omega_e": 1260.0}}, "weights.omega_e must be a non-empty list"),
+    ({"grid": {"weights.omega_e": [1260, 1260.0]}}, "1260"),
+    ({"grid": {"weights.omega_e": [1000.0, -5.0]}}, "weights.omega_e = -5.0"),
+    ({"grid": {"design.order": [6, 2.5]}}, "design.order = 2.5"),
+    ({"grid": {"controller": ["reduced"]}}, "controller = 'reduced'"),
+    ({"grid": {}}, "[grid] names no parameter"),
+    ({"random": {"samples": 2, "seed": 0, "design.order": [4, 6]}}, "either a [grid] or"),
+    ({"set": {"weights.omega_e": -1.0}}, "[set]"),
+    ({"set": {"controller": "full_order"}}, "[set] controller"),
+    ({"study": "no_such_study"}, "no_such_study"),
+    ({"nope": 1}, "unknown key(s) ['nope']"),
+    ({"name": "a/b"}, "sweep name"),
+    ({"name": "cache"}, "reserved"),
+    # a combination the study refuses although each value passes: named by its point
+    ({"grid": {"experiments.stage_seed": [0, 2 ** 32 - 20], "experiments.noise_seeds": [2, 30]}},
+     "point 4 (experiments.stage_seed = 4294967276, experiments.noise_seeds = 30)"),
+])
+def test_a_bad_spec_names_the_key_and_the_value(changes, said):
+    with pytest.raises(sweep.SweepError) as info:
+        grid_spec(**changes)
+    assert said in str(info.value)
+
+
+def test_neither_grid_nor_random_is_an_error():
+    with pytest.raises(sweep.SweepError, match="either a"):
+        sweep.spec_from_dict({"name": "x"})
+
+
+@pytest.mark.parametrize("table, said", [
+    ({"seed": 0, "weights.omega_e": [1.0, 2.0]}, "samples"),
+    ({"samples": 3, "weights.omega_e": [1.0, 2.0]}, "seed"),
+    ({"samples": 3, "seed": 0}, "names no parameter"),
+    ({"samples": 3, "seed": 0, "weights.omega_e": [2.0, 1.0]}, "must rise"),
+    ({"samples": 3, "seed": 0, "weights.omega_e": [-2.0, 1.0]}, "weights.omega_e = -2.0"),
+    ({"samples": 3, "seed": 0, "weights.omega_e": [1.0, 2.0, 3.0]}, "[low, high]"),
+    ({"samples": 3, "seed": 0, "weights.omega_e": {"low": 1.0, "high": 9.0, "scale": "ln"}},
+     "scale"),
+    ({"samples": 3, "seed": 0, "weights.omega_e": {"low": 0.0, "high": 9.0, "scale": "log"}},
+     "log needs"),
+    ({"samples": 3, "seed": 0, "design.order": [4, 6.5]}, "integers"),
+    ({"samples": 3, "seed": 0, "uncertainty.weight": ["a", "b"]}, "choices"),
+    ({"samples": 3, "seed": 0, "controller": {"choices": []}}, "non-empty"),
+    ({"samples": 3, "seed": 0, "controller": {"choices": ["fixed_order", "x"]}},
+     "controller = 'x'"),
+])
+def test_a_bad_random_table_names_what_is_wrong(table, said):
+    with pytest.raises(sweep.SweepError) as info:
+        sweep.spec_from_dict({"name": "r", "random": table})
+    assert said in str(info.value)
+
+
+def test_a_random_sample_is_reproducible_and_inside_its_ranges():
+    table = {"samples": 40, "seed": 7, "weights.omega_e": {"low": 800.0, "high": 2500.0,
+                                                           "scale": "log"},
+             "design.order": [4, 8], "uncertainty.spread": [0.01, 0.05],
+             "controller": {"choices": ["fixed_order", "full_order"]}}
+    first = sweep.spec_from_dict({"name": "r", "random": table}).points()
+    again = sweep.spec_from_dict({"name": "r", "random": table}).points()
+    assert [p.params for p in first] == [p.params for p in again]
+    assert len(first) == 40                 # continuous draws: no repeats
+    omega = np.array([p.params["weights.omega_e"] for p in first])
+    assert omega.min() >= 800.0 and omega.max() <= 2500.0
+    orders = {p.params["design.order"] for p in first}
+    assert orders <= {4, 5, 6, 7, 8} and all(isinstance(o, int) for o in orders)
+    assert {p.options["controller"] for p in first} == {"fixed_order", "full_order"}
+    other = sweep.spec_from_dict({"name": "r", "random": {**table, "seed": 8}}).points()
+    assert [p.params for p in other] != [p.params for p in first]
+
+
+def test_repeated_random_draws_become_one_point():
+    spec = sweep.spec_from_dict({"name": "r", "random": {"samples": 30, "seed": 0,
+                                                         "design.order": [4, 5]}})
+    assert sorted(p.params["design.order"] for p in spec.points()) == [4, 5]
+
+
+def test_a_spec_file_whose_name_differs_from_its_file_is_refused(checkout):
+    path = write(checkout / "one.toml", 'name = "two"\n[grid]\ndesign.order = [4]\n')
+    with pytest.raises(sweep.SweepError, match="one.toml"):
+        sweep.load_spec(path)
+
+
+# --------------------------------------------------------------------------- runs
+def run(spec, **options):
+    stream = io.StringIO()
+    result = sweep.run_sweep(spec, evaluate=fake_evaluate, stream=stream, **options)
+    return result, stream.getvalue()
+
+
+def test_a_grid_run_writes_one_row_per_point_a_record_each_and_the_figure(checkout):
+    result, said = run(grid_spec(), jobs=1)
+    table = result.table
+    assert (result.evaluated, result.reused, result.failed) == (6, 0, 0)
+    assert list(table["point"]) == list(range(1, 7))
+    assert list(table.columns[:4]) == ["point", "weights.omega_e", "design.order", "controller"]
+    assert np.allclose(table["mu_RP"], table["weights.omega_e"] / 1000 + 0.01 * table["design.order"])
+    # the front: lower omega_e lowers mu_RP and raises the error; order 6 is dominated by 4
+    assert list(table.loc[table.pareto, "point"]) == [1, 3, 5]
+    out = checkout / "runs" / "sweeps" / "small"
+    assert result.paths["table"] == out / "results.csv" and result.paths["figure"].is_file()
+    assert pd.read_csv(out / "results.csv")["mu_RP"].tolist() == table["mu_RP"].tolist()
+    assert len(list((out / "points").glob("*.json"))) == 6
+    lines = said.splitlines()
+    assert "[1/6] omega_e=1000 order=4  mu_RP 1.04  e(50 Hz) 5.005 %" in said
+    assert sum(line.startswith("[") for line in lines) == 6
+    assert lines[-1].startswith("sweep small: 6 evaluated, 0 reused, 0 failed in")
+    # nothing outside runs/sweeps/<name>/
+    assert sorted(p.name for p in checkout.iterdir()) == ["runs"]
+
+
+def test_a_local_dask_cluster_gives_the_same_table_as_local_workers():
+    distributed = pytest.importorskip("distributed")
+    local, _ = run(grid_spec("on_joblib"), jobs=1)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster:
+        remote, said = run(grid_spec("on_dask"), scheduler=cluster.scheduler_address)
+    assert "on tcp://" in said or "on inproc://" in said
+    assert remote.evaluated == 6
+    pd.testing.assert_frame_equal(local.table, remote.table)
+
+
+def test_a_sweep_killed_halfway_runs_only_the_missing_points_again(checkout):
+    FAKE["stop_after"] = 4
+    with pytest.raises(KeyboardInterrupt):
+        run(grid_spec(), jobs=1)
+    records = checkout / "runs" / "sweeps" / "small" / "points"
+    assert len(list(records.glob("*.json"))) == 4           # each stored as it finished
+    FAKE.update(calls=0, stop_after=None)
+    result, said = run(grid_spec(), jobs=1)
+    assert FAKE["calls"] == 2 and (result.evaluated, result.reused) == (2, 4)
+    assert "6 points, 4 stored (reused), 2 to run" in said
+    assert said.splitlines()[1].startswith("[5/6]")
+    fresh, _ = run(grid_spec("fresh"), jobs=1)
+    pd.testing.assert_frame_equal(result.table.drop(columns="key"),
+                                  fresh.table.drop(columns="key"))
+    # a third run reuses everything
+    FAKE["calls"] = 0
+    again, _ = run(grid_spec(), jobs=1)
+    assert FAKE["calls"] == 0 and again.reused == 6
+
+
+def test_a_corrupted_or_foreign_record_is_computed_again(checkout):
+    run(grid_spec(), jobs=1)
+    records = sorted((checkout / "runs" / "sweeps" / "small" / "points").glob("*.json"))
+    doc = json.loads(records[0].read_text())
+    doc["metrics"]["mu_RP"] = 0.1                          # edited by hand: fails its seal
+    records[0].write_text(json.dumps(doc))
+    records[1].write_text("{not json")
+    assert sweep.read_record(records[0]) is None and sweep.read_record(records[1]) is None
+    assert sweep.read_record(records[2], key="0" * 16) is None      # another point's key
+    FAKE["calls"] = 0
+    result, _ = run(grid_spec(), jobs=1)
+    assert FAKE["calls"] == 2 and result.reused == 4
+    assert 0.1 not in result.table["mu_RP"].tolist()
+
+
+def test_a_failing_point_is_reported_not_stored_and_retried(checkout):
+    FAKE["fail"] = (1260.0,)
+    result, said = run(grid_spec(), jobs=1)
+    assert (result.evaluated, result.failed) == (4, 2)
+    failed = result.table[result.table.error != ""]
+    assert list(failed.point) == [3, 4] and failed.mu_RP.isna().all()
+    assert "FAILED: RuntimeError: no design for omega_e 1260.0" in said
+    assert not failed.pareto.any()
+    FAKE.update(calls=0, fail=())
+    again, _ = run(grid_spec(), jobs=1)
+    assert FAKE["calls"] == 2 and again.failed == 0
+
+
+def test_a_dry_run_lists_the_points_and_runs_nothing(checkout):
+    run(grid_spec(), jobs=1)
+    FAKE["calls"] = 0
+    result, said = run(grid_spec(name="small", grid={"design.order": [4, 5]}), dry_run=True)
+    assert FAKE["calls"] == 0
+    # order 4 at the base's omega_e is point 3 of the first run: the same study, its record
+    assert list(result.table["stored"]) == [True, False]
+    assert "[1/2] order=4  (stored, key" in said and "[2/2] order=5  (to run, key" in said
+
+
+def test_the_command_line_runs_and_lists_a_spec(checkout, capsys):
+    path = write(checkout / "cli_sweep.toml",
+                 '[set]\ndesign.max_iter = 1\n[grid]\nweights.omega_e = [1000.0, 2000.0]\n')
+    stream = io.StringIO()
+    assert cli.main(["sweep", str(path), "--dry-run"], stream=stream) == 0
+    out = stream.getvalue()
+    assert "[2/2] omega_e=2000  (to run" in out and "2 points, 0 stored, 2 to run" in out
+    assert cli.main(["sweep", str(checkout / "missing.toml")]) == 2
+    assert "missing.toml" in capsys.readouterr().err
+
+
+def test_a_malformed_scheduler_address_fails_before_anything_runs():
+    with pytest.raises(ValueError, match="scheduler"):
+        sweep.run_sweep(grid_spec(), scheduler="localhost:8786", evaluate=fake_evaluate)
+    assert FAKE["calls"] == 0
+
+
+# --------------------------------------------------------------------------- Pareto
+def test_the_pareto_front_keeps_the_undominated_rows_and_skips_missing_values():
+    table = pd.DataFrame({"a": [1.0, 2.0, np.nan, 0.5, 1.0], "b": [2.0, 1.0, 0.1, 3.0, 2.0]})
+    assert sweep.pareto_front(table, "a", "b").tolist() == [True, True, False, True, True]
+    with pytest.raises(ValueError, match="y"):
+        sweep.pareto_front(table, "a", "c")
+
+
+# --------------------------------------------------------------------------- the real one
+@pytest.mark.slow
+def test_a_real_point_gives_its_design_margins_and_tracking(checkout, monkeypatch):
+    monkeypatch.setenv("PIEZOLIB_ROOT", str(REPOSITORY))       # the committed Dahl model and data
+    monkeypatch.setenv("PIEZOLIB_CACHE", str(checkout / "cache"))     # a fresh design, written here
+    point = studies.Study().replace(name="real_point", design={"max_iter": 1, "order": 4})
+    metrics = sweep.evaluate_point(point)
+    assert set(metrics) == set(sweep.METRICS)
+    assert metrics["controller_states"] == 4
+    assert 0.7176 < metrics["mu_RP"] < 3          # above the achievable bound (README)
+    assert (metrics["tracking_error_50Hz_low_percent"] <= metrics["tracking_error_50Hz_percent"]
+            <= metrics["tracking_error_50Hz_high_percent"])
+    full = sweep.evaluate_point(point, controller="full_order")
+    assert full["mu_RP"] == metrics["mu_RP_full_order"] and full["controller_states"] > 4
