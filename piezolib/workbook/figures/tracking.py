@@ -146,7 +146,7 @@ def tracking_over_set(results, nominal=None, goals=None):
         low, mid, high = e.quantile(0.05), e.median(), e.quantile(0.95)
         run, size = int(e.notna().all(axis=1).sum()), res.mset.size
         ax.vlines(x, low, high, color=colour, lw=7, alpha=0.55,
-                  label=f"{label}: 5-95 % of {run} stable members ({size - run} unstable)")
+                  label=f"{label}: {run} stable, {size - run} unstable")
         ax.scatter(x, mid, marker="_", s=120, color=colour, zorder=3)
         ax.scatter(x, e.max(), marker="x", s=30, color=colour, zorder=3)
         if nominal is not None and label in nominal:
@@ -155,12 +155,12 @@ def tracking_over_set(results, nominal=None, goals=None):
     goal = [goals["peak_to_peak_error_pct_up_to_10Hz"] if f <= 10 else
             goals["peak_to_peak_error_pct_at_50Hz"] if f >= 50 else np.nan for f in freqs]
     ax.step(np.arange(len(freqs)), goal, where="mid", ls="--", color=PALETTE.seventh, lw=1.2,
-            label="goals of Sec. IV-B (< 1 % up to 10 Hz, < 5 % at 50 Hz)")
+            label="goals of Sec. IV-B")
     ax.set_yscale("log")
     ax.set_xticks(np.arange(len(freqs)), [f"{f:g} Hz" for f in freqs])
     ax.set_ylabel("tracking error max|e| / 12 um [%]")
-    ax.set_title("Tracking over the model set: bar 5-95 %, tick median, x worst member, "
-                 "dot nominal stage", fontsize="medium")
+    ax.set_title("Tracking over the model set: bar 5-95 % of the stable members, tick median, "
+                 "x worst member, dot nominal stage", fontsize="medium")
     # below the axes: the worst members reach the top of the plot at every frequency
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=2, fontsize="small")
     plotting.name_figure(fig, None, "tracking_over_set")
