@@ -124,7 +124,8 @@ def zpetc(Gd, radius=1.0):
 
     Examples
     --------
-    >>> Gd = control.c2d(control.tf([1], [1, 2, 1]), 0.1, "zoh")
+    >>> import control as ct
+    >>> Gd = ct.c2d(ct.tf([1], [1, 2, 1]), 0.1, "zoh")
     >>> ff = zpetc(Gd)
     >>> ff.preview, abs(complex(ff.tracking(1.0)))
     (1, 1.0)
