@@ -20,7 +20,7 @@ follows the simulation error of a flat multisine (Parseval).
 :func:`select_order` fits each candidate order on one FRF and scores it on
 another, independent estimate (another group of realisations, another data
 set): the order with the smallest validation error wins.
-:func:`simulate` runs a discrete model on long records in modal form
+:func:`simulate_discrete` runs a discrete model on long records in modal form
 (:func:`scipy.signal.lfilter`), much faster than a Python time loop.
 
 Frequencies in Hz; ``fs`` [Hz] is the sampling frequency of the model
@@ -50,7 +50,7 @@ import scipy.signal
 
 from piezolib._checks import check_finite_array, check_integer, check_positive, check_type
 
-__all__ = ["fit_frf", "frf_error", "select_order", "OrderSelection", "simulate"]
+__all__ = ["fit_frf", "frf_error", "select_order", "OrderSelection", "simulate_discrete"]
 
 #: Largest pole radius the fitted model may have.
 MAX_POLE_RADIUS = 0.9995
@@ -335,7 +335,7 @@ def select_order(G_fit, G_validation, frequency_Hz, fs, orders, weight=None, **o
                           validation_error=np.array(e_val), model=models[best])
 
 
-def simulate(model, u):
+def simulate_discrete(model, u):
     """Response of a discrete model from zero initial state, in modal form.
 
     Parameters

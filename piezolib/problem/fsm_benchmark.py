@@ -270,7 +270,7 @@ def score(model, level_mV, split="test", folder=None):
     if not model.isdtime(strict=True) or abs(model.dt * SAMPLING_FREQUENCY_HZ - 1) > 1e-9:
         raise ValueError(f"model must be discrete with dt = 1/{SAMPLING_FREQUENCY_HZ:g} s")
     u, y = load(level_mV, split, folder)
-    y_model = freqfit.simulate(model, u)       # each (realisation, period) from rest
+    y_model = freqfit.simulate_discrete(model, u)       # each (realisation, period) from rest
     rmse, nrmse = metrics.simulation_error(y_model, y, N_INIT)
     return Score(level_mV=_level(level_mV), rmse_um=1e6 * rmse, nrmse=nrmse)
 
