@@ -5,7 +5,10 @@ largest |x_r - x| relative to the commanded range; its docstring says why
 this reading), :func:`peak_to_peak_error_percent` the literal reading, and
 :func:`improvement_percent` the improvement rows of Tables 4-5, and
 :func:`mean_interval` the mean over noise seeds with its Student-t confidence
-interval (a noise-driven figure is a random variable).  The
+interval (a noise-driven figure is a random variable), and
+:func:`simulation_error` the RMSE and NRMSE of a simulated output (the metric of
+the system-identification benchmarks: per output, over time, after a state
+initialisation window, averaged over records).  The
 hysteresis % of eq. 25-26 is :func:`piezolib.hysteresis.hysteresis_percent`.
 """
 
@@ -14,7 +17,7 @@ import numpy as np
 from piezolib._checks import check_finite_array, check_positive, check_same_length
 
 __all__ = ["tracking_error", "tracking_error_percent", "peak_to_peak_error_percent",
-           "improvement_percent", "mean_interval"]
+           "improvement_percent", "mean_interval", "simulation_error"]
 
 
 def tracking_error(x_r, x):
@@ -199,3 +202,52 @@ def mean_interval(values, axis=0, confidence=0.95):
     if np.ndim(mean) == 0:
         return float(mean), float(low), float(high)
     return mean, low, high
+
+
+def simulation_error(y_model, y, n_init=0):
+    """RMSE and NRMSE of a simulated output, per output channel, averaged over records.
+
+    For each output and record, over time after the first ``n_init`` samples:
+    RMSE = sqrt(mean((y_model - y)^2)) and NRMSE = RMSE / std(y) (the
+    standard deviation of the measured output over the same samples); both
+    are then averaged over the records.
+
+    Parameters
+    ----------
+    y_model, y : array_like, shape (N, n_y, ...)
+        Simulated and measured outputs; axis 0 is time, axis 1 the outputs,
+        further axes records (e.g. realisations and periods).  Same shape.
+    n_init : int, optional
+        Samples dropped at the start of each record (the model's state
+        initialisation), 0 <= n_init <= N - 2.
+
+    Returns
+    -------
+    rmse, nrmse : ndarray, shape (n_y,)
+        RMSE in the unit of ``y``; NRMSE as a fraction (x 100 for %).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> y = np.array([[1.0], [-1.0], [1.0], [-1.0]])
+    >>> rmse, nrmse = simulation_error(y + 0.1, y)
+    >>> round(float(rmse[0]), 6), round(float(nrmse[0]), 6)
+    (0.1, 0.1)
+    """
+    y_model = check_finite_array("y_model", y_model, real=True)
+    y = check_finite_array("y", y, real=True)
+    if y.ndim < 2:
+        raise ValueError(f"y must have shape (N, n_y, ...), got {y.shape}")
+    if y_model.shape != y.shape:
+        raise ValueError(f"y_model must have the shape of y {y.shape}, got {y_model.shape}")
+    if isinstance(n_init, bool) or not isinstance(n_init, (int, np.integer)) \
+            or not 0 <= n_init <= y.shape[0] - 2:
+        raise ValueError(f"n_init must be an integer in [0, {y.shape[0] - 2}], got {n_init!r}")
+    kept, err = y[n_init:], y_model[n_init:] - y[n_init:]
+    rmse = np.sqrt(np.mean(err ** 2, axis=0))
+    spread = np.std(kept, axis=0)
+    if np.any(spread <= 0):
+        raise ValueError("y is constant on a record: its NRMSE is undefined")
+    nrmse = rmse / spread
+    records = tuple(range(1, rmse.ndim))
+    return np.mean(rmse, axis=records), np.mean(nrmse, axis=records)

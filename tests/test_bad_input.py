@@ -54,6 +54,29 @@ TABLE = _hy.validation_table({"Dahl": DAHL}, [(V, X)])
 LOOPS = {"empty": [], "text": "abc", "not pairs": [V], "nan": [(np.r_[V[:-1], np.nan], X)],
          "complex": [(V + 1j, X)], "unequal lengths": [(V, X[:300])], "2-D": [(np.c_[V, V], X)]}
 
+# periodic multisine records (N, channels, realisations, periods) and an FRF for identification
+_X = np.zeros((33, 2), complex)
+_X[1:12] = np.exp(2j * np.pi * RNG.random((11, 2)))
+_MS = np.fft.irfft(_X, n=64, axis=0)
+FRF_U = np.repeat(np.concatenate([np.einsum("nc,cr->ncr", _MS, [[1, 1], [1, -1]]),
+                                  np.einsum("nc,cr->ncr", _MS, [[1, -1], [1, 1]])], axis=2)[..., None],
+                  2, axis=3)
+FRF_Y = 2 * FRF_U + 1e-6 * RNG.standard_normal(FRF_U.shape)
+GD = ct.ss(ct.tf([0.2, 0.1], [1.0, -1.2, 0.5], 1 / FS))
+FRF_F = np.linspace(5.0, 450.0, 40)
+FRF_G = GD(np.exp(2j * np.pi * FRF_F / FS)).reshape(1, 1, -1)
+PERIODIC = {"nan": np.where(FRF_U == FRF_U[0, 0, 0, 0], np.nan, FRF_U), "complex": FRF_U + 1j,
+            "text": "abc", "5-D": FRF_U[..., None], "one period": FRF_U[..., :1]}
+FRF_BAD = {"nan": np.where(FRF_G == FRF_G[0, 0, 0], np.nan, FRF_G), "text": "abc",
+           "4-D": FRF_G[..., None], "too few lines": FRF_G[..., :5]}
+FREQUENCIES = {"nan": np.r_[FRF_F[:-1], np.nan], "decreasing": FRF_F[::-1],
+               "above Nyquist": FRF_F * 10, "text": "abc", "2-D": np.c_[FRF_F, FRF_F]}
+ORDER = {"zero": 0, "text": "x", "float": 2.5, "too large": 10 ** 6}
+WEIGHT = {"negative": -np.ones(40), "nan": np.full(40, np.nan), "wrong shape": np.ones(7),
+          "text": "abc"}
+DISCRETE = {"continuous": G, "not a model": np.ones((2, 2))}
+
+
 
 class InTmp(str):
     """A path inside the test's temporary directory (resolved by the test)."""
@@ -416,6 +439,38 @@ CASES = {
                                            "not a mapping": [DAHL]},
                                 "x_r": SIGNAL,
                                 "first": {"negative": -1, "past the end": V.size, "text": "x"}}),
+    # identification: periodic multisines, FRF fits
+    "identification.excited_lines": (dict(u=FRF_U), {"u": {"nan": PERIODIC["nan"], "text": "abc",
+                                                           "empty": np.array([])},
+                                                     "relative_threshold": {**POSITIVE, "one": 1.0}}),
+    "identification.bla_periodic": (dict(u=FRF_U, y=FRF_Y, fs=FS),
+                                    {"u": PERIODIC, "y": {"nan": PERIODIC["nan"], "text": "abc",
+                                                          "short": FRF_Y[:32]},
+                                     "fs": POSITIVE, "lines": {"zero": [0, 1], "text": "abc",
+                                                               "fraction": [1.5]}}),
+    "identification.fit_frf": (dict(G=FRF_G, frequency_Hz=FRF_F, fs=FS, order=2),
+                               {"G": FRF_BAD, "frequency_Hz": FREQUENCIES, "fs": POSITIVE,
+                                "order": ORDER, "weight": WEIGHT,
+                                "n_rows": {"too few": 2, "text": "x"}}),
+    "identification.frf_error": (dict(model=GD, G=FRF_G, frequency_Hz=FRF_F),
+                                 {"model": DISCRETE, "G": FRF_BAD, "frequency_Hz": FREQUENCIES,
+                                  "weight": WEIGHT}),
+    "identification.select_order": (dict(G_fit=FRF_G, G_validation=FRF_G, frequency_Hz=FRF_F,
+                                         fs=FS, orders=[1, 2]),
+                                    {"G_fit": FRF_BAD, "G_validation": FRF_BAD,
+                                     "frequency_Hz": FREQUENCIES, "fs": POSITIVE,
+                                     "orders": {"empty": [], "zero": [0], "text": "x",
+                                                "fraction": [1.5]}}),
+    "identification.simulate_discrete": (dict(model=GD, u=U[:, None]),
+                                         {"model": DISCRETE,
+                                          "u": {"nan": np.r_[U[:-1], np.nan][:, None],
+                                                "1-D": U, "text": "abc", "complex": U[:, None] + 1j}}),
+    "metrics.simulation_error": (dict(y_model=np.c_[Y, Y] + 0.1, y=np.c_[Y, Y], n_init=10),
+                                 {"y_model": {"nan": np.c_[np.r_[Y[:-1], np.nan], Y],
+                                              "wrong shape": np.c_[Y], "text": "abc"},
+                                  "y": {"1-D": Y, "nan": np.c_[np.r_[Y[:-1], np.nan], Y]},
+                                  "n_init": {"negative": -1, "too large": 10 ** 6, "float": 1.5,
+                                             "text": "x"}}),
 }
 
 def function(qualname):

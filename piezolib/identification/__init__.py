@@ -14,6 +14,9 @@ arx         recursive least squares (eq. 1-3) and ARX models
 oe          output-error models (Steiglitz-McBride passes)
 continuous  d2c, ZOH discretisation, numerator refit, :func:`identify`, coefficients
 validation  fit, whiteness, empirical frequency response, coefficient table
+frf         best linear approximation of a MIMO system from periodic multisines, with its
+            noise and nonlinear-distortion variances (robust method)
+freqfit     discrete MIMO state-space models fitted to an FRF (frequency-domain subspace)
 
 Why output-error passes follow ARX, and why the numerator is refitted:
 ``docs/stage.md``.
@@ -35,6 +38,9 @@ from piezolib.identification.arx import *          # noqa: F401,F403
 from piezolib.identification.oe import *           # noqa: F401,F403
 from piezolib.identification.continuous import *   # noqa: F401,F403
 from piezolib.identification.validation import *   # noqa: F401,F403
-from piezolib.identification import arx, continuous, oe, validation
+from piezolib.identification.frf import *          # noqa: F401,F403
+from piezolib.identification.freqfit import *      # noqa: F401,F403
+from piezolib.identification import arx, continuous, oe, validation, frf, freqfit
 
-__all__ = [*arx.__all__, *oe.__all__, *continuous.__all__, *validation.__all__]
+__all__ = [*arx.__all__, *oe.__all__, *continuous.__all__, *validation.__all__, *frf.__all__,
+           *freqfit.__all__]

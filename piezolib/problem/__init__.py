@@ -8,6 +8,7 @@ stage_data       its experiment files (chirps, Table 4 Case I loops): definition
 design           the workbook's mu controller in one call
 analysis         Table 3: NS, NP, RS, RP of any controller
 hysteresis_fits  the paper's Dahl model and the workbook's Dahl fit to the Case I loops
+fsm_benchmark    the CubeSpec fine steering mirror benchmark: data, metric, baselines
 paths            where the checkout and its ``data/`` folder are
 
 :func:`piezolib.problem.paper.problem` returns the models G, H_m, H_e, H_y, K
@@ -16,4 +17,4 @@ that the other modules here take explicitly (plant first, then the weights);
 """
 
 __all__ = ["paper", "genplant", "stage", "stage_hysteresis", "stage_data", "design",
-           "analysis", "hysteresis_fits", "paths"]
+           "analysis", "hysteresis_fits", "fsm_benchmark", "paths"]

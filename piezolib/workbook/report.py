@@ -338,6 +338,7 @@ NOTEBOOK_TABLES = {
 OTHER_TABLES = {
     "own_stage": "08_your_own_stage",
     "mixed_mu": "09_mixed_mu",
+    "real_benchmark": "10_real_piezo_benchmark",
     "tracking_over_set": "12_tracking_over_the_set",
 }
 

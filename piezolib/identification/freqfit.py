@@ -1,0 +1,371 @@
+"""Discrete-time MIMO state-space models fitted to frequency-response data.
+
+:func:`fit_frf` fits a model of given order to an FRF (e.g. a
+:class:`~piezolib.identification.frf.BLA`) on its frequency lines in two
+steps:
+
+1. a frequency-domain subspace step (the observability range of a block
+   Hankel matrix of the data with the input's part projected out, then A and C
+   from its shift invariance) gives the poles;
+2. unstable poles are reflected into the unit disc, and B, D, then C, D are
+   solved by weighted linear least squares, alternately (the model is linear
+   in them with the others fixed).  The poles are not refined further (no
+   Gauss-Newton step over A yet).
+
+The cost is sum over lines and entries of w |G_model - G|^2.  The weight
+``w`` is the caller's: the inverse of the BLA's estimated variance gives the
+(approximate) maximum-likelihood fit; a uniform weight scaled per output
+follows the simulation error of a flat multisine (Parseval).
+
+:func:`select_order` fits each candidate order on one FRF and scores it on
+another, independent estimate (another group of realisations, another data
+set): the order with the smallest validation error wins.
+:func:`simulate_discrete` runs a discrete model on long records in modal form
+(:func:`scipy.signal.lfilter`), much faster than a Python time loop.
+
+Frequencies in Hz; ``fs`` [Hz] is the sampling frequency of the model
+(``dt = 1/fs``).
+
+Examples
+--------
+A 4th-order 2 x 2 system is found from noise-free data:
+
+>>> import control as ct, numpy as np
+>>> true = ct.ss(ct.tf([[[0.2, 0.1], [0.1]], [[0.3], [0.1, 0.05]]],
+...                    [[[1, -1.6, 0.8], [1, -0.5]], [[1, -1.6, 0.8], [1, -0.5]]], 1e-3))
+>>> f = np.linspace(1.0, 490.0, 200)
+>>> G = true(np.exp(2j * np.pi * f / 1e3))
+>>> model = fit_frf(G, f, fs=1e3, order=true.nstates)
+>>> err = np.abs(model(np.exp(2j * np.pi * f / 1e3)) - G).max() / np.abs(G).max()
+>>> model.nstates == true.nstates, bool(err < 1e-8), model.isdtime()
+(True, True, True)
+"""
+
+from dataclasses import dataclass
+
+import control as ct
+import numpy as np
+import scipy.linalg
+import scipy.signal
+
+from piezolib._checks import check_finite_array, check_integer, check_positive, check_type
+
+__all__ = ["fit_frf", "frf_error", "select_order", "OrderSelection", "simulate_discrete"]
+
+#: Largest pole radius the fitted model may have.
+MAX_POLE_RADIUS = 0.9995
+
+
+def _check_frf(G, frequency_Hz, fs, name="G"):
+    G = check_finite_array(name, G)
+    if G.ndim == 1:
+        G = G[None, None, :]
+    if G.ndim != 3:
+        raise ValueError(f"{name} must have shape (n_y, n_u, F), got {G.shape}")
+    f = check_finite_array("frequency_Hz", frequency_Hz, ndim=1, min_length=2, real=True)
+    fs = check_positive("fs", fs)
+    if f.size != G.shape[2]:
+        raise ValueError(f"frequency_Hz has {f.size} values, {name} has {G.shape[2]} lines")
+    if np.any(f <= 0) or np.any(f >= fs / 2) or np.any(np.diff(f) <= 0):
+        raise ValueError(f"frequency_Hz must increase strictly within (0, fs/2 = {fs / 2:g}) Hz")
+    return G.astype(complex), f, fs
+
+
+def _check_weight(weight, shape):
+    if weight is None:
+        return np.ones(shape)
+    w = check_finite_array("weight", weight, real=True)
+    try:
+        w = np.broadcast_to(w, shape)
+    except ValueError:
+        raise ValueError(f"weight must broadcast to {shape}, got {w.shape}") from None
+    if np.any(w < 0) or not np.any(w > 0):
+        raise ValueError("weight must be non-negative with a positive entry")
+    return w
+
+
+def _z(f, fs):
+    return np.exp(2j * np.pi * f / fs)
+
+
+def _realify(x):
+    return np.concatenate([x.real, x.imag], axis=-1)
+
+
+def _subspace_AC(G, z, order, n_rows):
+    """A, C of ``order`` from the observability range of the data's block Hankel matrix."""
+    n_y, n_u, F = G.shape
+    powers = z[None, :] ** np.arange(n_rows)[:, None]                  # (q, F)
+    # block row i: z^i G_k (n_y x n_u) for every k, side by side -> (q n_y, F n_u)
+    Gh = np.einsum("qf,yuf->qyfu", powers, G).reshape(n_rows * n_y, F * n_u)
+    Wh = np.einsum("qf,uv,f->qufv", powers, np.eye(n_u), np.ones(F)).reshape(
+        n_rows * n_u, F * n_u)
+    H = _realify(np.vstack([Wh, Gh]))
+    r = scipy.linalg.qr(H.T, mode="r")[0].T                           # lower triangular
+    k = n_rows * n_u
+    L22 = r[k:, k:k + n_rows * n_y]
+    Us, _, _ = np.linalg.svd(L22, full_matrices=False)
+    O = Us[:, :order]
+    C = O[:n_y]
+    A = np.linalg.lstsq(O[:-n_y], O[n_y:], rcond=None)[0]
+    return A, C
+
+
+def _stabilise(A):
+    """Reflect poles outside ``MAX_POLE_RADIUS`` into it, keeping A real."""
+    lam, V = np.linalg.eig(A)
+    r = np.abs(lam)
+    if np.all(r <= MAX_POLE_RADIUS):
+        return A
+    lam = np.where(r > 1, lam / r ** 2, lam)
+    lam = np.where(np.abs(lam) > MAX_POLE_RADIUS, lam * MAX_POLE_RADIUS / np.abs(lam), lam)
+    return np.real(V @ np.diag(lam) @ np.linalg.inv(V))
+
+
+def _eig(A):
+    """Eigenvalues and eigenvectors of A, with V^-1."""
+    lam, V = np.linalg.eig(A)
+    return lam, V, np.linalg.inv(V)
+
+
+def _resolvent_right(A, B, z):
+    """(z_k I - A)^-1 B for every line: (F, n, n_u) (complex)."""
+    lam, V, Vi = _eig(A)
+    return np.einsum("ni,fi,iu->fnu", V, 1.0 / (z[:, None] - lam), Vi @ B, optimize=True)
+
+
+def _resolvent_left(A, C, z):
+    """C (z_k I - A)^-1 for every line: (F, n_y, n) (complex)."""
+    lam, V, Vi = _eig(A)
+    return np.einsum("yi,fi,in->fyn", C @ V, 1.0 / (z[:, None] - lam), Vi, optimize=True)
+
+
+def _solve_BD(A, C, G, z, w):
+    """Weighted least squares for B, D with A, C fixed (one column of B, D per input)."""
+    n_y, n_u, F = G.shape
+    n = A.shape[0]
+    Phi = _resolvent_left(A, C, z)                                    # (F, n_y, n)
+    B, D = np.zeros((n, n_u)), np.zeros((n_y, n_u))
+    for j in range(n_u):
+        sw = np.sqrt(w[:, j, :]).T[:, :, None]                          # (F, n_y, 1)
+        X = np.concatenate([Phi, np.broadcast_to(np.eye(n_y), (F, n_y, n_y))], axis=2) * sw
+        rhs = G[:, j, :].T[:, :, None] * sw
+        X, rhs = X.reshape(F * n_y, n + n_y), rhs.reshape(F * n_y)
+        theta = np.linalg.lstsq(np.vstack([X.real, X.imag]), np.r_[rhs.real, rhs.imag],
+                                rcond=None)[0]
+        B[:, j], D[:, j] = theta[:n], theta[n:]
+    return B, D
+
+
+def _solve_CD(A, B, G, z, w):
+    """Weighted least squares for C, D with A, B fixed (one row of C, D per output)."""
+    n_y, n_u, F = G.shape
+    n = A.shape[0]
+    Psi = _resolvent_right(A, B, z)                                   # (F, n, n_u)
+    C, D = np.zeros((n_y, n)), np.zeros((n_y, n_u))
+    for i in range(n_y):
+        sw = np.sqrt(w[i, :, :]).T[:, :, None]                          # (F, n_u, 1)
+        X = np.concatenate([np.swapaxes(Psi, 1, 2),
+                            np.broadcast_to(np.eye(n_u), (F, n_u, n_u))], axis=2) * sw
+        rhs = G[i, :, :].T[:, :, None] * sw
+        X, rhs = X.reshape(F * n_u, n + n_u), rhs.reshape(F * n_u)
+        theta = np.linalg.lstsq(np.vstack([X.real, X.imag]), np.r_[rhs.real, rhs.imag],
+                                rcond=None)[0]
+        C[i], D[i] = theta[:n], theta[n:]
+    return C, D
+
+
+def _response(A, B, C, D, z):
+    """G_model (n_y, n_u, F)."""
+    return np.transpose(C @ _resolvent_right(A, B, z), (1, 2, 0)) + D[:, :, None]
+
+
+def fit_frf(G, frequency_Hz, fs, order, weight=None, *, n_rows=None, iterations=2,
+            input_labels=None, output_labels=None):
+    """Stable discrete-time state-space model of given order fitted to an FRF.
+
+    Parameters
+    ----------
+    G : array_like of complex, shape (n_y, n_u, F)
+        Frequency response on the lines ``frequency_Hz`` (e.g. ``BLA.G``).
+    frequency_Hz : array_like, shape (F,)
+        Strictly increasing, within (0, fs/2) [Hz].
+    fs : float
+        Sampling frequency of the model [Hz]; ``dt = 1/fs``.
+    order : int
+        Number of states (>= 1).
+    weight : array_like, optional
+        Non-negative weight of each entry and line, broadcast to (n_y, n_u,
+        F); e.g. ``1 / BLA.var_total``.  Default uniform.
+    n_rows : int, optional
+        Block rows of the subspace step (> order); default ``order + 8``.
+    iterations : int, optional
+        Alternations of the (B, D) and (C, D) least-squares steps.
+    input_labels, output_labels : list of str, optional
+        Signal names (default ``u[i]``, ``y[i]``).
+
+    Returns
+    -------
+    control.StateSpace
+        Discrete (``dt = 1/fs``), every pole inside the unit circle.
+    """
+    G, f, fs = _check_frf(G, frequency_Hz, fs)
+    n_y, n_u, F = G.shape
+    order = check_integer("order", order, minimum=1)
+    if order >= F * min(n_y, n_u):
+        raise ValueError(f"order must be below the number of data lines ({F}), got {order}")
+    w = _check_weight(weight, G.shape)
+    n_rows = order + 8 if n_rows is None else check_integer("n_rows", n_rows, minimum=order + 1)
+    if n_rows <= order:
+        raise ValueError(f"n_rows must exceed order = {order}, got {n_rows}")
+    iterations = check_integer("iterations", iterations, minimum=0)
+    # scale each output so that the subspace step sees balanced rows
+    scale = np.sqrt(np.mean(np.abs(G) ** 2, axis=(1, 2)))
+    scale = np.where(scale > 0, scale, 1.0)
+    Gs = G / scale[:, None, None]
+    ws = w * scale[:, None, None] ** 2
+    ws = ws / ws.max()
+    z = _z(f, fs)
+    A, C = _subspace_AC(Gs, z, order, n_rows)
+    A = _stabilise(A)
+    B, D = _solve_BD(A, C, Gs, z, ws)
+    for _ in range(iterations):
+        C, D = _solve_CD(A, B, Gs, z, ws)
+        B, D = _solve_BD(A, C, Gs, z, ws)
+    C, D = C * scale[:, None], D * scale[:, None]
+    return ct.ss(A, B, C, D, 1.0 / fs,
+                 inputs=input_labels or [f"u[{i}]" for i in range(n_u)],
+                 outputs=output_labels or [f"y[{i}]" for i in range(n_y)])
+
+
+def frf_error(model, G, frequency_Hz, weight=None):
+    """Relative weighted error of a discrete model against an FRF.
+
+    Parameters
+    ----------
+    model : control.StateSpace or control.TransferFunction
+        Discrete-time, ``n_y`` outputs and ``n_u`` inputs.
+    G : array_like of complex, shape (n_y, n_u, F)
+    frequency_Hz : array_like, shape (F,)
+        [Hz], below the model's Nyquist frequency.
+    weight : array_like, optional
+        As in :func:`fit_frf`.
+
+    Returns
+    -------
+    float
+        sqrt(sum w |G_model - G|^2 / sum w |G|^2).
+    """
+    check_type("model", model, (ct.StateSpace, ct.TransferFunction), "a discrete LTI model")
+    if not model.isdtime(strict=True):
+        raise ValueError("model must be discrete-time (dt > 0)")
+    G, f, fs = _check_frf(G, frequency_Hz, 1.0 / model.dt)
+    if (model.noutputs, model.ninputs) != G.shape[:2]:
+        raise ValueError(f"model has {model.noutputs} outputs, {model.ninputs} inputs; G has "
+                         f"shape {G.shape}")
+    w = _check_weight(weight, G.shape)
+    Gm = np.asarray(model(_z(f, fs))).reshape(G.shape)
+    return float(np.sqrt(np.sum(w * np.abs(Gm - G) ** 2) / np.sum(w * np.abs(G) ** 2)))
+
+
+@dataclass(frozen=True)
+class OrderSelection:
+    """Result of :func:`select_order`.
+
+    Attributes
+    ----------
+    order : int
+        The order with the smallest validation error.
+    orders : ndarray of int
+    fit_error, validation_error : ndarray
+        :func:`frf_error` of each order's model on the fitting and the
+        validation FRF.
+    model : control.StateSpace
+        The chosen order's model (fitted on the fitting FRF).
+    """
+
+    order: int
+    orders: np.ndarray
+    fit_error: np.ndarray
+    validation_error: np.ndarray
+    model: ct.StateSpace
+
+
+def select_order(G_fit, G_validation, frequency_Hz, fs, orders, weight=None, **options):
+    """The model order that predicts an independent FRF estimate best.
+
+    Parameters
+    ----------
+    G_fit, G_validation : array_like of complex, shape (n_y, n_u, F)
+        Two independent estimates on the same lines (e.g. two groups of
+        realisations, ``BLA.G_groups``).
+    frequency_Hz : array_like, shape (F,)
+        [Hz].
+    fs : float
+        [Hz].
+    orders : sequence of int
+        Candidate orders.
+    weight : array_like, optional
+        As in :func:`fit_frf`, used for fitting and scoring.
+    **options
+        Passed to :func:`fit_frf`.
+
+    Returns
+    -------
+    OrderSelection
+    """
+    G_fit, f, fs = _check_frf(G_fit, frequency_Hz, fs, "G_fit")
+    G_validation, _, _ = _check_frf(G_validation, f, fs, "G_validation")
+    if G_validation.shape != G_fit.shape:
+        raise ValueError(f"G_validation must have the shape of G_fit {G_fit.shape}, "
+                         f"got {G_validation.shape}")
+    orders = np.atleast_1d(check_finite_array("orders", orders, real=True))
+    if orders.ndim != 1 or orders.size < 1 or np.any(orders != np.round(orders)) \
+            or orders.min() < 1:
+        raise ValueError("orders must be a non-empty sequence of positive integers")
+    orders = orders.astype(int)
+    models, e_fit, e_val = [], [], []
+    for n in orders:
+        model = fit_frf(G_fit, f, fs, int(n), weight, **options)
+        models.append(model)
+        e_fit.append(frf_error(model, G_fit, f, weight))
+        e_val.append(frf_error(model, G_validation, f, weight))
+    best = int(np.argmin(e_val))
+    return OrderSelection(order=int(orders[best]), orders=orders, fit_error=np.array(e_fit),
+                          validation_error=np.array(e_val), model=models[best])
+
+
+def simulate_discrete(model, u):
+    """Response of a discrete model from zero initial state, in modal form.
+
+    Parameters
+    ----------
+    model : control.StateSpace
+        Discrete-time, diagonalisable A (distinct poles).
+    u : array_like, shape (N, n_u, ...)
+        Input samples; axis 0 is time, axis 1 the model's inputs, further axes
+        independent records.
+
+    Returns
+    -------
+    ndarray, shape (N, n_y, ...)
+    """
+    check_type("model", model, ct.StateSpace, "a discrete StateSpace")
+    if not model.isdtime(strict=True):
+        raise ValueError("model must be discrete-time (dt > 0)")
+    u = check_finite_array("u", u, real=True)
+    if u.ndim < 2 or u.shape[1] != model.ninputs:
+        raise ValueError(f"u must have shape (N, {model.ninputs}, ...), got {u.shape}")
+    lam, V = np.linalg.eig(model.A)
+    if np.linalg.cond(V) > 1e10:
+        raise ValueError("model must have a diagonalisable A (its eigenvectors are "
+                         "nearly dependent)")
+    Bm = np.linalg.solve(V, model.B)                   # (n, n_u)
+    Cm = model.C @ V                                   # (n_y, n)
+    drive = np.einsum("nu,tu...->tn...", Bm, u.astype(complex))
+    states = np.empty_like(drive)
+    for i, pole in enumerate(lam):
+        # x[k+1] = pole x[k] + drive[k]  ->  x = z^-1 / (1 - pole z^-1) drive
+        states[:, i] = scipy.signal.lfilter([0.0, 1.0], [1.0, -pole], drive[:, i], axis=0)
+    y = np.einsum("yn,tn...->ty...", Cm, states).real
+    return y + np.einsum("yu,tu...->ty...", model.D, u)
