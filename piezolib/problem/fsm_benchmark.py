@@ -37,7 +37,7 @@ from piezolib.problem import paths
 __all__ = ["SAMPLING_FREQUENCY_HZ", "LEVELS_MV", "SPLITS", "SAMPLES_PER_PERIOD", "N_INIT",
            "INPUT_LABELS", "OUTPUT_LABELS", "PUBLISHED_NRMSE_PERCENT", "PUBLISHED_RMSE_UM",
            "BASELINE_SOURCE", "data_folder", "file_name", "load", "check_files",
-           "write_manifest", "Score", "score", "noise_floor"]
+           "write_manifest", "Score", "score", "score_simulation", "noise_floor"]
 
 #: Sampling frequency of every record [Hz].
 SAMPLING_FREQUENCY_HZ = 6400.0
@@ -271,6 +271,34 @@ def score(model, level_mV, split="test", folder=None):
         raise ValueError(f"model must be discrete with dt = 1/{SAMPLING_FREQUENCY_HZ:g} s")
     u, y = load(level_mV, split, folder)
     y_model = freqfit.simulate_discrete(model, u)       # each (realisation, period) from rest
+    rmse, nrmse = metrics.simulation_error(y_model, y, N_INIT)
+    return Score(level_mV=_level(level_mV), rmse_um=1e6 * rmse, nrmse=nrmse)
+
+
+def score_simulation(simulate, level_mV, split="test", folder=None):
+    """The official metric of any model given as a simulation function (e.g. a nonlinear one).
+
+    Parameters
+    ----------
+    simulate : callable
+        ``simulate(u) -> y_model``: inputs (8192, 3, R, 2) [V] to outputs of
+        the same shape [m], each (realisation, period) simulated from rest.
+        The model may use only ``u`` (e.g. to compute a schedule from it).
+    level_mV : int
+        One of :data:`LEVELS_MV`.
+    split : {"train", "test"}, optional
+    folder : str or Path, optional
+
+    Returns
+    -------
+    Score
+    """
+    if not callable(simulate):
+        raise TypeError(f"simulate must be a callable u -> y, got {type(simulate).__name__}")
+    u, y = load(level_mV, split, folder)
+    y_model = np.asarray(simulate(u.copy()), dtype=float)
+    if y_model.shape != y.shape:
+        raise ValueError(f"simulate returned shape {y_model.shape}, expected {y.shape}")
     rmse, nrmse = metrics.simulation_error(y_model, y, N_INIT)
     return Score(level_mV=_level(level_mV), rmse_um=1e6 * rmse, nrmse=nrmse)
 
