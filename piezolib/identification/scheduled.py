@@ -13,11 +13,12 @@ input moves the schedule.
 
 Examples
 --------
-Two static gains at levels 1 and 3; a record of RMS 2 gets the mean gain:
+Two gains (one fast pole each, D the gain) at levels 1 and 3; a record of RMS 2
+gets the mean gain:
 
 >>> import control as ct, numpy as np
->>> m = ScheduledModel((ct.ss([], [], [], [[1.0]], 1.0), ct.ss([], [], [], [[3.0]], 1.0)),
-...                    (1.0, 3.0))
+>>> gain = lambda k: ct.ss([[0.0]], [[0.0]], [[0.0]], [[k]], 1.0)
+>>> m = ScheduledModel((gain(1.0), gain(3.0)), (1.0, 3.0))
 >>> u = np.array([[2.0], [-2.0], [2.0], [-2.0]])
 >>> float(m.schedule(u)), m.simulate(u)[:2, 0].tolist()
 (2.0, [4.0, -4.0])
