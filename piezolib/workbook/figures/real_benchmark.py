@@ -6,7 +6,7 @@ import numpy as np
 from piezolib.workbook import plotting
 from piezolib.workbook.style import PALETTE, db, new_figure
 
-__all__ = ["extra_fsm_bla", "extra_fsm_scores"]
+__all__ = ["extra_fsm_bla", "extra_fsm_scores", "extra_fsm_level_weight"]
 
 
 def _check_level_arrays(frequency_Hz, curves):
@@ -136,4 +136,54 @@ def extra_fsm_scores(levels, scores, floor=None):
     ax.set_ylabel("test NRMSE [%]")
     fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", ncol=2, fontsize=8)
     plotting.name_figure(fig, None, "fsm_scores")
+    return fig
+
+
+def extra_fsm_level_weight(frequency_Hz, relative_errors, envelope, weight_magnitude, pair_label):
+    """Relative error of each level's model against the nominal one, its envelope and weight.
+
+    Parameters
+    ----------
+    frequency_Hz : array_like, shape (F,)
+        [Hz], positive.
+    relative_errors : dict {str: array of shape (F,)}
+        |G_level / G_nominal - 1| per level label.
+    envelope, weight_magnitude : array_like, shape (F,)
+        Their maximum and |W| of the covering weight on the same lines.
+    pair_label : str
+        The input-output pair, e.g. ``"v_a3 → d_3"``.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Saved as ``extra_fsm_level_weight.png``.
+    """
+    f = np.asarray(frequency_Hz, dtype=float)
+    if f.ndim != 1 or f.size < 2 or not np.all(np.isfinite(f)) or np.any(f <= 0):
+        raise ValueError("frequency_Hz must be a 1-D array of positive frequencies")
+    if not isinstance(relative_errors, dict) or not relative_errors:
+        raise TypeError("relative_errors must be a non-empty dict {level label: array}")
+    curves = {}
+    for name, values in {**{f"relative_errors[{k!r}]": v for k, v in relative_errors.items()},
+                         "envelope": envelope, "weight_magnitude": weight_magnitude}.items():
+        values = np.asarray(values, dtype=float)
+        if values.shape != f.shape or not np.all(np.isfinite(values)) or np.any(values < 0):
+            raise ValueError(f"{name} must hold {f.size} finite non-negative values")
+        curves[name] = values
+    if not isinstance(pair_label, str):
+        raise TypeError("pair_label must be a string")
+    fig, ax = new_figure(figsize=(8, 4.2))
+    colours = PALETTE.cycle
+    for k, label in enumerate(relative_errors):
+        ax.semilogy(f, curves[f"relative_errors[{label!r}]"], lw=0.7,
+                    color=colours[k % len(colours)], label=f"{label} model / nominal − 1")
+    ax.semilogy(f, curves["envelope"], color="k", lw=1.0, ls=":", label="envelope E(ω)")
+    ax.semilogy(f, curves["weight_magnitude"], color="k", lw=1.6, label="covering weight |W|")
+    ax.set_xscale("log")
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel("relative error [-]")
+    ax.set_title(f"spread between the levels, {pair_label}, against the all-levels model",
+                 fontsize=9)
+    fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", ncol=3, fontsize=8)
+    plotting.name_figure(fig, None, "fsm_level_weight")
     return fig
