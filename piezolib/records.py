@@ -858,7 +858,8 @@ class StartUp:
     Attributes
     ----------
     rest_end : int
-        First sample at which the input leaves its initial value (0: no rest).
+        First sample at which the input leaves its initial value (1: it
+        moves from the start, no rest).
     step : int or None
         The sample at which the input jumps by more than the turning-point
         threshold in one sample, right after the rest (None: no step).
@@ -953,7 +954,7 @@ def find_start_up(record, threshold=0.02):
         raise RecordError(f"no turning point of the input after the start-up (rest to sample "
                           f"{rest_end}, settled at {settled}): nothing left to fit")
     first = int(candidates[0])
-    parts = [f"rest {rest_end} samples ({rest_end / fs:.3g} s)" if rest_end else "no rest"]
+    parts = [f"rest {rest_end} samples ({rest_end / fs:.3g} s)" if rest_end > 1 else "no rest"]
     if step is not None:
         parts.append(f"a step of {u[step] - u[step - 1]:+.4g} {record.input_unit} at sample "
                      f"{step} ({step / fs:.3g} s), ringing until sample {settled} "
