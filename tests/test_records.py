@@ -406,3 +406,12 @@ def test_a_record_without_start_up_loses_only_its_first_stroke():
         R.cut_at_turning_points(rec, skip_transient="yes")
     with pytest.raises(R.RecordError, match="constant"):
         R.find_start_up(R.Record(np.ones(10), t[:10], FS))
+
+
+def test_find_start_up_refuses_bad_input():
+    rec = raw_record()
+    with pytest.raises(TypeError, match="record"):
+        R.find_start_up(rec.input)
+    for bad in (0.0, 1.0, -0.1):
+        with pytest.raises(ValueError, match="threshold"):
+            R.find_start_up(rec, threshold=bad)

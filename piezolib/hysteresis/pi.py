@@ -23,8 +23,8 @@ from piezolib.hysteresis.common import (FitScores, FitWarning, check_loops, cova
                                         loop_errors, warn_about)
 from piezolib.hysteresis.dahl import NotInvertibleError, strokes
 
-__all__ = ["PI_STARTS", "PIModel", "PIFit", "play_outputs", "fit_pi", "FitWarning",
-           "pi_regressors"]
+# pi_regressors is shared with hammerstein.py (checked inputs), not part of the API
+__all__ = ["PI_STARTS", "PIModel", "PIFit", "play_outputs", "fit_pi", "FitWarning"]
 
 #: Initial play states: "rest" as if lowered to the first input (y_i = v_0 + r_i,
 #: the descending branch), "virgin" every play centred on it (y_i = v_0).
