@@ -262,7 +262,7 @@ def check_fit_options(form, offset, start):
 #: Most samples per record :func:`fit_dahl` fits by default (``stride=None``): the model is
 #: rate independent, so its output at the kept samples (every turning point included) is
 #: exact; more samples only average noise, at a cost proportional to their number.
-MAX_FIT_SAMPLES = 2000
+MAX_FIT_SAMPLES = 1000
 
 
 def fit_dahl(loops, gamma_a, form="bliman_sorine", offset=False, start="virgin",
@@ -316,8 +316,8 @@ def fit_dahl(loops, gamma_a, form="bliman_sorine", offset=False, start="virgin",
         fit; the model output there is exact regardless, so this only trades
         noise averaging for speed.  The reported residuals use all samples.
         Default: the smallest stride that leaves at most
-        :data:`MAX_FIT_SAMPLES` samples of the longest record (a 50 000-sample
-        raw record at 5 kHz is fitted on every 25th sample).
+        :data:`MAX_FIT_SAMPLES` samples of the longest record (a 51 000-sample
+        raw record at 5 kHz is fitted on every 52nd sample).
     initial : DahlModel, optional
         Single starting point instead of the grid search (its x0 is ignored:
         x0 is solved exactly).
