@@ -6,7 +6,9 @@ device: the input (e.g. an amplifier or actuator voltage) and the output
 metadata dict.  :func:`load_csv` reads one from a delimited text file of any
 column layout, encoding and number format (pandas' C parser) and checks every
 line; every error is a :class:`RecordError` naming the file and the line.
-Helpers cut a record at the turning points of its input
+Helpers find the start-up of a raw record (rest, a voltage step, the
+ringing after it, the virgin stroke: :func:`find_start_up`), cut a record at
+the turning points of its input, optionally after that start-up
 (:func:`cut_at_turning_points`), remove an offset or trend (:func:`detrend`),
 lower its rate behind an anti-alias filter (:func:`decimate`) and split it for
 validation (:func:`split`).
