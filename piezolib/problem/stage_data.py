@@ -570,7 +570,7 @@ def raw_hysteresis_record(seed=None, *, sample_rate_Hz=None, amplitudes_V=None, 
     --------
     >>> raw = raw_hysteresis_record()
     >>> len(raw.record), raw.record.fs, raw.step_index
-    (51000, 5000.0, 1000)
+    (51001, 5000.0, 1000)
     """
     d = RAW_RECORD
     seed = d["seed"] if seed is None else seed
