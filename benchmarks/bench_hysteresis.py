@@ -9,6 +9,12 @@ Fit time of each model (Dahl, Prandtl-Ishlinskii) on a raw 10 s record of the
 virtual stage (5x its sensor noise, from rest) at 5 kHz and 10 kHz, full rate.
 
     python benchmarks/bench_hysteresis.py --fits     # only the 10 s record fits
+    python benchmarks/bench_hysteresis.py --raw      # only the raw-record fits (issue 36)
+
+Raw record (issue 36): the virtual stage's 51 000-sample record that starts at rest and steps
+(``raw_hysteresis_record``): CPU time of fit_dahl (default stride: at most MAX_FIT_SAMPLES
+samples), fit_pi and fit_hammerstein on the whole record and on the record cut after its
+start-up, with the whole-record RMS error; goal for fit_dahl: <= 2 s of CPU.
 """
 
 import sys
@@ -97,7 +103,38 @@ def fit_times():
               f"{t_pi:.2f} s, RMS {pi.rms_percent[0]:.3f} %")
 
 
+def raw_fit_times():
+    """CPU time and error of each fit on the raw record (rest, step, ringing, 1 Hz cosines)."""
+    from piezolib import records
+    from piezolib.problem.stage_data import raw_hysteresis_record
+    raw = raw_hysteresis_record()
+    whole = raw.record
+    cut = records.cut_at_turning_points(whole, skip_transient=True)
+    print(f"raw record: {len(whole)} samples at {whole.fs:g} Hz; {cut.metadata['dropped']}")
+    fits = {
+        "fit_dahl (rest)": lambda r: hy.fit_dahl((r.input, r.output), 30.0, offset=True,
+                                                 start="rest"),
+        "fit_dahl (virgin)": lambda r: hy.fit_dahl((r.input, r.output), 30.0, offset=True,
+                                                   start="virgin"),
+        "fit_pi (auto start)": lambda r: hy.fit_pi((r.input, r.output)),
+        "fit_hammerstein (4, 4)": lambda r: hy.fit_hammerstein((r.input, r.output), r.fs),
+    }
+    for label, rec in (("whole", whole), ("cut", cut)):
+        for name, fit in fits.items():
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", hy.FitWarning)
+                start = time.process_time()
+                result = fit(rec)
+                cpu = time.process_time() - start
+            print(f"  {label:5s} ({len(rec)} samples) {name:24s}: CPU {cpu:5.2f} s, RMS "
+                  f"{result.rms_percent[0]:.3f} %, max {result.max_percent[0]:.2f} % of stroke")
+
+
 if __name__ == "__main__":
-    if "--fits" not in sys.argv:
-        main()
-    fit_times()
+    if "--raw" in sys.argv:
+        raw_fit_times()
+    else:
+        if "--fits" not in sys.argv:
+            main()
+        fit_times()
+        raw_fit_times()

@@ -6,7 +6,9 @@ device: the input (e.g. an amplifier or actuator voltage) and the output
 metadata dict.  :func:`load_csv` reads one from a delimited text file of any
 column layout, encoding and number format (pandas' C parser) and checks every
 line; every error is a :class:`RecordError` naming the file and the line.
-Helpers cut a record at the turning points of its input
+Helpers find the start-up of a raw record (rest, a voltage step, the
+ringing after it, the virgin stroke: :func:`find_start_up`), cut a record at
+the turning points of its input, optionally after that start-up
 (:func:`cut_at_turning_points`), remove an offset or trend (:func:`detrend`),
 lower its rate behind an anti-alias filter (:func:`decimate`) and split it for
 validation (:func:`split`).
@@ -36,6 +38,7 @@ A file of two sine periods at 1 kHz, no header (time, volts, micrometres):
 import codecs
 import csv
 import functools
+import logging
 import math
 import re
 from array import array
@@ -49,8 +52,11 @@ from piezolib._checks import check_finite_array, check_integer, check_positive
 
 __all__ = [
     "Record", "RecordError", "read_table", "load_csv", "turning_points",
-    "cut_at_turning_points", "detrend", "decimate", "split", "MIN_SAMPLES", "RATE_TOLERANCE",
+    "cut_at_turning_points", "StartUp", "find_start_up", "detrend", "decimate", "split",
+    "MIN_SAMPLES", "RATE_TOLERANCE",
 ]
+
+logger = logging.getLogger(__name__)
 
 #: Fewest samples :func:`load_csv` accepts by default.
 MIN_SAMPLES = 16
@@ -847,11 +853,129 @@ def turning_points(x, threshold=0.02):
     return np.array(points, dtype=int)
 
 
-def cut_at_turning_points(record, threshold=0.02, first=0, last=-1):
+@dataclass(frozen=True)
+class StartUp:
+    """How a raw record starts: rest, a step, the ringing after it, the virgin stroke.
+
+    Attributes
+    ----------
+    rest_end : int
+        First sample at which the input leaves its initial value (1: it
+        moves from the start, no rest).
+    step : int or None
+        The sample at which the input jumps by more than the turning-point
+        threshold in one sample, right after the rest (None: no step).
+    settled : int
+        First sample after the output's ringing from the step died out
+        (``rest_end`` without a step).
+    first_turning_point : int
+        The first turning point of the input at or after ``settled`` whose
+        stroke began after the step: where a hysteresis record free of the
+        start-up begins.  Everything before it (rest, step, ringing and the
+        stroke from the step's level, the virgin stroke) is start-up.
+    note : str
+        One line saying what the start-up holds, in samples and seconds.
+    """
+
+    rest_end: int
+    step: object
+    settled: int
+    first_turning_point: int
+    note: str
+
+
+def _ringing_end(y, step, stop):
+    """Last sample in ``step .. stop`` whose second difference of ``y`` stands out of noise.
+
+    The noise level of the second difference is its median absolute deviation
+    over the whole record (robust: ringing is a small share of the samples);
+    a sample "stands out" at more than 5 of those standard deviations.
+    """
+    d2 = np.diff(y, 2)
+    sigma = 1.4826 * float(np.median(np.abs(d2 - np.median(d2))))
+    window = np.abs(d2[step:max(stop - 1, step + 1)])
+    loud = np.flatnonzero(window > 5.0 * sigma)
+    return step + int(loud[-1]) + 2 if loud.size else step
+
+
+def find_start_up(record, threshold=0.02):
+    """Find the start-up of a raw record: rest, step, ringing and virgin stroke.
+
+    A raw record of a stage often starts at rest, jumps to the first value
+    of the excitation (a voltage step, which rings the stage's resonances)
+    and only then follows the periodic excitation.  None of that is a
+    hysteresis loop: a rate-independent model cannot follow the ringing, and
+    the first stroke starts from a state no model start assumes.
+
+    Parameters
+    ----------
+    record : Record
+    threshold : float, optional
+        Fraction of the input's range: a one-sample change larger than this is
+        a step, and turning points reverse by more (:func:`turning_points`).
+
+    Returns
+    -------
+    StartUp
+        The ringing ends at the last sample after the step, before the next
+        turning point, whose output second difference exceeds 5 standard
+        deviations of its noise (median absolute deviation over the record).
+
+    Raises
+    ------
+    RecordError
+        No turning point after the start-up (the record holds no stroke
+        that a hysteresis fit could start from).
+    """
+    _check_record(record)
+    threshold = check_positive("threshold", threshold)
+    if threshold >= 1:
+        raise ValueError(f"threshold must be below 1, got {threshold}")
+    u, y, fs = record.input, record.output, record.fs
+    span = float(np.ptp(u))
+    if span == 0:
+        raise RecordError("the input is constant: no start-up and no stroke to find")
+    moved = np.flatnonzero(np.abs(u - u[0]) > 1e-3 * span)
+    rest_end = int(moved[0]) if moved.size else 0
+    points = turning_points(u, threshold)
+    jump = rest_end > 0 and abs(u[rest_end] - u[rest_end - 1]) > threshold * span
+    step = rest_end if jump else None
+    if step is not None:
+        # the ringing is searched up to the end of the first stroke leaving the step's
+        # level (the step's own plateau can be the first turning point)
+        off_level = np.flatnonzero(u[step:] != u[step])
+        moving = step + int(off_level[0]) if off_level.size else len(u)
+        later = points[points >= moving]
+        settled = _ringing_end(y, step, int(later[0]) if later.size else len(u))
+    else:
+        settled = rest_end
+    # the first stroke that began after the step: a plateau at the step's level is start-up
+    first_move = rest_end if step is None else moving
+    candidates = points[(points >= first_move) & (points >= settled)]
+    if len(candidates) == 0:
+        raise RecordError(f"no turning point of the input after the start-up (rest to sample "
+                          f"{rest_end}, settled at {settled}): nothing left to fit")
+    first = int(candidates[0])
+    parts = [f"rest {rest_end} samples ({rest_end / fs:.3g} s)" if rest_end > 1 else "no rest"]
+    if step is not None:
+        parts.append(f"a step of {u[step] - u[step - 1]:+.4g} {record.input_unit} at sample "
+                     f"{step} ({step / fs:.3g} s), ringing until sample {settled} "
+                     f"({(settled - step) / fs * 1e3:.3g} ms)")
+    parts.append(f"the virgin stroke up to the first turning point after it, sample {first} "
+                 f"({first / fs:.3g} s)")
+    return StartUp(rest_end, step, settled, first,
+                   f"start-up of {first} samples ({first / fs:.3g} s): " + "; ".join(parts))
+
+
+def cut_at_turning_points(record, threshold=0.02, first=0, last=-1, skip_transient=False):
     """The record from one turning point of its input to another (whole strokes).
 
-    Starting a hysteresis fit at a turning point removes the start-up (rest,
-    a voltage step, the virgin curve) from the data.
+    Cutting at turning points keeps whole strokes.  Whether the start-up (rest, a
+    voltage step, the ringing after it, the virgin stroke) goes too depends on
+    the record: when the step lands on an extreme of the input, the step
+    sample is itself the first turning point and the default cut keeps the
+    step and its ringing.  ``skip_transient=True`` drops the start-up
+    (:func:`find_start_up`) and says so.
 
     Parameters
     ----------
@@ -860,7 +984,14 @@ def cut_at_turning_points(record, threshold=0.02, first=0, last=-1):
         See :func:`turning_points`.
     first, last : int, optional
         Which turning points to cut at (Python indices into the list of
-        turning points; default the first and the last).
+        turning points, those after the start-up with ``skip_transient``;
+        default the first and the last).
+    skip_transient : bool, optional
+        Count only turning points after the start-up: the rest, the step,
+        its ringing and the virgin stroke are dropped, the fact logged
+        (logger ``piezolib.records``, level INFO) and written to
+        ``metadata["dropped"]`` (one line) and ``metadata["start_up"]``
+        (the :class:`StartUp`).  Default False: every turning point counts.
 
     Returns
     -------
@@ -871,18 +1002,28 @@ def cut_at_turning_points(record, threshold=0.02, first=0, last=-1):
     Raises
     ------
     RecordError
-        Fewer than two turning points.
+        Fewer than two turning points (after the start-up with ``skip_transient``).
     """
     _check_record(record)
+    if not isinstance(skip_transient, (bool, np.bool_)):
+        raise TypeError(f"skip_transient must be True or False, got {skip_transient!r}")
     points = turning_points(record.input, threshold)
+    meta = {}
+    if skip_transient:
+        start_up = find_start_up(record, threshold)
+        points = points[points >= start_up.first_turning_point]
+        meta = {"start_up": start_up, "dropped": start_up.note}
     if len(points) < 2:
-        raise RecordError(f"the input has {len(points)} turning point(s) reversing by more "
-                          f"than {threshold:g} of its range; need 2 to cut whole strokes")
+        after = " after the start-up" if skip_transient else ""
+        raise RecordError(f"the input has {len(points)} turning point(s){after} reversing by "
+                          f"more than {threshold:g} of its range; need 2 to cut whole strokes")
     a, b = int(points[first]), int(points[last])
     if b <= a:
         raise ValueError(f"turning point last={last} is not after first={first}")
+    if skip_transient:
+        logger.info("cut_at_turning_points dropped the %s", meta["dropped"])
     cut = record.segment(a, b + 1)
-    return replace(cut, metadata={**record.metadata, "cut": (a, b + 1)})
+    return replace(cut, metadata={**record.metadata, **meta, "cut": (a, b + 1)})
 
 
 def detrend(record, which="output", kind="constant"):

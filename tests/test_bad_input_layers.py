@@ -170,6 +170,13 @@ CASES = {
     "stage_data.check_experiment_files": (None, {"directory": DIRECTORY}),
     "stage_data.write_foreign_records": (None, {"directory": DIRECTORY}),
     "stage_data.foreign_record_paths": (dict(), {"directory": DIRECTORY}),
+    "stage_data.raw_hysteresis_record": (
+        dict(amplitudes_V=(0.5,), periods=1, rest_s=0.05),
+        {"seed": {"negative": -1, "text": "x"}, "sample_rate_Hz": POSITIVE,
+         "amplitudes_V": {"empty": [], "negative": [-1.0], "nan": [np.nan], "text": "ab",
+                          "too large": [5.0]},
+         "top_V": POSITIVE, "rest_s": POSITIVE, "periods": {"zero": 0, "text": "x"},
+         "frequency_Hz": POSITIVE, "noise_factor": {"negative": -1.0, "nan": np.nan, "text": "x"}}),
     # problem.design, analysis, hysteresis_fits
     "design.design_controller": (None, {"G": PLANT, "order": POSITIVE_INT,
                                         "d_order": {"negative": -1, "fraction": 1.5},

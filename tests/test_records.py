@@ -354,3 +354,64 @@ def test_split_and_detrend():
     assert np.array_equal(flat.input, rec.input)
     with pytest.raises(ValueError, match="which"):
         R.detrend(rec, which="time")
+
+
+# --- raw records that start at rest (issue 36) ------------------------------------------------
+def raw_record(noise=2e-3, seed=0):
+    """Rest, a step onto the input's top (the step is the first turning point), a lightly
+    damped resonance ringing after it, then 2 Hz cosines dipping from the top."""
+    import scipy.signal as sg
+    n = int(FS / 2)
+    phase = 2 * np.pi * np.arange(n) / n
+    u = np.concatenate([np.zeros(500)] + [3 - a * (1 - np.cos(phase)) for a in (0.5, 1, 1.5)])
+    w0, zeta = 2 * np.pi * 300, 0.03
+    b, a = sg.cont2discrete(([w0 ** 2], [1, 2 * zeta * w0, w0 ** 2]), 1 / FS, method="zoh")[:2]
+    y = sg.lfilter(np.ravel(b), a, u) + np.random.default_rng(seed).normal(0, noise, u.size)
+    return R.Record(u, y, FS)
+
+
+def test_the_default_cut_keeps_the_step_and_its_ringing():
+    rec = raw_record()
+    assert R.cut_at_turning_points(rec).metadata["cut"][0] == 500    # the step sample itself
+
+
+def test_skip_transient_drops_rest_step_ringing_and_virgin_stroke(caplog):
+    rec = raw_record()
+    start_up = R.find_start_up(rec)
+    assert start_up.rest_end == start_up.step == 500
+    ringing_ms = 1e3 * (start_up.settled - start_up.step) / FS
+    assert 20 < ringing_ms < 250       # 1/(zeta w0) = 18 ms: it decays into 2 mV noise
+    first_minimum = 500 + int(FS / 4)  # the first cosine's bottom, a quarter second later
+    assert abs(start_up.first_turning_point - first_minimum) <= 2
+    with caplog.at_level("INFO", logger="piezolib.records"):
+        cut = R.cut_at_turning_points(rec, skip_transient=True)
+    assert cut.metadata["cut"][0] == start_up.first_turning_point
+    assert cut.metadata["start_up"] == start_up
+    assert "step" in cut.metadata["dropped"] and "ringing" in cut.metadata["dropped"]
+    assert "dropped" in caplog.text and "ringing" in caplog.text
+    # what is left has no ringing: the output's second difference is at the noise level
+    assert np.abs(np.diff(cut.output, 2)).max() < 8 * np.sqrt(6) * 2e-3
+
+
+def test_a_record_without_start_up_loses_only_its_first_stroke():
+    t = np.arange(2000) / FS
+    u = np.sin(2 * np.pi * 5 * t)
+    rec = R.Record(u, 2 * u, FS)
+    start_up = R.find_start_up(rec)
+    assert start_up.step is None and start_up.rest_end <= 1     # moves from its second sample
+    assert start_up.first_turning_point == R.turning_points(u)[0]
+    assert R.cut_at_turning_points(rec, skip_transient=True).metadata["cut"] == \
+        R.cut_at_turning_points(rec).metadata["cut"]
+    with pytest.raises(TypeError, match="skip_transient"):
+        R.cut_at_turning_points(rec, skip_transient="yes")
+    with pytest.raises(R.RecordError, match="constant"):
+        R.find_start_up(R.Record(np.ones(10), t[:10], FS))
+
+
+def test_find_start_up_refuses_bad_input():
+    rec = raw_record()
+    with pytest.raises(TypeError, match="record"):
+        R.find_start_up(rec.input)
+    for bad in (0.0, 1.0, -0.1):
+        with pytest.raises(ValueError, match="threshold"):
+            R.find_start_up(rec, threshold=bad)

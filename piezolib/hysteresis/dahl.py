@@ -654,9 +654,18 @@ def _solve_strokes(dyn, s, Z, x_start, targets, n_grid=48):
         sigma = np.where(done, sigma, np.where(inside, newton, 0.5 * (lo + hi)))
     else:
         raise NotInvertibleError("the implicit relation x = g_a v - H did not converge")
-    if np.any(_min_slopes(dyn, sn, snp, np.maximum.reduceat(sigma, offsets)) <= 0):
+    slopes = _min_slopes(dyn, sn, snp, np.maximum.reduceat(sigma, offsets))
+    if np.any(slopes <= 0):
+        a2 = dyn.m ** 2 - dyn.disc                    # alpha2 (nan/inf for alpha1 > 1e154)
+        zeta = -dyn.m / math.sqrt(a2) if math.isfinite(a2) and a2 > 0 else math.inf
         raise NotInvertibleError(
-            "x + H(x) is not increasing along a stroke (dH/dx <= -1: the Dahl transient "
-            "overshoots), so x = g_a v - H has no unique solution; use a better damped "
-            "model or drive the model by displacement (dahl_hysteresis)")
+            f"x + H(x) is not increasing along a stroke (smallest slope {slopes.min():.3g}: "
+            f"dH/dx <= -1, the Dahl transient overshoots; damping alpha1/(2 sqrt(alpha2)) = "
+            f"{zeta:.3g}), so x = g_a v - H has no unique solution for this input.  A Dahl "
+            "model fitted to a raw record that starts at rest and steps has learnt the "
+            "stage's ringing after the step as hysteresis: refit it on the record without "
+            "its start-up (piezolib.records.cut_at_turning_points(record, "
+            "skip_transient=True)), or fit the linear dynamics with the hysteresis "
+            "(piezolib.hysteresis.fit_hammerstein).  To evaluate this model anyway, drive it "
+            "by displacement (dahl_hysteresis), which needs no inversion")
     return np.split(sigma, offsets[1:])

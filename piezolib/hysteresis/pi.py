@@ -23,6 +23,7 @@ from piezolib.hysteresis.common import (FitScores, FitWarning, check_loops, cova
                                         loop_errors, warn_about)
 from piezolib.hysteresis.dahl import NotInvertibleError, strokes
 
+# pi_regressors is shared with hammerstein.py (checked inputs), not part of the API
 __all__ = ["PI_STARTS", "PIModel", "PIFit", "play_outputs", "fit_pi", "FitWarning"]
 
 #: Initial play states: "rest" as if lowered to the first input (y_i = v_0 + r_i,
@@ -215,6 +216,9 @@ class PIFit(FitScores):
     parameters : tuple of ParameterEstimate
         w_0 ... w_n (and x0) with 95 % confidence intervals; a weight on its
         bound 0 is a play the data do not call for.
+    start_scores : dict
+        With ``start="auto"``: the weighted residual norm of the fit from each
+        initial state (the smaller one was kept); empty otherwise.
     """
 
     model: PIModel
@@ -224,9 +228,45 @@ class PIFit(FitScores):
     rms_percent: np.ndarray
     max_percent: np.ndarray
     parameters: tuple = ()
+    start_scores: dict = None
 
 
-def fit_pi(loops, n_plays=10, offset=True, start="rest", discard=0, thresholds=None):
+def pi_regressors(data, thresholds, start):
+    """Play outputs of already validated loops, one (Y, weight) per loop.
+
+    ``data`` is what :func:`~piezolib.hysteresis.common.check_loops` returns;
+    ``Y`` holds the play outputs of the model start ``start`` on every sample
+    of the (thinned) loop, ``weight`` = 1 / (output range x sqrt(samples used)).
+    Shared by :func:`fit_pi` and the Hammerstein fit.
+    """
+    template = PIModel(tuple(thresholds), tuple(np.ones(len(thresholds))), start=start)
+    r = np.asarray(template.thresholds)
+    out = []
+    for v, x, used in data:
+        Y = play_outputs(v, r, template.initial_state(v[0]))
+        out.append((Y, 1.0 / (np.ptp(x[used]) * math.sqrt(used.size))))
+    return out
+
+
+def _solve_weights(data, r, offset, start):
+    """Bounded least squares of the weights (and offset) from one initial state."""
+    rows, rhs = [], []
+    for (v, x, used), (Y, weight) in zip(data, pi_regressors(data, r, start)):
+        cols = [Y[used]] + ([np.ones((used.size, 1))] if offset else [])
+        rows.append(weight * np.hstack(cols))
+        rhs.append(weight * x[used])
+    A, b = np.vstack(rows), np.concatenate(rhs)
+    slope = np.linalg.lstsq(A[:, :1] - A[:, :1].mean(), b - b.mean(), rcond=None)[0][0] \
+        if offset else np.linalg.lstsq(A[:, :1], b, rcond=None)[0][0]
+    if not slope > 0:
+        raise ValueError("the loops must show x increasing with v (positive mean slope): "
+                         "the data cannot support a hysteresis model")
+    lower = np.r_[np.zeros(r.size), [-np.inf] if offset else []]
+    theta = opt.lsq_linear(A, b, bounds=(lower, np.inf), method="bvls").x
+    return A, b, theta
+
+
+def fit_pi(loops, n_plays=10, offset=True, start="auto", discard=0, thresholds=None):
     """Fit the play weights of a PI model to one or several loops jointly (NNLS).
 
     With the thresholds fixed the output is linear in the weights and the
@@ -245,8 +285,18 @@ def fit_pi(loops, n_plays=10, offset=True, start="rest", discard=0, thresholds=N
         Default thresholds r_i = i / n_plays * (largest input range) / 2.
     offset : bool, optional
         Fit the output offset x0 (default True).
-    start : {"rest", "virgin"}, optional
-        The model's initial play state (:data:`PI_STARTS`).
+    start : {"auto", "rest", "virgin"}, optional
+        The model's initial play state (:data:`PI_STARTS`).  Default
+        ``"auto"``: fit from both and keep the one with the smaller residual.
+        The initial state is the stage's unrecorded history, which the
+        record alone decides: a record that begins after a long descending
+        stroke (a cut at an input minimum, a stage lowered to rest) supports
+        "rest", a freshly powered or depolarised actuator "virgin".  A wrong
+        guess does not merely add error at the start: the weights that
+        would explain the first strokes are driven to their bound 0
+        (observed on a raw record: 8 of 10 weights zero from "rest" and
+        twice the error of "virgin"), and both fits together cost two linear
+        solves.  Pass one of :data:`PI_STARTS` to impose it.
     discard : int, optional
         Samples at the start of each record left out of the residuals (the
         plays still run through them).
@@ -256,8 +306,10 @@ def fit_pi(loops, n_plays=10, offset=True, start="rest", discard=0, thresholds=N
     Returns
     -------
     PIFit
-        A :class:`~piezolib.hysteresis.common.FitWarning` is issued when the
-        linear weight w_0 ends at 0 (the model then has no exact inverse).
+        A :class:`~piezolib.hysteresis.common.FitWarning` names every
+        parameter on its bound (a weight at 0: a play the data do not call
+        for; the linear weight w_0 at 0 leaves the model without an exact
+        inverse) or not identifiable (95 % interval including 0).
 
     Raises
     ------
@@ -266,8 +318,8 @@ def fit_pi(loops, n_plays=10, offset=True, start="rest", discard=0, thresholds=N
         ``discard``, or with x not increasing with v.
     """
     data = check_loops(loops, discard, 1)
-    if start not in PI_STARTS:
-        raise ValueError(f"start must be one of {PI_STARTS}, got {start!r}")
+    if start != "auto" and start not in PI_STARTS:
+        raise ValueError(f"start must be 'auto' or one of {PI_STARTS}, got {start!r}")
     if not isinstance(offset, (bool, np.bool_)):
         raise TypeError(f"offset must be True or False, got {offset!r}")
     if thresholds is None:
@@ -275,26 +327,17 @@ def fit_pi(loops, n_plays=10, offset=True, start="rest", discard=0, thresholds=N
         half = max(float(np.ptp(v)) for v, x, used in data) / 2.0
         thresholds = half * np.arange(n_plays) / n_plays
     thresholds = check_finite_array("thresholds", thresholds, ndim=1, min_length=1, real=True)
-    template = PIModel(tuple(thresholds), tuple(np.ones(thresholds.size)), start=start)
-    r = np.asarray(template.thresholds)
-    rows, rhs = [], []
-    for v, x, used in data:
-        Y = play_outputs(v, r, template.initial_state(v[0]))[used]
-        weight = 1.0 / (np.ptp(x[used]) * math.sqrt(used.size))
-        cols = [Y] + ([np.ones((used.size, 1))] if offset else [])
-        rows.append(weight * np.hstack(cols))
-        rhs.append(weight * x[used])
-    A, b = np.vstack(rows), np.concatenate(rhs)
-    slope = np.linalg.lstsq(A[:, :1] - A[:, :1].mean(), b - b.mean(), rcond=None)[0][0] \
-        if offset else np.linalg.lstsq(A[:, :1], b, rcond=None)[0][0]
-    if not slope > 0:
-        raise ValueError("the loops must show x increasing with v (positive mean slope): "
-                         "the data cannot support a hysteresis model")
-    lower = np.r_[np.zeros(r.size), [-np.inf] if offset else []]
-    sol = opt.lsq_linear(A, b, bounds=(lower, np.inf), method="bvls")
-    theta = sol.x
+    r = np.asarray(PIModel(tuple(thresholds), tuple(np.ones(thresholds.size))).thresholds)
+    scores = {}
+    if start == "auto":
+        solved = {s0: _solve_weights(data, r, offset, s0) for s0 in PI_STARTS}
+        scores = {s0: float(np.linalg.norm(A @ th - b)) for s0, (A, b, th) in solved.items()}
+        start = min(PI_STARTS, key=lambda s0: scores[s0])        # ties: "rest", listed first
+        A, b, theta = solved[start]
+    else:
+        A, b, theta = _solve_weights(data, r, offset, start)
     x0 = float(theta[-1]) if offset else 0.0
-    model = PIModel(template.thresholds, tuple(theta[:r.size]), x0=x0, start=start)
+    model = PIModel(tuple(r), tuple(theta[:r.size]), x0=x0, start=start)
     w_fit = theta[:r.size]
     tiny = 1e-12 * float(np.sum(w_fit))               # rounding of the active set
     w_fit[w_fit <= tiny] = 0.0
@@ -303,13 +346,15 @@ def fit_pi(loops, n_plays=10, offset=True, start="rest", discard=0, thresholds=N
     names = [f"w_{i} (r = {ri:.4g})" for i, ri in enumerate(r)] + (["x0"] if offset else [])
     units = ["x/v"] * r.size + (["x"] if offset else [])
     parameters = estimates(names, units, theta, [False] * theta.size, cov, at_bound)
+    what = f"fit_pi (start {start!r})"
     if at_bound[0]:
-        warn_about(parameters[:1], "fit_pi: the linear weight w_0 is 0 (no exact inverse)")
+        what += ": the linear weight w_0 is 0 (no exact inverse)"
+    warn_about(parameters, what)
     x_model = [model.simulate(np.asarray(pair[0], dtype=float))
                for pair in _pairs(loops)]
     res, rms, rms_pct, max_pct = loop_errors(x_model, _pairs(loops), discard)
     return PIFit(model=model, x_model=x_model, residuals=res, rms=rms, rms_percent=rms_pct,
-                 max_percent=max_pct, parameters=tuple(parameters))
+                 max_percent=max_pct, parameters=tuple(parameters), start_scores=scores)
 
 
 def _pairs(loops):

@@ -16,6 +16,7 @@ from piezolib._checks import (check_finite_array, check_integer, check_positive,
 __all__ = [
     "RLSResult", "rls", "arx_regressors", "ArxModel", "fit_arx", "DEFAULT_INITIAL_GAIN",
     "MIN_SAMPLES_PER_PARAMETER", "MAX_INITIAL_GAIN", "least_squares", "check_io",
+    "excitation_band",
 ]   # discrete_tf, checked_arx_regressors: shared with oe.py and continuous.py, not API
 
 
@@ -264,6 +265,41 @@ def checked_arx_regressors(u, y, na, nb, nk):
         raise ValueError(f"the regressors are not persistently exciting of order {p}: "
                          "use a richer input or a lower order")
     return phi, target
+
+
+def excitation_band(u, fs, share=0.99):
+    """Frequency below which ``share`` of an input's power lies [Hz] (mean removed).
+
+    An identification input must excite the band of the model it is to
+    give: a chirp to 2 kHz puts its power up to 2 kHz, whereas a hysteresis
+    record (a slow sine, a step from rest) has nearly all its power below a
+    few Hz, and a high-order model fitted to it is unsupported by the data.
+
+    Parameters
+    ----------
+    u : array_like
+        Input record, 1-D, at least 16 samples.
+    fs : float
+        Sampling rate [Hz].
+    share : float, optional
+        Share of the power, 0 < share < 1.
+
+    Returns
+    -------
+    float
+        The frequency [Hz] (0 for a constant input).
+    """
+    u = check_finite_array("u", u, ndim=1, min_length=16, real=True)
+    fs = check_positive("fs", fs)
+    share = check_positive("share", share)
+    if share >= 1:
+        raise ValueError(f"share must be below 1, got {share!r}")
+    power = np.abs(np.fft.rfft(u - u.mean())) ** 2
+    total = float(power.sum())
+    if total == 0:
+        return 0.0
+    k = int(np.searchsorted(np.cumsum(power) / total, share))
+    return float(min(k, power.size - 1) * fs / u.size)
 
 
 def _gram(phi):

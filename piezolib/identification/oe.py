@@ -11,6 +11,7 @@ import scipy.signal as sg
 
 from piezolib._checks import check_integer, check_positive
 from piezolib.identification.arx import (DEFAULT_INITIAL_GAIN, ArxModel, arx_regressors,
+                                         excitation_band,
                                          checked_arx_regressors, discrete_tf, fit_arx,
                                          least_squares)
 
@@ -95,8 +96,13 @@ def fit_output_error(u, y, fs, na=6, nb=6, nk=1, iterations=50, tol=1e-8,
         params = least_squares(phi, target)
         den = np.concatenate(([1.0], params[:na]))
         if np.any(np.abs(np.roots(den)) >= 1):
-            raise ValueError("an intermediate model is unstable, so it cannot prefilter "
-                             "the data: check the excitation and the model order")
+            band = excitation_band(u, fs)
+            raise ValueError(
+                "an intermediate model is unstable, so it cannot prefilter the data: 99 % of "
+                f"the input's power lies below {band:.3g} Hz (Nyquist {fs / 2:.4g} Hz).  "
+                "A record without broadband excitation (a hysteresis loop, a step from rest) "
+                "cannot identify a model of this order: identify from a chirp or another "
+                "broadband input, or lower the order")
         prefilters.append(den)
         if previous is not None and (np.max(np.abs(params - previous))
                                      < tol * np.max(np.abs(params))):

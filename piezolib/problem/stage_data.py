@@ -29,7 +29,7 @@ __all__ = [
     "chirp_input", "ChirpExperiment", "experiment_paths", "write_experiment_files",
     "load_record", "load_chirp", "load_hysteresis_loops", "MANIFEST_NAME", "manifest_path",
     "read_manifest", "check_experiment_files", "write_foreign_records", "FOREIGN_FORM",
-    "foreign_record_paths",
+    "foreign_record_paths", "RAW_RECORD", "RawRecord", "raw_hysteresis_record",
 ]
 
 
@@ -496,3 +496,122 @@ def write_foreign_records(directory=None):
         np.savetxt(body, table, fmt=list(FOREIGN_FORM["formats"]), delimiter=",")
         written.append(files.atomic_write(paths[name], body.getvalue()))
     return written
+
+
+# --- a raw hysteresis record that starts at rest (issue 36) ---------------------------------
+#: The default raw record of :func:`raw_hysteresis_record`: 5 kHz, 5x the stage's sensor noise,
+#: 0.2 s at rest at 0 V, a step to the top of the excitation ``top_V``, then a 1 Hz cosine
+#: dipping from the top by twice each of ``amplitudes_V`` (two periods per amplitude) [V of u_c].
+RAW_RECORD = {"sample_rate_Hz": 5000.0, "noise_factor": 5.0, "rest_s": 0.2, "top_V": 3.5,
+              "amplitudes_V": (0.4, 0.8, 1.2, 1.6, 1.6), "periods": 2, "frequency_Hz": 1.0,
+              "seed": 36}
+
+
+@dataclass(frozen=True)
+class RawRecord:
+    """A raw hysteresis record of the virtual stage and its noise-free twin.
+
+    Attributes
+    ----------
+    record : piezolib.records.Record
+        u_c [V] -> v_y [V] as measured: sensor noise and ADC quantisation included.
+    noise_free : piezolib.records.Record
+        The same run without noise and ADC: u_c [V] -> y [V], the true output.
+    step_index : int
+        The sample at which the input steps from rest to the top of the excitation.
+    noise_rms_V : float
+        The sensor noise of ``record`` [V rms].
+    """
+
+    record: records.Record
+    noise_free: records.Record
+    step_index: int
+    noise_rms_V: float
+
+
+def raw_hysteresis_record(seed=None, *, sample_rate_Hz=None, amplitudes_V=None, top_V=None,
+                          rest_s=None, periods=None, frequency_Hz=None, noise_factor=None):
+    """A raw hysteresis record as a real stage gives one: rest, a step, ringing, large sines.
+
+    The stage (:class:`~piezolib.problem.stage.VirtualStage` at ``sample_rate_Hz``, its
+    hysteresis truth and linear dynamics G) sits at rest at u_c = 0 V for ``rest_s``,
+    the input then jumps to ``top_V`` in one sample, which rings G's resonances for some
+    tens of milliseconds, and falls straight into a cosine of ``frequency_Hz``
+    dipping by 2 A from the top, ``periods`` periods for each A of ``amplitudes_V``:
+    u_c = top - A (1 - cos 2 pi f t).  The step sample is the input's first maximum, so
+    the first turning point of the record is the step itself.  Every argument left out
+    takes its value from :data:`RAW_RECORD`.
+
+    Parameters
+    ----------
+    seed : int, optional
+        Sensor-noise seed (default ``RAW_RECORD["seed"]``).
+    sample_rate_Hz : float, optional
+        Sampling rate of the record [Hz].
+    amplitudes_V : sequence of float, optional
+        Cosine amplitudes A [V of u_c], each > 0 with top - 2 A >= the DAC's lower limit.
+    top_V : float, optional
+        The level the step goes to, the cosine's top [V of u_c].
+    rest_s : float, optional
+        Time at rest before the step [s].
+    periods : int, optional
+        Periods per amplitude.
+    frequency_Hz : float, optional
+        Cosine frequency [Hz].
+    noise_factor : float, optional
+        Sensor noise as a multiple of the default stage's 0.5 mV rms.
+
+    Returns
+    -------
+    RawRecord
+        The measured record, its noise-free twin, the step's index and the noise level.
+
+    Examples
+    --------
+    >>> raw = raw_hysteresis_record()
+    >>> len(raw.record), raw.record.fs, raw.step_index
+    (51001, 5000.0, 1000)
+    """
+    d = RAW_RECORD
+    seed = d["seed"] if seed is None else seed
+    fs = check_positive("sample_rate_Hz", d["sample_rate_Hz"] if sample_rate_Hz is None
+                        else sample_rate_Hz)
+    top = float(d["top_V"] if top_V is None else check_positive("top_V", top_V))
+    rest = check_positive("rest_s", d["rest_s"] if rest_s is None else rest_s)
+    f = check_positive("frequency_Hz", d["frequency_Hz"] if frequency_Hz is None
+                       else frequency_Hz)
+    factor = d["noise_factor"] if noise_factor is None else noise_factor
+    if not isinstance(factor, (int, float)) or isinstance(factor, bool) or not factor >= 0 \
+            or not np.isfinite(factor):
+        raise ValueError(f"noise_factor must be a finite number >= 0, got {factor!r}")
+    n_periods = d["periods"] if periods is None else periods
+    if isinstance(n_periods, bool) or not isinstance(n_periods, (int, np.integer)) \
+            or n_periods < 1:
+        raise ValueError(f"periods must be an integer >= 1, got {n_periods!r}")
+    amps = d["amplitudes_V"] if amplitudes_V is None else amplitudes_V
+    amps = np.asarray(amps, dtype=float) if np.ndim(amps) == 1 else None
+    if amps is None or amps.size == 0 or not np.all(np.isfinite(amps)) or np.any(amps <= 0):
+        raise ValueError(f"amplitudes_V must be a 1-D sequence of positive numbers, "
+                         f"got {amplitudes_V!r}")
+    lowest = paper.AMPLIFIER_INPUT_RANGE_V[0]
+    if top - 2 * amps.max() < lowest or top > paper.AMPLIFIER_INPUT_RANGE_V[1]:
+        raise ValueError(f"top_V = {top:g} V and amplitudes_V up to {amps.max():g} V leave the "
+                         f"DAC range {paper.AMPLIFIER_INPUT_RANGE_V} V")
+    n_rest = int(round(rest * fs))
+    if n_rest < 2:
+        raise ValueError(f"rest_s = {rest:g} s keeps fewer than 2 samples at {fs:g} Hz")
+    n_period = int(round(fs / f))
+    phase = 2 * np.pi * np.arange(n_period) / n_period
+    wave = np.concatenate([top - a * (1 - np.cos(phase)) for a in amps
+                           for _ in range(int(n_periods))] + [[top]])
+    u = np.concatenate((np.zeros(n_rest), wave))
+    noise = factor * VirtualStage().settings.noise_rms_V
+    stage = VirtualStage(seed=seed, sample_rate_Hz=fs, noise_rms_V=noise)
+    rec = stage.run(u)
+    meta = {"source": "piezolib.problem.stage_data.raw_hysteresis_record", "seed": int(seed),
+            "step_index": n_rest, "noise_rms_V": noise}
+    measured = records.Record(rec.u_c_V, rec.v_y_V, fs, input_name="u_c", output_name="v_y",
+                              metadata=meta)
+    true = records.Record(rec.u_c_V, rec.x_um / paper.UM_PER_VOLT, fs, input_name="u_c",
+                          output_name="y", metadata={**meta, "noise_free": True})
+    return RawRecord(measured, true, n_rest, noise)

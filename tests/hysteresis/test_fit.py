@@ -169,3 +169,19 @@ def test_rescore_moves_a_fit_to_another_model_and_recomputes_its_errors():
         hy.rescore_dahl(fit, model("printed"), loops)
     with pytest.raises(TypeError, match="DahlFit"):
         hy.rescore_dahl(fit.model, fit.model, loops)
+
+
+def test_default_stride_keeps_at_most_max_fit_samples():
+    """A long record is fitted on every k-th sample (turning points kept): the same fit as
+    the explicit stride, and the reported residuals still cover every sample (issue 36)."""
+    import warnings
+    true = hy.DahlModel(alpha1=3.0, alpha2=4.0, beta1=0.0, beta2=0.2 * 4 / 30, gamma_a=30.0,
+                        g_a=0.95, form="bliman_sorine")
+    v = 2.0 + 2.0 * np.sin(np.linspace(0, 6 * np.pi, 4 * hy.MAX_FIT_SAMPLES + 1))
+    x = hy.simulate_dahl(true, v).x
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", hy.FitWarning)
+        auto = hy.fit_dahl([(v, x)], gamma_a=30.0, starts=1)
+        explicit = hy.fit_dahl([(v, x)], gamma_a=30.0, starts=1, stride=5)
+    assert auto.model == explicit.model
+    assert auto.residuals[0].size == v.size

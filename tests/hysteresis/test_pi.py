@@ -83,3 +83,28 @@ def test_zero_linear_weight_is_reported():
     with pytest.warns(hy.FitWarning, match="w_0"):
         fit = hy.fit_pi([(v, true.simulate(v))], thresholds=(0.0, 0.4))
     assert fit.parameter_table()["at_bound"].iloc[0]
+
+
+def test_every_weight_on_its_bound_is_named_in_a_warning():
+    """docs/hysteresis.md: a FitWarning names every parameter on a bound, not only w_0."""
+    true = hy.PIModel(R, W, x0=-0.1)
+    loops = [(v, true.simulate(v)) for v in
+             (signals.triangle(A, 10.0, fs=FS, periods=2)[1] for A in (1.0, 2.0, 3.0))]
+    zero = [i for i, w in enumerate(W) if w == 0]
+    assert zero and zero[0] > 0
+    with pytest.warns(hy.FitWarning, match=f"w_{zero[0]} "):
+        hy.fit_pi(loops, thresholds=R, start="rest")
+
+
+@pytest.mark.parametrize("start", hy.PI_STARTS)
+def test_the_default_start_is_the_one_the_data_support(start):
+    """Data from either initial state: the default fit finds it (exactly), not always "rest"."""
+    true = hy.PIModel(R, W, x0=-0.1, start=start)
+    v = np.r_[minor_loops(), signals.triangle(3.0, 10.0, fs=FS, periods=2)[1]]
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", hy.FitWarning)
+        fit = hy.fit_pi([(v, true.simulate(v))], thresholds=R)
+    assert fit.model.start == start
+    assert fit.worst_rms_percent < 1e-8
+    assert set(fit.start_scores) == set(hy.PI_STARTS)

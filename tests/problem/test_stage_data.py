@@ -134,3 +134,25 @@ def test_foreign_records_have_the_foreign_form():
     assert np.all(rec.input[:rest] == 0) and rec.input[rest] > 1.0      # at rest, then a step
     # 5x the stage's noise: 3 um/V x 2.5 mV = 7.5 nm rms (plus 0.9 nm ADC steps) at rest
     assert 0.005 < np.std(rec.output[:rest]) < 0.011
+
+
+def test_raw_record_starts_at_rest_steps_rings_and_has_a_noise_free_twin():
+    """Issue 36's record: the step sample is the input's first turning point, it rings
+    the stage's resonances, and the noisy record differs from its twin by the noise only."""
+    from piezolib import records
+    from piezolib.problem.stage_data import RAW_RECORD, raw_hysteresis_record
+    raw = raw_hysteresis_record()
+    rec, twin, k = raw.record, raw.noise_free, raw.step_index
+    assert rec.fs == RAW_RECORD["sample_rate_Hz"] and len(rec) >= 50_000
+    np.testing.assert_array_equal(rec.input, twin.input)
+    assert np.all(rec.input[:k] == 0) and rec.input[k] == pytest.approx(RAW_RECORD["top_V"], abs=1e-3)
+    points = records.turning_points(rec.input)
+    assert np.all(rec.input[k:points[0] + 1] == rec.input[k])    # first turning point: the step
+    top = twin.output[k:k + 50]
+    assert top.max() > 1.2 * twin.output[points[0] + 200]          # the overshoot rings
+    noise = rec.output - twin.output
+    assert np.std(noise) == pytest.approx(raw.noise_rms_V, rel=0.05)
+    start_up = records.find_start_up(rec)
+    assert start_up.step == k and k < start_up.settled < k + 250   # tens of ms of ringing
+    with pytest.raises(ValueError, match="DAC range"):
+        raw_hysteresis_record(amplitudes_V=(5.0,))

@@ -1,0 +1,358 @@
+"""Hysteresis followed by the stage's linear dynamics (a Hammerstein model).
+
+x = x0 + G[p],  p = sum_i w_i F_{r_i}[v]:  a Prandtl-Ishlinskii operator
+(:class:`~piezolib.hysteresis.pi.PIModel`) then a discrete linear model G(q)
+of unit DC gain at the record's rate, started at rest (in steady state with
+the first sample).  A raw record that starts at rest and steps to its first
+value rings the stage's resonances after the step; no rate-independent model
+can follow that ringing, this one does, and at low frequency it is the PI
+model itself (G has unit gain), so its quasi-static feedforward is the PI
+model's exact inverse.
+
+:func:`fit_hammerstein` fits it to records at their full rate.  With the
+dynamics given (e.g. an identified G, normalised to unit DC gain) the
+weights are one bounded linear least-squares problem, as in
+:func:`~piezolib.hysteresis.pi.fit_pi`.  With only their order given, the
+fit alternates: the weights for fixed dynamics (bounded least squares on
+the play outputs filtered by G), then the dynamics for fixed weights by
+Steiglitz-McBride passes (an output-error fit of B/A from p to x), until the
+residual stops falling.
+"""
+
+import math
+from dataclasses import dataclass
+
+import control as ct
+import numpy as np
+import scipy.optimize as opt
+import scipy.signal as sg
+
+from piezolib._checks import check_finite_array, check_integer, check_positive
+from piezolib.hysteresis.common import (FitScores, check_loops, covariance, estimates,
+                                        loop_errors, warn_about)
+from piezolib.hysteresis.pi import PI_STARTS, PIModel, pi_regressors
+
+__all__ = ["HammersteinModel", "HammersteinFit", "fit_hammerstein", "unit_dc_dynamics"]
+
+
+def _unit_gain(b, a):
+    """(b, a) scaled so that B(1)/A(1) = 1; ValueError for a zero or infinite DC gain."""
+    b, a = np.asarray(b, dtype=float), np.asarray(a, dtype=float)
+    gain = float(np.sum(b)) / float(np.sum(a))
+    if not np.isfinite(gain) or gain == 0:
+        raise ValueError(f"the dynamics must have a finite non-zero DC gain, got {gain!r}")
+    return b / gain, a
+
+
+def unit_dc_dynamics(dynamics, fs):
+    """Discrete dynamics (b, a) of unit DC gain at the rate ``fs`` [Hz] from an LTI model.
+
+    Parameters
+    ----------
+    dynamics : control.LTI
+        SISO, stable.  Continuous: discretised with a zero-order hold at
+        ``fs``; discrete: its sampling time must be 1 / fs.
+    fs : float
+        Sampling rate of the records [Hz].
+
+    Returns
+    -------
+    b, a : ndarray
+        Coefficients in powers of q^-1 (``scipy.signal.lfilter`` form),
+        a[0] = 1, b scaled so that B(1) / A(1) = 1.
+    """
+    fs = check_positive("fs", fs)
+    if not isinstance(dynamics, ct.LTI):
+        raise TypeError(f"dynamics must be a control.LTI model, got {type(dynamics).__name__}")
+    if dynamics.ninputs != 1 or dynamics.noutputs != 1:
+        raise ValueError(f"dynamics must be SISO, got {dynamics.noutputs}x{dynamics.ninputs}")
+    if dynamics.isctime():
+        sysd = ct.sample_system(ct.tf(dynamics), 1.0 / fs, method="zoh")
+    else:
+        if not math.isclose(float(dynamics.dt), 1.0 / fs, rel_tol=1e-9):
+            raise ValueError(f"dynamics is sampled at dt = {dynamics.dt!r} s, the records at "
+                             f"1/fs = {1.0 / fs:g} s")
+        sysd = ct.tf(dynamics)
+    num, den = np.ravel(sysd.num[0][0]), np.ravel(sysd.den[0][0])
+    if np.any(np.abs(np.roots(den)) >= 1):
+        raise ValueError("dynamics must be stable")
+    b = np.r_[np.zeros(den.size - num.size), num] / den[0]
+    return _unit_gain(b, den / den[0])
+
+
+def _filter_at_rest(b, a, u):
+    """Unit-DC-gain filter of the columns of ``u`` started in steady state with u[0]."""
+    return u[0] + sg.lfilter(b, a, u - u[0], axis=0)
+
+
+@dataclass(frozen=True)
+class HammersteinModel:
+    """A PI hysteresis operator followed by discrete linear dynamics of unit DC gain.
+
+    Attributes
+    ----------
+    hysteresis : PIModel
+        The rate-independent part, x-unit output (its offset x0 included).
+    b, a : tuple of float
+        The dynamics G(q) = B(q^-1) / A(q^-1) at ``fs`` (``lfilter`` form,
+        a[0] = 1, B(1) = A(1): unit DC gain; b[0] = 0 for a delay of a sample).
+    fs : float
+        The rate the dynamics are sampled at [Hz]; records must be at it.
+    """
+
+    hysteresis: PIModel
+    b: tuple
+    a: tuple
+    fs: float
+
+    def __post_init__(self):
+        if not isinstance(self.hysteresis, PIModel):
+            raise TypeError("hysteresis must be a PIModel, got "
+                            f"{type(self.hysteresis).__name__}")
+        b = check_finite_array("b", self.b, ndim=1, min_length=1, real=True)
+        a = check_finite_array("a", self.a, ndim=1, min_length=1, real=True)
+        if a[0] != 1:
+            raise ValueError(f"a[0] must be 1, got {a[0]!r}")
+        if not math.isclose(float(np.sum(b)), float(np.sum(a)), rel_tol=1e-9, abs_tol=1e-12):
+            raise ValueError(f"the dynamics must have unit DC gain (sum(b) = sum(a)), got "
+                             f"{np.sum(b):.6g} and {np.sum(a):.6g}")
+        if a.size > 1 and np.any(np.abs(np.roots(a)) >= 1):
+            raise ValueError("the dynamics must be stable (roots of a inside the unit circle)")
+        object.__setattr__(self, "b", tuple(float(x) for x in b))
+        object.__setattr__(self, "a", tuple(float(x) for x in a))
+        object.__setattr__(self, "fs", check_positive("fs", self.fs))
+
+    @property
+    def dynamics(self):
+        """The linear part as a discrete ``control.TransferFunction`` (dt = 1 / fs)."""
+        n = max(len(self.a), len(self.b))
+        num = np.r_[self.b, np.zeros(n - len(self.b))]
+        den = np.r_[self.a, np.zeros(n - len(self.a))]
+        return ct.tf(num, den, 1.0 / self.fs, inputs="p", outputs="x", name="G_unit_dc")
+
+    def simulate(self, v):
+        """Displacement [x-unit] for the input record ``v`` [v-unit] at ``fs``.
+
+        The plays start in the hysteresis model's ``start``, the dynamics at
+        rest with the first sample (as a stage that sat still before it).
+        """
+        h = self.hysteresis
+        p = h.simulate(v) - h.x0
+        return h.x0 + _filter_at_rest(np.asarray(self.b), np.asarray(self.a), p)
+
+    def feedforward(self, x_r):
+        """Quasi-static feedforward [v-unit]: the PI model's exact inverse of ``x_r``.
+
+        G has unit DC gain, so for references slow against its resonances
+        this makes the model follow x_r; it does not invert the dynamics (a
+        dynamics inverse needs preview and a minimum-phase treatment of the
+        sampling zeros, e.g. :func:`piezolib.robust.preview.zpetc`, or a
+        feedback loop).
+        """
+        return self.hysteresis.feedforward(x_r)
+
+
+@dataclass(frozen=True)
+class HammersteinFit(FitScores):
+    """Result of :func:`fit_hammerstein`.
+
+    Attributes
+    ----------
+    model : HammersteinModel
+    x_model : list of ndarray
+        Model output for each whole record [x-unit].
+    residuals : list of ndarray
+        ``x_model - x`` from ``discard`` on [x-unit].
+    rms, rms_percent, max_percent : ndarray
+        Per record: RMS residual [x-unit], RMS and largest |residual| [% of
+        the record's output range].
+    parameters : tuple of ParameterEstimate
+        Weights and offset with 95 % intervals for the fitted dynamics held
+        fixed (the dynamics' coefficients are not listed).
+    iterations : int
+        Alternations of weights and dynamics (0 with given dynamics).
+    start_scores : dict
+        Weighted residual norm from each initial play state tried.
+    """
+
+    model: HammersteinModel
+    x_model: list
+    residuals: list
+    rms: np.ndarray
+    rms_percent: np.ndarray
+    max_percent: np.ndarray
+    parameters: tuple = ()
+    iterations: int = 0
+    start_scores: dict = None
+
+
+def _weights_step(data, regs, b, a, offset, n):
+    """Bounded least squares of weights (and offset) for fixed dynamics (b, a)."""
+    rows, rhs = [], []
+    for (v, x, used), (Y, weight) in zip(data, regs):
+        cols = [_filter_at_rest(b, a, Y)[used]] + ([np.ones((used.size, 1))] if offset else [])
+        rows.append(weight * np.hstack(cols))
+        rhs.append(weight * x[used])
+    A, rhs = np.vstack(rows), np.concatenate(rhs)
+    lower = np.r_[np.zeros(n), [-np.inf] if offset else []]
+    theta = opt.lsq_linear(A, rhs, bounds=(lower, np.inf), method="bvls").x
+    return A, rhs, theta
+
+
+def _dynamics_step(data, regs, w, x0, b, a, na, nb, nk, passes=3):
+    """Steiglitz-McBride passes for B/A from p = Y w to x - x0, from the current A."""
+    for _ in range(passes):
+        rows, rhs = [], []
+        for (v, x, used), (Y, weight) in zip(data, regs):
+            p = Y @ w
+            u, y = p - p[0], x - x0 - p[0]             # deviations from the rest at sample 0
+            uf, yf = sg.lfilter([1.0], a, u), sg.lfilter([1.0], a, y)
+            n = uf.size
+            cols = [np.r_[np.zeros(j), -yf[:n - j]] for j in range(1, na + 1)]
+            cols += [np.r_[np.zeros(nk + j), uf[:n - nk - j]] for j in range(nb)]
+            M = np.column_stack(cols)[used]
+            rows.append(weight * M)
+            rhs.append(weight * yf[used])
+        theta = np.linalg.lstsq(np.vstack(rows), np.concatenate(rhs), rcond=None)[0]
+        a_new = np.r_[1.0, theta[:na]]
+        roots = np.roots(a_new)
+        if np.any(np.abs(roots) >= 1):                 # reflect into the unit circle
+            roots = np.where(np.abs(roots) >= 1, 0.99 / np.conj(roots), roots)
+            a_new = np.real(np.poly(roots))
+        b_new = np.r_[np.zeros(nk), theta[na:]]
+        try:
+            b, a = _unit_gain(b_new, a_new)
+        except ValueError:
+            break
+    return b, a
+
+
+def _cost(A, rhs, theta):
+    r = A @ theta - rhs
+    return float(r @ r)
+
+
+def fit_hammerstein(loops, fs, order=(4, 4), n_plays=10, dynamics=None, delay=1, offset=True,
+                    start="auto", discard=0, thresholds=None, iterations=30, tol=1e-6):
+    """Fit a PI operator followed by linear dynamics to records at their full rate.
+
+    Parameters
+    ----------
+    loops : sequence of (v, x)
+        Input [v-unit] and measured output [x-unit] records at ``fs`` (or one
+        pair); whole raw records, rest and steps included, are fine.
+    fs : float
+        Sampling rate of the records [Hz].
+    order : (int, int), optional
+        (na, nb): poles and numerator terms of the discrete dynamics when
+        ``dynamics`` is not given.
+    n_plays : int, optional
+        Play operators including the linear one; thresholds as in
+        :func:`~piezolib.hysteresis.pi.fit_pi`.
+    dynamics : control.LTI, optional
+        Known linear dynamics (e.g. an identified G), used at unit DC gain
+        (:func:`unit_dc_dynamics`); then only the weights are fitted.
+    delay : int, optional
+        Input delay of the dynamics [samples] (1: x[k] depends on v up to
+        k - 1, a sampled stage).
+    offset : bool, optional
+        Fit the output offset x0.
+    start : {"auto", "rest", "virgin"}, optional
+        Initial play state; "auto" fits from both and keeps the better.
+    discard : int, optional
+        Samples at the start of each record left out of the residuals.
+    thresholds : array_like, optional
+        Play thresholds instead of the default ones [v-unit].
+    iterations : int, optional
+        Most alternations of weights and dynamics.
+    tol : float, optional
+        Stop when the residual falls by less than this fraction.
+
+    Returns
+    -------
+    HammersteinFit
+        A :class:`~piezolib.hysteresis.common.FitWarning` names every weight
+        on its bound 0 and every parameter not identifiable.
+
+    Raises
+    ------
+    ValueError
+        Bad loops (as :func:`~piezolib.hysteresis.pi.fit_pi`), bad orders,
+        or unstable dynamics.
+    """
+    fs = check_positive("fs", fs)
+    data = check_loops(loops, discard, 1)
+    if start != "auto" and start not in PI_STARTS:
+        raise ValueError(f"start must be 'auto' or one of {PI_STARTS}, got {start!r}")
+    if not isinstance(offset, (bool, np.bool_)):
+        raise TypeError(f"offset must be True or False, got {offset!r}")
+    delay = check_integer("delay", delay, minimum=0)
+    iterations = check_integer("iterations", iterations, minimum=1)
+    tol = check_positive("tol", tol)
+    if dynamics is not None:
+        b0, a0 = unit_dc_dynamics(dynamics, fs)
+        na = nb = 0
+    else:
+        if not isinstance(order, (tuple, list)) or len(order) != 2:
+            raise TypeError(f"order must be a pair (na, nb), got {order!r}")
+        na = check_integer("order[0] (na)", order[0], minimum=1)
+        nb = check_integer("order[1] (nb)", order[1], minimum=1)
+        b0, a0 = np.r_[np.zeros(delay), 1.0], np.array([1.0])
+    if thresholds is None:
+        n_plays = check_integer("n_plays", n_plays, minimum=1)
+        half = max(float(np.ptp(v)) for v, x, used in data) / 2.0
+        thresholds = half * np.arange(n_plays) / n_plays
+    thresholds = check_finite_array("thresholds", thresholds, ndim=1, min_length=1, real=True)
+    r = np.asarray(PIModel(tuple(thresholds), tuple(np.ones(thresholds.size))).thresholds)
+    if any(v.size < 4 * (na + nb + 1) for v, x, used in data):
+        raise ValueError("each record needs at least 4 x (na + nb + 1) samples")
+
+    def solve(start0):
+        regs = pi_regressors(data, r, start0)
+        b, a = b0, a0
+        A, rhs, theta = _weights_step(data, regs, b, a, offset, r.size)
+        cost, k = _cost(A, rhs, theta), 0
+        if dynamics is None:
+            for k in range(1, iterations + 1):
+                x0 = float(theta[-1]) if offset else 0.0
+                b1, a1 = _dynamics_step(data, regs, theta[:r.size], x0, b, a, na, nb, delay)
+                A1, rhs1, theta1 = _weights_step(data, regs, b1, a1, offset, r.size)
+                cost1 = _cost(A1, rhs1, theta1)
+                if cost1 > cost:                            # no better: keep the last
+                    break
+                done = cost - cost1 <= tol * cost
+                b, a, A, rhs, theta, cost = b1, a1, A1, rhs1, theta1, cost1
+                if done:
+                    break
+        return b, a, A, rhs, theta, cost, k
+
+    starts = PI_STARTS if start == "auto" else (start,)
+    solved = {s0: solve(s0) for s0 in starts}
+    scores = {s0: math.sqrt(sol[5]) for s0, sol in solved.items()}
+    start = min(starts, key=lambda s0: scores[s0])
+    b, a, A, rhs, theta, cost, k = solved[start]
+    x0 = float(theta[-1]) if offset else 0.0
+    w = theta[:r.size].copy()
+    w[w <= 1e-12 * float(np.sum(w))] = 0.0
+    model = HammersteinModel(PIModel(tuple(r), tuple(w), x0=x0, start=start), tuple(b),
+                             tuple(a), fs)
+    at_bound = list(w <= 0) + ([False] if offset else [])
+    cov = covariance(A, A @ theta - rhs, int(np.count_nonzero(~np.array(at_bound))))
+    names = [f"w_{i} (r = {ri:.4g})" for i, ri in enumerate(r)] + (["x0"] if offset else [])
+    units = ["x/v"] * r.size + (["x"] if offset else [])
+    parameters = estimates(names, units, theta, [False] * theta.size, cov, at_bound)
+    warn_about(parameters, f"fit_hammerstein (start {start!r})")
+    pairs = [(np.asarray(p[0], dtype=float), np.asarray(p[1], dtype=float))
+             for p in _pairs(loops)]
+    x_model = [model.simulate(v) for v, x in pairs]
+    res, rms, rms_pct, max_pct = loop_errors(x_model, pairs, discard)
+    return HammersteinFit(model=model, x_model=x_model, residuals=res, rms=rms,
+                          rms_percent=rms_pct, max_percent=max_pct,
+                          parameters=tuple(parameters), iterations=k, start_scores=scores)
+
+
+def _pairs(loops):
+    if isinstance(loops, tuple) and len(loops) == 2 and np.ndim(loops[0]) == 1 \
+            and np.size(loops[0]) > 2:
+        return [loops]
+    return list(loops)
