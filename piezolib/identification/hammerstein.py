@@ -1,5 +1,9 @@
 """Hammerstein models with Prandtl-Ishlinskii hysteresis ahead of MIMO linear dynamics.
 
+For identification from periodic multi-input records (e.g. multisine benchmarks),
+the linear part given; the single-input model fitted to raw records in the time
+domain, dynamics included, is :class:`piezolib.hysteresis.HammersteinModel`.
+
 Each input channel j passes a Prandtl-Ishlinskii operator
 v_j = sum_k w_jk F_{r_k}[u_j] (play operators F_r of thresholds r_k, r_0 = 0
 the identity), and the vector v drives a discrete linear model G(q):
@@ -36,7 +40,7 @@ import numpy as np
 from piezolib._checks import check_finite_array, check_positive, check_type
 from piezolib.identification.freqfit import simulate_discrete
 
-__all__ = ["play_operators", "HammersteinModel", "fit_play_weights"]
+__all__ = ["play_operators", "MIMOHammerstein", "fit_play_weights"]
 
 
 def _thresholds(thresholds):
@@ -84,7 +88,7 @@ def play_operators(u, thresholds):
 
 
 @dataclass(frozen=True)
-class HammersteinModel:
+class MIMOHammerstein:
     """Prandtl-Ishlinskii operators per input channel, then a discrete linear model.
 
     Attributes
@@ -145,7 +149,7 @@ def fit_play_weights(linear, u, y, thresholds, lines):
 
     Returns
     -------
-    HammersteinModel
+    MIMOHammerstein
         ``linear`` as given and the weights minimising
         sum over records, outputs and lines |Y - G V|^2 / std(y)^2.
     """
@@ -186,4 +190,4 @@ def fit_play_weights(linear, u, y, thresholds, lines):
         rows.append(np.vstack([X.real, X.imag]))
         rhs.append(np.r_[b.real, b.imag])
     w = np.linalg.lstsq(np.vstack(rows), np.concatenate(rhs), rcond=None)[0]
-    return HammersteinModel(linear=linear, thresholds=r, weights=w.reshape(linear.ninputs, r.size))
+    return MIMOHammerstein(linear=linear, thresholds=r, weights=w.reshape(linear.ninputs, r.size))

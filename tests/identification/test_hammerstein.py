@@ -4,7 +4,7 @@ import control as ct
 import numpy as np
 import pytest
 
-from piezolib.identification import HammersteinModel, fit_play_weights, play_operators
+from piezolib.identification import MIMOHammerstein, fit_play_weights, play_operators
 
 FS = 1000.0
 
@@ -33,7 +33,7 @@ def test_fit_recovers_known_weights_exactly():
     rng = np.random.default_rng(3)
     linear = ct.ss(ct.tf([[[0.3, 0.1], [0.1]], [[0.2], [0.4, -0.1]]],
                          [[[1, -1.2, 0.6], [1, -0.5]], [[1, -0.3], [1, -1.2, 0.6]]], 1 / FS))
-    truth = HammersteinModel(linear, np.array([0.0, 0.2, 0.5]),
+    truth = MIMOHammerstein(linear, np.array([0.0, 0.2, 0.5]),
                              np.array([[1.0, -0.3, 0.1], [0.8, 0.2, -0.15]]))
     us, ys = [], []
     for rms in (0.3, 0.9):                   # two levels, as in a benchmark
@@ -51,7 +51,7 @@ def test_fit_recovers_known_weights_exactly():
 def test_one_level_and_noise():
     rng = np.random.default_rng(4)
     linear = ct.ss(ct.tf([0.5], [1, -0.5], 1 / FS))
-    truth = HammersteinModel(linear, np.array([0.0, 0.4]), np.array([[1.0, 0.5]]))
+    truth = MIMOHammerstein(linear, np.array([0.0, 0.4]), np.array([[1.0, 0.5]]))
     u = _multisine(rng, 512, 1, 4, 2, 0.5)
     long = np.concatenate([u[..., 0]] * 4, axis=0)
     y = truth.simulate(long)[2 * 512:]
@@ -61,7 +61,7 @@ def test_one_level_and_noise():
 
 
 def test_simulate_checks_channels():
-    m = HammersteinModel(ct.ss(ct.tf([0.5], [1, -0.5], 1 / FS)), np.array([0.0]),
+    m = MIMOHammerstein(ct.ss(ct.tf([0.5], [1, -0.5], 1 / FS)), np.array([0.0]),
                          np.array([[1.0]]))
     with pytest.raises(ValueError, match="u must have 1 channels"):
         m.simulate(np.zeros((10, 2)))
