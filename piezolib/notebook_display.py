@@ -20,7 +20,8 @@ A bar ends in one of two states, and its final line says which and why:
 Log lines: :class:`CellLogHandler` (attached by :func:`route_logs`) shows
 the records of a logger in the cell instead of on stderr: under the bar
 that is running, in a collapsed "log" section of its output, or when no
-bar runs, in a small grey block of their own (one per cell, growing).
+bar runs, in a small grey block of their own (growing, until the next bar
+of the cell starts).
 
 Where the outputs go: the running cell, or inside :func:`shown_in`, a
 callback such as a widget's HTML value.  A widget's callback (a button's
@@ -56,6 +57,8 @@ _SYMBOLS = {"running": "…", "done": "✔", "failed": "✘"}
 _SINK = contextvars.ContextVar("piezolib_display_sink", default=None)
 # open bars, innermost last: log records go under the innermost one
 _ACTIVE = []
+# bars made so far: a log block drawn before a bar is not continued after it (order kept)
+_BARS_MADE = [0]
 
 
 # --------------------------------------------------------------------------- kernel
@@ -264,6 +267,7 @@ class CellBar:
         self._log, self._dropped, self._warnings = [], 0, 0
         self._slot = _new_slot()
         _ACTIVE.append(self)
+        _BARS_MADE[0] += 1
         self.refresh()
 
     # tqdm-like use ---------------------------------------------------------
@@ -388,7 +392,8 @@ class CellBar:
 
 # --------------------------------------------------------------------------- logs
 class _LogBlock:
-    """Log lines of one request (cell) drawn while no bar runs: a small grey block."""
+    """Log lines of one request (cell) drawn while no bar runs (and none was made since the
+    first of them): a small grey block."""
 
     def __init__(self, request):
         self.request, self.lines = request, []
@@ -430,7 +435,8 @@ class CellLogHandler(logging.Handler):
             if _ACTIVE:
                 _ACTIVE[-1].log(text, record.levelno)
                 return
-            key = (_request_id(), id(_SINK.get()))
+            # one block per cell and stretch between bars, so lines stay in order with them
+            key = (_request_id(), id(_SINK.get()), _BARS_MADE[0])
             if self._block is None or self._block.request != key:
                 self._block = _LogBlock(key)
             self._block.add(text, record.levelno)

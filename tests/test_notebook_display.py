@@ -122,6 +122,10 @@ def test_records_without_a_bar_grow_one_block_per_cell(cell, logger, monkeypatch
     monkeypatch.setattr(nd, "_request_id", lambda: "cell-2")        # the next cell
     logger.info("another cell")
     assert len(cell) == 2 and cell[1][-1]["text/plain"] == "another cell"
+    with nd.CellBar(total=1, desc="between") as bar:
+        bar.update()
+    logger.info("after the bar")                                    # below it, not above
+    assert len(cell) == 4 and cell[3][-1]["text/plain"] == "after the bar"
 
 
 def test_outside_a_kernel_records_go_where_they_would_without_the_handler(logger, capsys,

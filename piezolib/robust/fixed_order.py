@@ -484,7 +484,7 @@ def fixed_order_musyn(P, blk, K0, omega, *, max_iter=20, rtol=1e-3, patience=2,
             logger.info("fixed-order: peak %.4f between grid points (grid %.4f); grid refined "
                         "to %d points", upper.max(), on_grid, omega.size)
         # fewer steps than the bound is the stopping rule working: the bar says why
-        finish(bar, f"{reason} (grid of {omega.size} points); mu {rows[-1]['mu_upper']:.4f}")
+        finish(bar, reason)
     loop = _Loop(P, omega, ws)
     final = mussv(loop.M(modal.response(omega)), blk, omega)
     k = int(np.argmax(final.upper))

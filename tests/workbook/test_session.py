@@ -100,7 +100,7 @@ def test_a_notebook_run_headless_saves_static_outputs(monkeypatch):
     assert len(bar) == 1 and bar[0].output_type == "display_data"      # one output, updated
     final = bar[0].data["text/plain"]
     assert final.startswith("✔ musyn DK: done: no improvement > 0.005 in 2 iterations")
-    assert "5 of at most 8 iter" in final and "DK 4: mu 0.800" in final   # log under the bar
+    assert "5 of at most 8 iter" in final and "DK 4: mu 0.800" in final  # log under the bar
     assert "piezolib-progress-done" in bar[0].data["text/html"]
     for cell in nb.cells[2:]:                                   # pyplot figure, the control
         assert [o.output_type for o in cell.outputs][-1] in ("display_data", "execute_result")
