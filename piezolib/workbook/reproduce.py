@@ -213,8 +213,6 @@ def run(selection=None, timeout=600, keep_going=False, data=True, stream=sys.std
                                        else str(study))
     save_to = chosen.output_dir / "notebooks" if not chosen.is_reference else None
     os.environ.setdefault("MPLBACKEND", "Agg")
-    # widgets have no frontend here: controls draw their static figure
-    os.environ.setdefault("PIEZOLIB_STATIC", "1")
     # kernels inherit this: threaded BLAS on small problems is slower on 2 cores
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     os.environ.setdefault("PIEZOLIB_ROOT", str(project_root()))
