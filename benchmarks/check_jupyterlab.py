@@ -73,6 +73,11 @@ INSPECT_JS = """() => {
     runningBars: count('.piezolib-progress-running'),
     doneBars: count('.piezolib-progress-done'),
     stderr: count('.jp-OutputArea-output[data-mime-type="application/vnd.jupyter.stderr"]'),
+    firstStderr: ([...document.querySelectorAll('.jp-Notebook .jp-OutputArea-output'
+      + '[data-mime-type="application/vnd.jupyter.stderr"]')].map(e => e.textContent)[0] || '')
+      .slice(-300),
+    failedBar: ([...document.querySelectorAll('.jp-Notebook .piezolib-progress-failed')]
+      .map(e => e.textContent)[0] || ''),
     errors: count('.jp-OutputArea-output[data-mime-type="application/vnd.jupyter.error"]'),
     widgetErrors: (text.match(/Error displaying widget/g) || []).length,
     widgets: count('.jp-OutputArea-output .widget-box, .jp-OutputArea-output .jupyter-widgets'),
@@ -249,6 +254,10 @@ def check_notebook(browser, base, token, name, timeout_s):
     if "redesign" in state:
         summary += f"; {state['redesign']}"
     verdict = "ok" if not found else "SURPRISE: " + "; ".join(found)
+    if state["failedBar"]:
+        summary += "\n    failed bar: " + state["failedBar"]
+    if state["firstStderr"]:                             # what the reader would read first
+        summary += "\n    first stderr block ends: " + state["firstStderr"].replace("\n", " | ")
     return f"{name:<32s} {verdict} — {summary}", not found
 
 

@@ -241,8 +241,8 @@ class CellBar:
 
     Made by :func:`piezolib.progress.progress` in a kernel; the attributes
     and methods the library uses are those of a ``tqdm`` bar: ``n``,
-    ``total``, ``postfix``, ``update``, ``set_postfix_str``, ``close``,
-    iteration and use as a context manager.
+    ``total``, ``postfix``, ``update``, ``reset``, ``set_postfix_str``,
+    ``close``, iteration and use as a context manager.
 
     Parameters
     ----------
@@ -301,6 +301,17 @@ class CellBar:
         """Advance by ``n`` steps; redraw unless the last redraw is very recent."""
         self.n += n
         self._draw()
+
+    def reset(self, total=None):
+        """Start counting again from 0, with a new ``total`` if given (tqdm's ``reset``).
+
+        The elapsed time keeps counting from the bar's start: the final line
+        says how long the whole work took (e.g. a grid search, then solves).
+        """
+        self.n = 0
+        if total is not None:
+            self.total = total
+        self.refresh()
 
     def set_postfix_str(self, s="", refresh=True):
         """Set the status text after the counts (e.g. ``"mu 0.9402"``)."""

@@ -70,6 +70,17 @@ def test_a_running_bar_shows_its_counts_and_redraws_at_most_five_times_a_second(
     assert cell[0][-1]["text/plain"].startswith("✔ sweep: done · 1000 of at most 1000 point")
 
 
+def test_reset_counts_again_with_a_new_total(cell):
+    """The Dahl fit's use: a counter during the grid search, then a bar over the solves."""
+    with nd.CellBar(desc="fit_dahl", unit="solve") as bar:
+        bar.set_postfix_str("grid search for starting points")
+        bar.update(40)
+        bar.reset(total=3)
+        assert "0/3 solve" in cell[0][-1]["text/plain"]
+        bar.update(3)
+    assert cell[0][-1]["text/plain"].startswith("✔ fit_dahl: done · 3 of at most 3 solve")
+
+
 def test_leaving_a_loop_early_is_done_not_failed(cell):
     for k in nd.CellBar(range(10), desc="search"):
         if k == 3:
