@@ -5,7 +5,8 @@ toolkit   general tools for any plant (never import the layers above them in thi
           :mod:`~piezolib.identification`, :mod:`~piezolib.hysteresis`,
           :mod:`~piezolib.uncertainty`, :mod:`~piezolib.signals`,
           :mod:`~piezolib.metrics`, :mod:`~piezolib.records`,
-          :mod:`~piezolib.files`, :mod:`~piezolib.progress` and the private ``_checks``
+          :mod:`~piezolib.files`, :mod:`~piezolib.progress` (and its notebook outputs,
+          :mod:`~piezolib.notebook_display`) and the private ``_checks``
 problem   the paper's numbers, stage and design problem: :mod:`piezolib.problem`
           (the published numbers in :mod:`piezolib.problem.paper`, also reachable
           as ``from piezolib import paper``)

@@ -1,11 +1,20 @@
-"""Progress bars for the long computations: one mechanism for the whole library (tqdm).
+"""Progress bars for the long computations: one mechanism for the whole library.
 
-:func:`progress` returns a :class:`tqdm.auto.tqdm` bar: a widget in a
-Jupyter notebook, a text bar on a terminal (written to stderr).  Bars are
-transient (``leave=False``): they disappear when the loop ends, so saved
-notebooks and logs keep only the results and the INFO logging lines the
-solvers write anyway.  The bar is extra information; nothing a solver
-returns depends on it.
+:func:`progress` returns a bar that fits where the code runs:
+
+* in a notebook (an IPython kernel, under JupyterLab or a headless client
+  such as nbclient, papermill, ``jupyter nbconvert --execute`` or nbval): a
+  :class:`~piezolib.notebook_display.CellBar`, one output redrawn in place
+  (HTML with a plain-text twin).  It ends on one line that says how the work
+  ended: green "✔ done" with the reason it stopped (:func:`finish`), however
+  many of its ``total`` steps it took, or red "✘ FAILED" when an exception
+  left the bar.  A saved notebook keeps that final line, never a stale
+  frame or a widget without state.
+* elsewhere: a ``tqdm`` text bar on ``file`` (default stderr), transient
+  (``leave=False``): it disappears when the loop ends, so logs keep only
+  the results and the INFO lines the solvers write anyway.
+
+The bar is extra information; nothing a solver returns depends on it.
 
 The environment variable ``PIEZOLIB_PROGRESS`` switches the bars:
 
@@ -13,25 +22,20 @@ The environment variable ``PIEZOLIB_PROGRESS`` switches the bars:
 ``0`` (off, no, ...)  no bar anywhere (nothing is written)
 ``1`` (on, yes, ...)  a bar even when stderr is not a terminal (logs, CI)
 unset or ``auto``     a bar in a notebook or on a terminal, none when stderr
-                      is redirected to a file or captured, and none in a
-                      notebook kernel run headless (``PIEZOLIB_STATIC=1``)
+                      is redirected to a file or captured
 ====================  =====================================================
 
-A kernel run by nbclient, nbval or ``python -m piezolib reproduce`` has no
-frontend to draw a widget: the bar would only leave a dead output in the
-saved notebook.  Those runners set ``PIEZOLIB_STATIC=1`` (the switch the
-workbook's interactive controls read for the same reason), and in a kernel
-auto mode takes it as "no bars".
-
 :func:`postfix` sets the short status text after the bar (e.g. the current
-mu peak) and :func:`write` prints a line without tearing an active bar
-(for per-step report lines of a runner).  On a terminal, INFO logging lines
-and a bar share stderr; wrap the call in
-``tqdm.contrib.logging.logging_redirect_tqdm()`` to route the log lines
-around the bar.
+mu peak), :func:`finish` says why a search stopped, and :func:`write`
+prints a line without tearing an active text bar (for per-step report lines
+of a runner).  On a terminal, INFO logging lines and a bar share stderr;
+wrap the call in ``tqdm.contrib.logging.logging_redirect_tqdm()`` to route
+the log lines around the bar.  In a notebook, :func:`route_logs` shows a
+logger's records under the running bar instead of on stderr, and
+:func:`shown_in` draws bars into a widget (work started by a button).
 
-tqdm is imported on first use, so importing a module that uses this one
-stays cheap.
+tqdm and IPython are imported on first use, so importing a module that
+uses this one stays cheap.
 """
 
 import os
@@ -39,14 +43,15 @@ import sys
 
 import numpy as np
 
+from piezolib import notebook_display
 from piezolib._checks import check_integer
+from piezolib.notebook_display import route_logs, shown_in
 
-__all__ = ["ENV_VARIABLE", "progress", "progress_enabled", "postfix", "write"]
+__all__ = ["ENV_VARIABLE", "progress", "progress_enabled", "postfix", "finish", "write",
+           "route_logs", "shown_in"]
 
 #: Environment variable that switches the bars on (1), off (0) or to auto.
 ENV_VARIABLE = "PIEZOLIB_PROGRESS"
-#: Set (true) by the headless notebook runners: no widget frontend exists.
-_HEADLESS_VARIABLE = "PIEZOLIB_STATIC"
 
 _OFF = ("0", "false", "no", "off")
 _ON = ("1", "true", "yes", "on")
@@ -78,16 +83,6 @@ def progress_enabled():
                      f"got {os.environ[ENV_VARIABLE]!r}")
 
 
-def _headless_kernel():
-    """True in an IPython kernel that a headless runner started (``PIEZOLIB_STATIC`` true)."""
-    if os.environ.get(_HEADLESS_VARIABLE, "").strip().lower() in ("",) + _OFF:
-        return False
-    # a kernel's shell has a .kernel; merely importing ipykernel (pytest plugins do) is not one
-    ipython = sys.modules.get("IPython")
-    shell = ipython.get_ipython() if hasattr(ipython, "get_ipython") else None
-    return getattr(shell, "kernel", None) is not None
-
-
 def progress(iterable=None, *, total=None, desc=None, unit="step", leave=False, file=None):
     """A progress bar over ``iterable`` or over ``total`` manual updates.
 
@@ -105,21 +100,25 @@ def progress(iterable=None, *, total=None, desc=None, unit="step", leave=False, 
     iterable : iterable, optional
         Items to wrap; ``total`` defaults to its length when it has one.
     total : int, optional
-        Expected number of steps (an upper bound is fine: the bar vanishes
-        when closed); None shows a counter without a percentage.
+        Expected number of steps, or an upper bound (a search that stops
+        early still ends as done, see :func:`finish`); None shows a counter
+        without a percentage.
     desc : str, optional
         Label in front of the bar.
     unit : str
         Name of one step.
     leave : bool
-        Keep the finished bar on screen (default False: it disappears).
+        Keep a finished text bar on screen (default False: it disappears).
+        A notebook bar always keeps its one final line.
     file : file-like, optional
-        Stream of a text bar; default ``sys.stderr`` (a notebook shows a
-        widget instead).
+        Stream of a text bar; default ``sys.stderr``, or in a notebook
+        kernel the cell, inside :func:`shown_in` its callback (a
+        :class:`~piezolib.notebook_display.CellBar`).  Given explicitly, the
+        text bar is drawn there even in a kernel.
 
     Returns
     -------
-    tqdm.auto.tqdm
+    tqdm.tqdm or piezolib.notebook_display.CellBar
         The bar; ``bar.n`` counts the steps done.  A disabled bar writes
         nothing and still iterates.
 
@@ -128,16 +127,17 @@ def progress(iterable=None, *, total=None, desc=None, unit="step", leave=False, 
     ValueError, TypeError
         ``total`` not a non-negative integer, or a bad ``PIEZOLIB_PROGRESS``.
     """
-    from tqdm.auto import tqdm
+    from tqdm import tqdm
 
     if total is not None:
         total = check_integer("total", total, minimum=0)
     if not isinstance(unit, str) or not unit:
         raise TypeError(f"unit must be a non-empty string, got {unit!r}")
     enabled = progress_enabled()
-    if enabled is None and _headless_kernel():
-        enabled = False
-    # disable=None is tqdm's "off unless the stream is a terminal" (a notebook bar is shown)
+    if enabled is not False and file is None and (notebook_display.in_kernel()
+                                                  or notebook_display.redirected()):
+        return notebook_display.CellBar(iterable, total=total, desc=desc, unit=unit)
+    # disable=None is tqdm's "off unless the stream is a terminal"
     return tqdm(iterable, total=total, desc=desc, unit=unit, leave=bool(leave),
                 file=sys.stderr if file is None else file,
                 disable=None if enabled is None else not enabled, dynamic_ncols=True)
@@ -151,7 +151,7 @@ def postfix(bar, text=None, *, refresh=False, **values):
 
     Parameters
     ----------
-    bar : tqdm.tqdm
+    bar : tqdm.tqdm or piezolib.notebook_display.CellBar
         A bar from :func:`progress` (disabled bars ignore the call).
     text : str, optional
         Free text put first.
@@ -166,6 +166,39 @@ def postfix(bar, text=None, *, refresh=False, **values):
         shown = f"{value:.4g}" if isinstance(value, (float, np.floating)) else str(value)
         parts.append(f"{name} {shown}")
     bar.set_postfix_str(", ".join(parts), refresh=bool(refresh))
+
+
+def finish(bar, reason):
+    """Say why the work of ``bar`` ended: it succeeded, after however many steps.
+
+    Call it before the bar closes (inside its ``with`` block).  A search
+    that stops before ``total`` (converged, no more improvement) is not a
+    failure, and the bar must not read as one:
+
+    * a notebook bar ends on a green line with the reason, e.g.
+      ``✔ musyn DK: done: no improvement > 0.005 in 2 iterations · 5 of at
+      most 8 iter in 41.2 s · mu 0.8003``;
+    * a text bar is completed (its total becomes the steps done, so a kept
+      bar reads 100 %) with the reason as its status text.
+
+    Parameters
+    ----------
+    bar : tqdm.tqdm or piezolib.notebook_display.CellBar
+        A bar from :func:`progress` (disabled bars ignore the call).
+    reason : str
+        Why the work stopped, e.g. ``"converged"``, ``"no improvement > 0.005
+        in 2 iterations"`` or ``"max_iter reached"``.
+    """
+    if not isinstance(reason, str) or not reason:
+        raise TypeError(f"reason must be a non-empty string, got {reason!r}")
+    if isinstance(bar, notebook_display.CellBar):
+        bar.finish(reason)
+        return
+    if getattr(bar, "disable", True):
+        return
+    if bar.total is not None and bar.n < bar.total:
+        bar.total = bar.n
+    bar.set_postfix_str(reason, refresh=False)
 
 
 def write(line, file=None):
@@ -188,7 +221,7 @@ def write(line, file=None):
     file : file-like, optional
         Destination; default ``sys.stdout``.
     """
-    from tqdm.auto import tqdm
+    from tqdm import tqdm
 
     stream = sys.stdout if file is None else file
     tqdm.write(str(line), file=stream)

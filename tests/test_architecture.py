@@ -18,7 +18,7 @@ import piezolib
 PACKAGE = pathlib.Path(piezolib.__file__).parent
 
 TOOLKIT = ("robust", "hysteresis", "uncertainty", "identification", "signals", "metrics",
-           "records", "files", "_checks", "progress")
+           "records", "files", "_checks", "progress", "notebook_display")
 PROBLEM = ("problem",)
 WORKBOOK = ("workbook", "__main__")
 # what each layer may not import (at any depth of the module)

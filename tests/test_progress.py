@@ -1,13 +1,15 @@
-"""piezolib.progress: the one progress-bar mechanism (tqdm), switched by PIEZOLIB_PROGRESS."""
+"""piezolib.progress: the one progress-bar mechanism (text bar or cell output), switched by
+PIEZOLIB_PROGRESS."""
 
 import io
-import sys
-import types
 
 import numpy as np
 import pytest
 
-from piezolib.progress import ENV_VARIABLE, postfix, progress, progress_enabled, write
+from piezolib import notebook_display
+from piezolib.notebook_display import CellBar
+from piezolib.progress import (ENV_VARIABLE, finish, postfix, progress, progress_enabled,
+                               shown_in, write)
 
 
 class Terminal(io.StringIO):
@@ -79,24 +81,96 @@ def test_auto_mode_shows_bars_on_terminals_only(monkeypatch):
     assert log.getvalue() == ""
 
 
-def test_no_widget_bar_in_a_headless_kernel(monkeypatch):
-    """nbclient / nbval kernels (PIEZOLIB_STATIC=1) get no bar unless asked explicitly."""
+@pytest.fixture
+def kernel_cell(monkeypatch):
+    """A kernel whose cell outputs are recorded: [(bundle, display_id or None)] per call."""
+    from IPython import display as ipython_display
+
+    shown = []
+
+    class Handle:
+        def update(self, bundle, raw=False):
+            shown.append(("update", bundle))
+
+    def display(bundle, raw=False, display_id=False):
+        shown.append(("display", bundle))
+        return Handle() if display_id else None
+
+    monkeypatch.setattr(notebook_display, "in_kernel", lambda: True)
+    monkeypatch.setattr(ipython_display, "display", display)
     monkeypatch.delenv(ENV_VARIABLE, raising=False)
-    monkeypatch.setenv("PIEZOLIB_STATIC", "1")
-    fake_ipython = types.ModuleType("IPython")
-    fake_ipython.get_ipython = lambda: types.SimpleNamespace(kernel=object())
-    monkeypatch.setitem(sys.modules, "IPython", fake_ipython)
+    return shown
+
+
+def test_a_kernel_gets_a_cell_output_that_ends_done_with_the_reason(kernel_cell):
+    """Stopped after 5 of at most 8 steps: the final output reads as success, says why."""
+    with progress(total=8, desc="musyn DK", unit="iter") as bar:
+        assert isinstance(bar, CellBar)
+        for _ in range(5):
+            bar.update()
+            postfix(bar, mu=0.80031)
+        finish(bar, "no improvement > 0.005 in 2 iterations")
+    kinds = [kind for kind, _ in kernel_cell]
+    assert kinds[0] == "display" and set(kinds[1:]) == {"update"}    # one output, redrawn
+    final = kernel_cell[-1][1]
+    assert set(final) == {"text/html", "text/plain"}
+    text, html_text = final["text/plain"], final["text/html"]
+    assert text.startswith("✔ musyn DK: done: no improvement > 0.005 in 2 iterations")
+    assert "5 of at most 8 iter" in text and "mu 0.8003" in text
+    assert "piezolib-progress-done" in html_text
+    assert "failed" not in html_text and "danger" not in html_text and "5/8" not in text
+
+
+def test_a_kernel_bar_fails_only_when_an_exception_leaves_it(kernel_cell):
+    with pytest.raises(RuntimeError):
+        with progress(total=3, desc="search") as bar:
+            bar.update()
+            raise RuntimeError("K-step diverged")
+    final = kernel_cell[-1][1]
+    assert "piezolib-progress-failed" in final["text/html"]
+    assert final["text/plain"].startswith("✘ search: FAILED: RuntimeError: K-step diverged")
+
+
+def test_in_a_kernel_the_switch_and_an_explicit_stream_still_rule(kernel_cell, monkeypatch):
     tty = Terminal()
-    bar = progress(range(3), desc="kernel", file=tty)
-    assert bar.disable and list(bar) == [0, 1, 2] and tty.getvalue() == ""
-    monkeypatch.setenv(ENV_VARIABLE, "1")                 # explicit: shown all the same
-    assert not progress(range(3), file=tty).disable
-    monkeypatch.delenv(ENV_VARIABLE)
-    monkeypatch.setenv("PIEZOLIB_STATIC", "0")            # an interactive kernel
-    assert not progress(range(3), file=tty).disable
-    monkeypatch.setenv("PIEZOLIB_STATIC", "1")
-    fake_ipython.get_ipython = lambda: None               # a plain script: terminal rules
-    assert not progress(range(3), file=tty).disable
+    assert not isinstance(progress(range(2), file=tty), CellBar)     # the stream asked for
+    monkeypatch.setenv(ENV_VARIABLE, "0")
+    bar = progress(range(3), desc="off")
+    assert not isinstance(bar, CellBar) and bar.disable and list(bar) == [0, 1, 2]
+    assert kernel_cell == []
+
+
+def test_shown_in_draws_bars_through_the_callback_outside_a_kernel(monkeypatch):
+    monkeypatch.delenv(ENV_VARIABLE, raising=False)
+    drawn = []
+    with shown_in(lambda html_text, text: drawn.append(text)):
+        with progress(total=4, desc="re-design", unit="iter") as bar:
+            bar.update(2)
+            finish(bar, "max_iter reached")
+    assert isinstance(bar, CellBar)
+    assert drawn[-1].startswith("✔ re-design: done: max_iter reached")
+    assert not isinstance(progress(range(2)), CellBar)               # after the block: text
+
+
+def test_finish_completes_a_text_bar(monkeypatch):
+    monkeypatch.setenv(ENV_VARIABLE, "1")
+    kept = io.StringIO()
+    with progress(total=8, desc="search", unit="iter", leave=True, file=kept) as bar:
+        bar.update(5)
+        finish(bar, "converged")
+    last = kept.getvalue().rstrip("\n").split("\r")[-1]
+    assert "100%" in last and "5/5" in last and "converged" in last     # not a stale 5/8
+    gone = io.StringIO()
+    with progress(total=8, desc="search", file=gone) as bar:
+        bar.update(5)
+        finish(bar, "converged")
+    assert gone.getvalue().endswith("\r") and gone.getvalue().split("\r")[-2].strip() == ""
+    with pytest.raises(TypeError, match="reason"):
+        finish(bar, "")
+    monkeypatch.setenv(ENV_VARIABLE, "0")
+    off = progress(total=3)
+    finish(off, "converged")                         # a disabled bar ignores it
+    assert off.total == 3
 
 
 def test_postfix_formats_values_with_four_digits(monkeypatch):

@@ -17,7 +17,7 @@ import numpy as np
 
 from piezolib._checks import (check_channels, check_frequency_grid, check_integer,
                               check_model, check_positive, check_siso, check_stable)
-from piezolib.progress import postfix, progress
+from piezolib.progress import finish, postfix, progress
 from piezolib.robust.blocks import block_slices, parse_blk
 from piezolib.robust.dfit import fit_magnitude
 from piezolib.robust.hinf import HinfSynthesisError, hinfsyn
@@ -241,8 +241,9 @@ def musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=4, max_iter=8, rtol=5e
 
     Progress goes to the logger ``piezolib.robust.dk`` at INFO level, one
     line per iteration (``logging.basicConfig(level=logging.INFO)`` shows it),
-    and to a transient progress bar with the current mu peak
-    (:func:`piezolib.progress.progress`; ``PIEZOLIB_PROGRESS=0`` hides it).
+    and to a progress bar with the current mu peak that ends saying which
+    rule stopped the iteration (:func:`piezolib.progress.progress`;
+    ``PIEZOLIB_PROGRESS=0`` hides it).
 
     The iteration stops on counts and on the mu peaks only (``max_iter``
     K-steps, each a :func:`~piezolib.robust.hinf.hinfsyn` search of at most
@@ -352,6 +353,9 @@ def musyn(P, blk, nmeas=1, ncon=1, omega=None, *, d_order=4, max_iter=8, rtol=5e
             if it == max_iter - 1:
                 break
             fits = _fit_scalings(omega_s, mu_res, blocks, d_order, fits, resp)
+        # an early stop is the rule working, not a failure: the bar says why it ended
+        finish(bar, f"{reason}; best mu {best['row']['mu_upper']:.4f} at iteration "
+                    f"{best['iteration']}")
 
     K = from_scaled(best["K"], ws, P.output_labels[-nmeas:], P.input_labels[-ncon:], name="K")
     d_scalings = [scale_time(ct.tf(f.tf), 1.0 / ws) for f in best["fits"]]

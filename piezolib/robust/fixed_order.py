@@ -33,7 +33,7 @@ from scipy import optimize
 
 from piezolib._checks import (check_finite_array, check_finite_lti, check_frequency_grid,
                               check_integer, check_model, check_positive, check_siso)
-from piezolib.progress import postfix, progress
+from piezolib.progress import finish, postfix, progress
 from piezolib.robust.blocks import parse_blk
 from piezolib.robust.lti import time_scale_of, to_scaled, with_signals
 from piezolib.robust.mu import MuResult, mussv
@@ -397,8 +397,8 @@ def fixed_order_musyn(P, blk, K0, omega, *, max_iter=20, rtol=1e-3, patience=2,
     ``k_step_iterations`` SLSQP iterations.  No rule uses wall time, so the
     controller does not depend on the machine's speed or load.  Each step
     writes an INFO line to the logger ``piezolib.robust.fixed_order`` and
-    advances a transient progress bar (:func:`piezolib.progress.progress`;
-    ``PIEZOLIB_PROGRESS=0`` hides it).
+    advances a progress bar that ends saying which rule stopped the search
+    (:func:`piezolib.progress.progress`; ``PIEZOLIB_PROGRESS=0`` hides it).
 
     Parameters
     ----------
@@ -483,6 +483,8 @@ def fixed_order_musyn(P, blk, K0, omega, *, max_iter=20, rtol=1e-3, patience=2,
             omega = _refine(omega, fine, upper)
             logger.info("fixed-order: peak %.4f between grid points (grid %.4f); grid refined "
                         "to %d points", upper.max(), on_grid, omega.size)
+        # fewer steps than the bound is the stopping rule working: the bar says why
+        finish(bar, reason)
     loop = _Loop(P, omega, ws)
     final = mussv(loop.M(modal.response(omega)), blk, omega)
     k = int(np.argmax(final.upper))

@@ -49,9 +49,10 @@ DATA_CHECKS = ["piezolib.problem.stage_data:check_experiment_files"]
 GATHERING = ("07_",)
 
 #: Environment variables a headless run sets for its kernels unless already set:
-#: figures are saved, not drawn (Agg); widgets have no frontend, so controls draw
-#: their static figure; threaded BLAS on small problems is slower on 2 cores.
-KERNEL_ENVIRONMENT = {"MPLBACKEND": "Agg", "PIEZOLIB_STATIC": "1", "OPENBLAS_NUM_THREADS": "1"}
+#: figures are saved, not drawn (Agg); threaded BLAS on small problems is slower on
+#: 2 cores.  (Controls draw their static figure by themselves: a headless client
+#: sends no cell id, see piezolib.notebook_display.)
+KERNEL_ENVIRONMENT = {"MPLBACKEND": "Agg", "OPENBLAS_NUM_THREADS": "1"}
 
 
 class NotebookFailure(RuntimeError):

@@ -12,12 +12,18 @@
 Everything a notebook writes goes through its session, to the folders of the
 session's study (``figures/`` and ``data/results/`` for the reference study,
 ``runs/<study>/`` for any other): the study is passed, never looked up.
+
+In a notebook kernel the session also shows the library's log records in
+the cell (:func:`piezolib.progress.route_logs`): a solver's INFO lines
+(when the notebook sets ``logging.getLogger("piezolib").setLevel(logging.INFO)``)
+appear in a collapsed log under its progress bar, not as stderr blocks.
 """
 
 import time
 
 import pandas as pd
 
+from piezolib import notebook_display, progress
 from piezolib.workbook import plotting, report, style
 from piezolib.workbook import study as studies
 
@@ -88,6 +94,9 @@ class Session:
 def start(study=studies.REFERENCE, claims=None):
     """Start a notebook: load its study, open its claim table, apply the figure style.
 
+    In a notebook kernel, the records of the ``piezolib`` loggers are shown
+    in the cells (under the running progress bar) rather than on stderr.
+
     Parameters
     ----------
     study : str, path or Study
@@ -102,6 +111,8 @@ def start(study=studies.REFERENCE, claims=None):
     """
     session = Session(study, claims)
     style.use_style()
+    if notebook_display.in_kernel():        # a script or test keeps its own logging set-up
+        progress.route_logs("piezolib")
     for option, value in DISPLAY_OPTIONS.items():
         pd.set_option(option, value)
     return session

@@ -57,3 +57,51 @@ def test_a_reading_notebook_has_no_claim_table_and_bad_studies_are_named(checkou
         session.start("nope")
     with pytest.raises(ValueError, match="no file name"):
         session.start("reference").save(plt.figure())
+
+
+# a notebook as a reader of JupyterLab writes one: a session, a search that stops early with log
+# lines, a pyplot figure and an interactive control
+HEADLESS_CELLS = [
+    """import logging
+import matplotlib.pyplot as plt
+import numpy as np
+from piezolib import paper, progress
+from piezolib.workbook import interactive, session
+nb = session.start("reference")
+logging.getLogger("piezolib").setLevel(logging.INFO)
+log = logging.getLogger("piezolib.robust.dk")""",
+    """with progress.progress(total=8, desc="musyn DK", unit="iter") as bar:
+    for k in range(5):
+        log.info("DK %d: mu %.3f", k, 1 - 0.05 * k)
+        bar.update()
+    progress.finish(bar, "no improvement > 0.005 in 2 iterations")""",
+    """plt.plot([0, 1], [1, 0])
+plt.show()""",
+    """interactive.spread_control(paper.plant(), paper.uncertainty_weight(), np.logspace(0, 6, 200),
+                           levels=2)""",
+]
+
+
+def test_a_notebook_run_headless_saves_static_outputs(monkeypatch):
+    """nbclient (papermill's and nbconvert's executor) without any piezolib setting: the saved
+    notebook holds figures as PNG, the bar's final line, no stderr and no widget view."""
+    nbclient = pytest.importorskip("nbclient")
+    nbformat = pytest.importorskip("nbformat")
+    for name in ("PIEZOLIB_STATIC", "MPLBACKEND", "PIEZOLIB_PROGRESS"):   # conftest sets some
+        monkeypatch.delenv(name, raising=False)
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(c) for c in HEADLESS_CELLS])
+    nbclient.NotebookClient(nb, timeout=180, kernel_name="python3").execute()
+    outputs = [o for cell in nb.cells for o in cell.outputs]
+    assert [o for o in outputs if o.output_type in ("stream", "error")] == []   # no stderr
+    assert not any("application/vnd.jupyter.widget-view+json" in o.get("data", {})
+                   for o in outputs)
+    assert not any("VBox(" in o.get("data", {}).get("text/plain", "") for o in outputs)
+    bar = nb.cells[1].outputs
+    assert len(bar) == 1 and bar[0].output_type == "display_data"      # one output, updated
+    final = bar[0].data["text/plain"]
+    assert final.startswith("✔ musyn DK: done: no improvement > 0.005 in 2 iterations")
+    assert "5 of at most 8 iter" in final and "DK 4: mu 0.800" in final  # log under the bar
+    assert "piezolib-progress-done" in bar[0].data["text/html"]
+    for cell in nb.cells[2:]:                                   # pyplot figure, the control
+        assert [o.output_type for o in cell.outputs][-1] in ("display_data", "execute_result")
+        assert "image/png" in cell.outputs[-1].data

@@ -23,14 +23,22 @@ callbacks are what the tests exercise.  The plumbing the three share
 Headless degradation
 --------------------
 A widget needs a live frontend to render it: executed headless (nbclient,
-nbval, ``python -m piezolib reproduce``) it would leave nothing but a
-``VBox(...)`` text in the notebook.  An IPython kernel runs in both cases, and
-nothing the kernel sees tells them apart reliably, so the headless runners say
-so: with the environment variable ``PIEZOLIB_STATIC=1`` (see
-:func:`interactive_available`) every entry point draws the figure for its
-default parameters and returns that :class:`matplotlib.figure.Figure`
-instead of the widget.  Figures are not attached to pyplot, so a cell whose
-last expression is the entry point shows the widget or the figure exactly once.
+papermill, ``jupyter nbconvert --execute``, nbval, ``python -m piezolib
+reproduce``) it would leave a widget view that shows nothing when the saved
+notebook or its HTML is read, and a ``VBox(...)`` text.  An IPython kernel
+runs in both cases; what tells them apart is the request that runs the cell:
+JupyterLab and Notebook 7 name the cell in it (``cellId``), the headless
+clients do not (:func:`interactive_available`).  Without a frontend every
+entry point draws the figure for its default parameters and returns that
+:class:`matplotlib.figure.Figure` instead of the widget; no setting is
+needed.  ``PIEZOLIB_STATIC=1`` forces the figure everywhere.
+
+Where the widget is shown, its output also carries the current figure as
+``image/png`` and a summary as ``text/plain``: a notebook saved from
+JupyterLab without widget state, and nbconvert's HTML of it (which skips a
+widget view without state), show the figure instead of nothing.  Figures
+are not attached to pyplot, so a cell whose last expression is the entry
+point shows the widget or the figure exactly once.
 """
 
 from piezolib.workbook.interactive._panel import STATIC_ENV, interactive_available

@@ -3,25 +3,32 @@
 Whether a control shows a live widget or a static figure
 (:func:`interactive_available`, :func:`want_widget`, :func:`static_figure`),
 pyplot-free figures and their PNG bytes, and :class:`LivePanel`, which ties
-sliders to a callback, a drawing function and a summary line.  Each panel
-module builds its control from these; nothing outside the package imports them.
+sliders to a callback, a drawing function and a summary line, in a box whose
+saved form is the current figure (:func:`panel_box`).  Each panel module
+builds its control from these; nothing outside the package imports them.
 """
 
+import base64
+import functools
 import html
 import importlib.util
 import io
 import os
-import sys
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from piezolib import notebook_display
+from piezolib.notebook_display import ipython_shell
 from piezolib.workbook.style import db, unit_text
 
-__all__ = ["STATIC_ENV", "interactive_available", "ipython_shell", "static_figure", "want_widget",
+__all__ = ["STATIC_ENV", "interactive_available", "static_figure", "want_widget",
            "import_ipywidgets", "panel_figure", "png_bytes", "magnitude", "curve_db", "LivePanel",
-           "log_slider", "linear_slider", "finish"]
+           "panel_box", "log_slider", "linear_slider", "finish"]
+
+#: MIME type of a widget view in a notebook output.
+WIDGET_VIEW_MIME = "application/vnd.jupyter.widget-view+json"
 
 #: Environment variable that makes every entry point draw its static figure
 #: ("1", "true", "yes" or "on"; "0", "false", "no", "off" or unset leave the choice to
@@ -36,12 +43,17 @@ def interactive_available():
 
     All of these must hold:
 
-    * ``PIEZOLIB_STATIC`` is unset or false ("0", "false", "no", "off").
-      Headless runners set it to "1": under nbclient or nbval an IPython
-      kernel runs just as under JupyterLab, with no frontend to render widgets.
+    * ``PIEZOLIB_STATIC`` is unset or false ("0", "false", "no", "off");
+      "1" forces the static figure everywhere.
     * ipywidgets is importable.
     * the code runs in an IPython kernel (a shell with a ``kernel``): plain
       Python and terminal IPython have no widget frontend.
+    * the cell was sent by an interactive frontend: JupyterLab and Notebook
+      7 name the cell in each execute request (``cellId``,
+      :func:`piezolib.notebook_display.frontend_cell_id`).  The headless
+      clients (nbclient, papermill, ``jupyter nbconvert --execute``, nbval)
+      do not, and a widget they saved would show nothing when the notebook
+      or its HTML is read later; they get the figure, with no setting.
 
     Returns
     -------
@@ -52,14 +64,7 @@ def interactive_available():
     if importlib.util.find_spec("ipywidgets") is None:
         return False
     # IPython is loaded in every kernel; if it is not, no frontend can exist either
-    shell = ipython_shell()
-    return shell is not None and getattr(shell, "kernel", None) is not None
-
-
-def ipython_shell():
-    """The running IPython shell, or None (IPython is not imported unless it already is)."""
-    ipython = sys.modules.get("IPython")
-    return ipython.get_ipython() if ipython is not None else None
+    return notebook_display.in_kernel() and notebook_display.frontend_cell_id() is not None
 
 
 def static_figure(fig):
@@ -180,11 +185,59 @@ class LivePanel:
         self.status.value = ""
 
     def box(self, extra=()):
-        """The VBox: sliders, extra rows, summary, status, figure."""
+        """The box (:func:`panel_box`): sliders, extra rows, summary, status, figure."""
         w = self.widgets
-        return w.VBox([w.HBox(list(self.sliders.values())[i:i + 3])
-                       for i in range(0, len(self.sliders), 3)]
-                      + list(extra) + [self.summary, self.status, self.image])
+        return panel_box(w, [w.HBox(list(self.sliders.values())[i:i + 3])
+                             for i in range(0, len(self.sliders), 3)]
+                         + list(extra) + [self.summary, self.status, self.image], self)
+
+    def mime_bundle(self, bundle):
+        """``bundle`` (a widget's view) with the current figure as image/png and the summary
+        as text/plain: what a reader sees where the widget cannot be drawn."""
+        bundle = dict(bundle)
+        if self.figure is not None:
+            bundle["image/png"] = base64.b64encode(png_bytes(self.figure)).decode("ascii")
+        summary = html.unescape(self.summary.value) or "no figure drawn yet"
+        bundle["text/plain"] = f"interactive control (figure for the values shown): {summary}"
+        return bundle
+
+
+@functools.cache
+def _panel_box_class(widgets):
+    """A VBox class whose output also carries its panel's figure (made once per ipywidgets)."""
+
+    class PanelBox(widgets.VBox):
+        """A control's VBox; its output holds the widget view, the figure (image/png) and the
+        summary (text/plain), so a notebook saved without widget state (or its HTML, which
+        skips a view without state) still shows the figure, never the ``VBox(...)`` repr."""
+
+        def _repr_mimebundle_(self, **kwargs):
+            bundle = super()._repr_mimebundle_(**kwargs)
+            panel = getattr(self, "panel", None)
+            return bundle if panel is None else panel.mime_bundle(bundle)
+
+    return PanelBox
+
+
+def panel_box(widgets, children, panel):
+    """A VBox of ``children`` displayed with the figure of ``panel`` as its static fallback.
+
+    Parameters
+    ----------
+    widgets : module
+        ipywidgets.
+    children : list of ipywidgets.Widget
+    panel : LivePanel
+        Its figure and summary are the fallback (read when the box is displayed).
+
+    Returns
+    -------
+    ipywidgets.VBox
+        With ``box.panel = panel``.
+    """
+    box = _panel_box_class(widgets)(children)
+    box.panel = panel
+    return box
 
 
 def log_slider(widgets, name, value, decades=1.0, description=None):

@@ -17,6 +17,7 @@ import control as ct
 import matplotlib as mpl
 import numpy as np
 
+from piezolib import progress
 from piezolib.problem import paper
 from piezolib._checks import check_frequency_grid, check_positive, check_siso, check_type
 from piezolib.problem.analysis import RobustnessAnalysis, analyze, robust_performance_peak
@@ -332,10 +333,13 @@ def weight_design_control(G, H_m, K, params=None, omega=None, *, design_options=
         The widget: M_e and M_y linear sliders, eps_e, eps_y, omega_e [rad/s]
         and omega_y [rad/s] log sliders; the figure and the NP / RS / RP
         peaks follow every change; "re-design" runs :func:`redesign` for the
-        current weights, shows the new controller's mu_RP and adds it to the
-        controller menu.  ``box.controls`` holds the sliders, the button
-        ("redesign") and the menu ("controller"); ``box.panel.view`` the
-        latest :class:`WeightDesignView`.  Headless: the figure of
+        current weights, shows its progress bar and log lines under the
+        button (``box.redesign_progress``), the new controller's mu_RP
+        (``box.redesign_result``), and adds it to the controller menu.
+        ``box.controls`` holds the sliders, the button ("redesign") and the
+        menu ("controller"); ``box.panel.view`` the latest
+        :class:`WeightDesignView`.  Saved without a frontend, the widget's
+        output holds the figure as image/png.  Headless: the figure of
         :func:`draw_weight_design` for ``params``.
     """
     start = _weight_parameters(params)
@@ -368,11 +372,19 @@ def weight_design_control(G, H_m, K, params=None, omega=None, *, design_options=
     panel = LivePanel(w, sliders, compute, draw_weight_design, _weight_summary)
     menu.observe(panel.refresh, names="value")
 
+    activity = w.HTML()
+
+    def show_activity(html_text, _plain):
+        activity.value = html_text
+
     def on_redesign(_):
         button.disabled = True
         result.value = "<i>re-designing (DK-iteration) ...</i>"
         try:
-            K_new, mu_new = redesign(G, H_m, panel.values(), **design_options)
+            # a button's callback runs outside any cell: its bars and log lines would only
+            # reach the hidden log console, so they are drawn under the button instead
+            with progress.shown_in(show_activity):
+                K_new, mu_new = redesign(G, H_m, panel.values(), **design_options)
         except Exception as exc:        # noqa: BLE001 -- shown, not lost in the kernel log
             result.value = f"<b>re-design failed</b> ({type(exc).__name__}): {html.escape(str(exc))}"
             return
@@ -390,7 +402,8 @@ def weight_design_control(G, H_m, K, params=None, omega=None, *, design_options=
             menu.value = label
 
     button.on_click(on_redesign)
-    box = finish(panel, panel.box(extra=[w.HBox([menu, button, result])]))
+    box = finish(panel, panel.box(extra=[w.HBox([menu, button, result]), activity]))
     box.controls.update(redesign=button, controller=menu)
     box.redesign_result = result
+    box.redesign_progress = activity
     return box

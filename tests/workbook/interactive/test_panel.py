@@ -1,5 +1,6 @@
 """The controls' plumbing: widget or static figure, and the static figure shown as a PNG."""
 
+import base64
 import sys
 import types
 
@@ -10,11 +11,19 @@ from piezolib.workbook.interactive import _panel
 
 
 @pytest.fixture
-def fake_kernel(monkeypatch):
-    """IPython's shell has a kernel, as inside Jupyter."""
+def request_metadata(monkeypatch):
+    """IPython's shell has a kernel; the metadata of the request it runs (JupyterLab's: cellId)."""
     ipython = pytest.importorskip("IPython")
-    monkeypatch.setattr(ipython, "get_ipython", lambda: types.SimpleNamespace(kernel=object()))
+    metadata = {"cellId": "0f3c"}
+    kernel = types.SimpleNamespace(get_parent=lambda channel: {"metadata": metadata})
+    monkeypatch.setattr(ipython, "get_ipython", lambda: types.SimpleNamespace(kernel=kernel))
     monkeypatch.delenv(_panel.STATIC_ENV, raising=False)
+    return metadata
+
+
+@pytest.fixture
+def fake_kernel(request_metadata):
+    """A kernel with JupyterLab attached, as when a person runs the cell."""
 
 
 def test_no_frontend_outside_a_kernel(monkeypatch):
@@ -35,6 +44,15 @@ def test_kernel_is_interactive_unless_static_is_set(fake_kernel, monkeypatch):
     for value in ("0", "false", "", "off"):
         monkeypatch.setenv(_panel.STATIC_ENV, value)
         assert _panel.interactive_available() is True, value
+
+
+def test_a_headless_client_gets_the_static_figure_without_a_setting(request_metadata):
+    """nbclient, papermill, nbconvert --execute and nbval name no cell in their requests."""
+    pytest.importorskip("ipywidgets")
+    request_metadata.clear()
+    assert _panel.interactive_available() is False
+    request_metadata["cellId"] = "7a"
+    assert _panel.interactive_available() is True
 
 
 def test_kernel_without_ipywidgets_is_static(fake_kernel, monkeypatch):
@@ -74,3 +92,27 @@ def test_static_figure_shows_as_png_in_ipython(monkeypatch):
     png.for_type(Figure, lambda f: b"\x89PNG inline")
     _panel.static_figure(fig)
     assert png(fig) == b"\x89PNG inline" and png.lookup_by_type(Figure) is not mine
+
+
+def test_a_panel_box_is_saved_with_its_figure_as_png(monkeypatch):
+    """Where the widget cannot be drawn (no state saved, nbconvert's HTML) the figure shows."""
+    widgets = pytest.importorskip("ipywidgets")
+    sliders = {"a": _panel.linear_slider(widgets, "a", 1.0, 0.0, 2.0, 0.1)}
+
+    def draw(view, fig=None):
+        fig, (ax,) = _panel.panel_figure(fig, 1, (3.0, 2.0))
+        ax.plot([0, 1], [0, view])
+        return fig
+
+    panel = _panel.LivePanel(widgets, sliders, lambda values: values["a"], draw,
+                             lambda view: f"a = {view:.2f} & more")
+    box = _panel.finish(panel, panel.box())
+    assert isinstance(box, widgets.VBox) and box.panel is panel
+    bundle = box._repr_mimebundle_()
+    assert set(bundle) == {_panel.WIDGET_VIEW_MIME, "image/png", "text/plain"}
+    assert base64.b64decode(bundle["image/png"]) == _panel.png_bytes(panel.figure)
+    assert bundle["text/plain"] == ("interactive control (figure for the values shown): "
+                                    "a = 1.00 & more")
+    assert "VBox(" not in bundle["text/plain"]
+    sliders["a"].value = 2.0                                      # the saved figure follows
+    assert base64.b64decode(box._repr_mimebundle_()["image/png"]) == _panel.png_bytes(panel.figure)

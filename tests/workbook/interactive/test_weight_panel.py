@@ -151,6 +151,10 @@ def test_weight_widget_follows_its_sliders(problem, published_analysis, widgets)
     menu = box.controls["controller"]
     assert menu.value.startswith("re-designed K") and len(menu.options) == 2
     assert "μ_RP" in box.redesign_result.value
+    # its progress is drawn under the button (a callback's output reaches no cell), finished
+    assert "piezolib-progress-done" in box.redesign_progress.value
+    assert "musyn DK" in box.redesign_progress.value
+    assert "max_iter reached" in box.redesign_progress.value
     assert panel.view.controller == menu.value
     K_new, mu = I.redesign(G, H_m, panel.values(), max_iter=1)
     assert panel.view.mu_RP == pytest.approx(mu, rel=1e-9)
