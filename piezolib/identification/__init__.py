@@ -17,7 +17,8 @@ validation  fit, whiteness, empirical frequency response, coefficient table
 frf         best linear approximation of a MIMO system from periodic multisines, with its
             noise and nonlinear-distortion variances (robust method)
 freqfit     discrete MIMO state-space models fitted to an FRF (frequency-domain subspace)
-hammerstein Prandtl-Ishlinskii operators ahead of MIMO linear dynamics, weights by least squares
+mimo_hammerstein
+            Prandtl-Ishlinskii operators ahead of MIMO linear dynamics, weights by least squares
 scheduled   linear models blended by the input's measured RMS level
 
 Why output-error passes follow ARX, and why the numerator is refitted:
@@ -42,10 +43,10 @@ from piezolib.identification.continuous import *   # noqa: F401,F403
 from piezolib.identification.validation import *   # noqa: F401,F403
 from piezolib.identification.frf import *          # noqa: F401,F403
 from piezolib.identification.freqfit import *      # noqa: F401,F403
-from piezolib.identification.hammerstein import *  # noqa: F401,F403
+from piezolib.identification.mimo_hammerstein import *  # noqa: F401,F403
 from piezolib.identification.scheduled import *    # noqa: F401,F403
 from piezolib.identification import (arx, continuous, oe, validation, frf, freqfit,
-                                    hammerstein, scheduled)
+                                    mimo_hammerstein, scheduled)
 
 __all__ = [*arx.__all__, *oe.__all__, *continuous.__all__, *validation.__all__, *frf.__all__,
-           *freqfit.__all__, *hammerstein.__all__, *scheduled.__all__]
+           *freqfit.__all__, *mimo_hammerstein.__all__, *scheduled.__all__]
