@@ -53,6 +53,8 @@ FIG.set_label("fig99_campaign")
 AXES = FIG.add_subplot()
 OMEGA = np.logspace(2, 5, 20)
 MEMBERS = importlib.import_module("piezolib.uncertainty").random_model_set(G, 0.05, 2)
+SECTIONS_10K = importlib.import_module("piezolib.robust").controller_sos(
+    ct.tf([1.0, -0.5], [1.0, -0.2], 1 / FS), name="other")
 
 
 class InTmp(str):
@@ -386,11 +388,17 @@ CASES = {
     "cli.main": (None, {}),                 # by argument below: test_cli_*
     "outputs.study_name_problem": (dict(name="a/b"), {}),    # returns the problem as text
     # workbook.two_dof, set_tracking
+    "two_dof.dynamics_inverse": (dict(G=G, fs=FS),
+                                 {"G": {"zero DC gain": S / (S + 1), "text": "x"},
+                                  "fs": POSITIVE, "radius": {"above one": 2.0, "zero": 0.0}}),
+    "pipeline.export_feedforward_sections": (None, {"study": STUDY, "directory": {"number": 3}}),
+    "pipeline.study_feedforward_sections": (dict(study="reference"), {"study": STUDY}),
     "two_dof.two_dof_feedforward": (dict(G=G, model=DAHL, fs=FS),
                                     {"G": {"zero DC gain": S / (S + 1), "text": "x",
                                            "discrete": ct.tf([1.0], [1.0, -0.5], 1 / FS)},
                                      "model": {"text": "x", "number": 3}, "fs": POSITIVE,
-                                     "radius": {**POSITIVE, "above one": 2.0}}),
+                                     "radius": {**POSITIVE, "above one": 2.0},
+                                     "sections": {"text": "x", "another filter": SECTIONS_10K}}),
     "set_tracking.tracking_over_set": (
         dict(stage=STAGE, mset=MEMBERS, model=DAHL, controller=K, frequencies_Hz=[50.0]),
         {"stage": {"text": "x", "a batch": STAGE.batch([0, 1])}, "mset": {"a plant": G},

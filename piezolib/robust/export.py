@@ -628,7 +628,9 @@ def write_json(controller, path, meta=None):
     path : str or Path
         File to write.
     meta : dict, optional
-        JSON-serialisable extra information (units, origin, ...).
+        JSON-serialisable extra information (units, origin, ...); its
+        ``"input"`` and ``"output"`` entries, if any, name the signals
+        (default ``v_e [V]`` and ``u_b [V]``: a feedback controller).
 
     Returns
     -------
@@ -659,13 +661,16 @@ def _check_controller(controller):
 
 
 def _write_json(controller, path, meta):
+    # the signals default to a feedback controller's; meta's "input"/"output" name others
+    signals = {"input": "v_e [V]", "output": "u_b [V]"}
+    signals.update({k: meta[k] for k in signals if k in meta})
     doc = {"name": controller.name, "fs_Hz": controller.fs,
            "form": "second-order sections [b0, b1, b2, 1, a1, a2], Direct Form II transposed",
-           "input": "v_e [V]", "output": "u_b [V]",
+           **signals,
            "sos_float64": controller.sos.tolist(),
            # float32 values written as the exact decimal of the rounded number
            "sos_float32": [[float(np.float32(v)) for v in row] for row in controller.sos],
-           "meta": meta}
+           "meta": {k: v for k, v in meta.items() if k not in signals}}
     # sealed (a content SHA-256 that read_json checks) and written atomically
     return atomic_write(path, json.dumps(seal(doc), indent=1) + "\n")
 

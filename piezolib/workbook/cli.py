@@ -151,7 +151,8 @@ def _controllers(args, stream):
     if args.write_reference:
         path = pipeline.write_reference_design()
         print(f"wrote {path}, the section exports "
-              + ", ".join(f"{stem}.json/.h" for stem in pipeline.SECTION_FILES)
+              + ", ".join(f"{stem}.json/.h" for stem in (*pipeline.SECTION_FILES,
+                                                         pipeline.FEEDFORWARD_FILE))
               + " and the workbook Dahl model", file=stream)
     found = pipeline.read_controllers(pipeline.reference_design_path())
     print(f"{found.source}: designed for choices {found.digest}; mu_RP "

@@ -44,13 +44,15 @@ from piezolib.robust.discrete import discretize
 from piezolib.uncertainty import fit_covering_weight, model_set, relative_error_envelope
 from piezolib.workbook import outputs
 from piezolib.workbook import study as studies
+from piezolib.workbook.two_dof import dynamics_inverse
 
 __all__ = ["StudyControllers", "study_problem", "study_uncertainty_weight",
            "study_controllers", "derive_controllers", "design_choices", "design_digest",
            "memory", "checked_cache_call", "library_fingerprint", "reference_design_path",
            "write_controllers", "read_controllers", "write_reference_design",
            "case_III_controllers", "discretized_controllers", "export_sections",
-           "study_sections", "SECTION_FILES", "ArtifactError", "CACHE_ENV"]
+           "study_sections", "SECTION_FILES", "ArtifactError", "CACHE_ENV",
+           "FEEDFORWARD_FILE", "export_feedforward_sections", "study_feedforward_sections"]
 
 logger = logging.getLogger(__name__)
 
@@ -396,6 +398,7 @@ def write_reference_design(cache=False):
     found = derive_controllers(reference, cache=cache)
     path = write_controllers(found, reference_design_path(), reference)
     export_sections(reference, outputs.study_controllers_dir(reference.name), found)
+    export_feedforward_sections(reference, outputs.study_controllers_dir(reference.name))
     return path
 
 
@@ -441,6 +444,50 @@ def export_sections(study, directory, controllers=None):
                 meta={"controller": labels[stem], "states": d.K.nstates,
                       "discretisation": "Tustin", "prewarp_rad_s": d.prewarp_frequency})
             for stem, d in discretized_controllers(study, controllers).items()}
+
+
+#: File stem of Case IV's dynamics inverse exported as sections (``.json`` and ``.h``).
+FEEDFORWARD_FILE = "F_zpetc"
+
+
+def export_feedforward_sections(study, directory):
+    """Export Case IV's dynamics inverse (ZPETC of the study's G / G(0)) as sections.
+
+    Returns
+    -------
+    SOSController
+        Read back in float32, as a target runs it.
+    """
+    study = studies.load(study)
+    dynamics = dynamics_inverse(study_problem(study).G, study.loop.fs_Hz)
+    return export.export_controller(
+        ct.ss(dynamics.F), directory, FEEDFORWARD_FILE,
+        meta={"input": "v_r [V], preview samples ahead", "output": "w [V], the input of the "
+              "hysteresis feedforward",
+              "filter": "ZPETC of the ZOH model of G / G(0): w[k] = F(z) v_r[k + preview]",
+              "preview_samples": dynamics.preview, "states": len(dynamics.F.den[0][0]) - 1})
+
+
+def study_feedforward_sections(study):
+    """The float32 sections of Case IV's dynamics inverse for ``study``.
+
+    The reference study reads the committed export ``data/controllers/F_zpetc.json``
+    (an input, like the controllers' sections of :func:`study_sections`: the
+    factorisation's float32 coefficients are not the same on every machine);
+    any other study exports its own to ``runs/<study>/controllers/``.
+
+    Raises
+    ------
+    ArtifactError
+        The committed export of the reference study is missing.
+    """
+    study = studies.load(study)
+    if not study.is_reference:
+        return export_feedforward_sections(study, outputs.study_controllers_dir(study.name))
+    path = outputs.study_controllers_dir(study.name) / f"{FEEDFORWARD_FILE}.json"
+    if not path.is_file():
+        raise ArtifactError(f"{path} is missing: run `{_WRITE_REFERENCE}` to export it")
+    return export.read_json(path, "float32")
 
 
 def study_sections(study):

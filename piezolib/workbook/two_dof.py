@@ -32,7 +32,7 @@ from piezolib.identification import zoh_coefficients
 from piezolib.robust.export import SOSController, controller_sos, sos_filter
 from piezolib.robust.preview import PreviewFeedforward, zpetc
 
-__all__ = ["TwoDofFeedforward", "two_dof_feedforward"]
+__all__ = ["TwoDofFeedforward", "dynamics_inverse", "two_dof_feedforward"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -81,7 +81,35 @@ class TwoDofFeedforward:
         return self.model.static_part
 
 
-def two_dof_feedforward(G, model, fs, radius=1.0):
+def dynamics_inverse(G, fs, radius=1.0):
+    """ZPETC of the exact ZOH model of G / G(0) at ``fs`` (the dynamics Case IV inverts).
+
+    Parameters
+    ----------
+    G : control.LTI
+        Continuous SISO model u_c [V] -> v_y [V] with a finite nonzero DC gain.
+    fs : float
+        Loop rate [Hz].
+    radius : float
+        Passed to :func:`~piezolib.robust.preview.zpetc`.
+
+    Returns
+    -------
+    PreviewFeedforward
+    """
+    check_siso("G", G)
+    if not G.isctime(strict=True):
+        raise ValueError("G must be a continuous-time model (u_c [V] -> v_y [V])")
+    fs = check_positive("fs", fs)
+    dc = float(np.real(ct.dcgain(G)))
+    if not np.isfinite(dc) or dc == 0:
+        raise ValueError(f"G must have a finite nonzero DC gain, got {dc!r}")
+    # the exact ZOH model from a scaled realisation (G's coefficients reach 1e23)
+    b, a = zoh_coefficients(G * (1.0 / dc), 1.0 / fs)
+    return zpetc(ct.tf(b, a, 1.0 / fs), radius=radius)
+
+
+def two_dof_feedforward(G, model, fs, radius=1.0, sections=None):
     """The Case IV feedforward for the plant G and a hysteresis model.
 
     Parameters
@@ -96,23 +124,43 @@ def two_dof_feedforward(G, model, fs, radius=1.0):
         Loop rate [Hz].
     radius : float
         Passed to :func:`~piezolib.robust.preview.zpetc`.
+    sections : SOSController, optional
+        The sections of the dynamics inverse as exported before (e.g. read
+        from a committed JSON file, so that every machine runs the same
+        float32 coefficients); checked against the ZPETC of G.  Default:
+        factored here (:func:`~piezolib.robust.export.controller_sos`).
 
     Returns
     -------
     TwoDofFeedforward
+
+    Raises
+    ------
+    ValueError
+        ``sections`` at another rate, or whose response is not the ZPETC
+        of G's dynamics (relative error above 1e-6 below 0.49 fs).
     """
-    check_siso("G", G)
-    if not G.isctime(strict=True):
-        raise ValueError("G must be a continuous-time model (u_c [V] -> v_y [V])")
+    dynamics = dynamics_inverse(G, fs, radius)
     check_type("model", model, HysteresisModel, "a hysteresis model with simulate(v) and "
                "feedforward(x_r) (DahlModel, PIModel)")
-    fs = check_positive("fs", fs)
-    dc = float(np.real(ct.dcgain(G)))
-    if not np.isfinite(dc) or dc == 0:
-        raise ValueError(f"G must have a finite nonzero DC gain, got {dc!r}")
-    # the exact ZOH model from a scaled realisation (G's coefficients reach 1e23)
-    b, a = zoh_coefficients(G * (1.0 / dc), 1.0 / fs)
-    dynamics = zpetc(ct.tf(b, a, 1.0 / fs), radius=radius)
-    sections = controller_sos(ct.ss(dynamics.F), name="F_zpetc")
+    if sections is None:
+        sections = controller_sos(ct.ss(dynamics.F), name="F_zpetc")
+    else:
+        _check_sections(sections, dynamics, fs)
     sections.check_float32(what="the dynamics inverse")
+    dc = float(np.real(ct.dcgain(G)))
+    b, a = zoh_coefficients(G * (1.0 / dc), 1.0 / fs)
     return TwoDofFeedforward(dynamics, sections, model, b, a)
+
+
+def _check_sections(sections, dynamics, fs):
+    """Raise unless ``sections`` implement ``dynamics.F`` at ``fs`` (float64 coefficients)."""
+    check_type("sections", sections, SOSController, "an SOSController (robust.export)")
+    if not np.isclose(sections.fs, fs, rtol=1e-9):
+        raise ValueError(f"sections run at {sections.fs:g} Hz, the loop at {fs:g} Hz")
+    omega = 2 * np.pi * fs * np.linspace(0.001, 0.49, 200)
+    want = np.ravel(dynamics.F(np.exp(1j * omega / fs)))
+    err = np.abs(sections.frequency_response(omega) / want - 1).max()
+    if not err < 1e-6:
+        raise ValueError(f"sections do not implement the ZPETC of G's dynamics (largest "
+                         f"relative error {err:.2g}): export them anew for this G and rate")

@@ -60,3 +60,16 @@ def test_a_plant_without_dc_gain_is_refused():
     s = ct.tf("s")
     with pytest.raises(ValueError, match="G must have a finite nonzero DC gain"):
         two_dof_feedforward(s / (s + 1), PI, FS)
+
+
+def test_given_sections_are_checked_against_the_zpetc_of_G():
+    """The committed export is used as it is, float32 for float32; another filter is refused."""
+    from piezolib.workbook import pipeline
+    committed = pipeline.study_feedforward_sections("reference")
+    ff = two_dof_feedforward(G, PI, FS, sections=committed)
+    assert ff.sections is committed and ff.preview == 2
+    other = two_dof_feedforward(G * ct.tf([1.0], [1e-3, 1.0]), PI, FS).sections
+    with pytest.raises(ValueError, match="sections do not implement the ZPETC"):
+        two_dof_feedforward(G, PI, FS, sections=other)
+    with pytest.raises(ValueError, match="sections run at"):
+        two_dof_feedforward(G, PI, 2 * FS, sections=committed)
