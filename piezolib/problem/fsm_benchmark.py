@@ -32,9 +32,11 @@ import numpy as np
 from piezolib import metrics
 from piezolib._checks import check_type
 from piezolib.identification import freqfit
+from piezolib.robust.lti import balance
 from piezolib.problem import paths
+from piezolib.problem.genplant import effective_delay
 
-__all__ = ["SAMPLING_FREQUENCY_HZ", "LEVELS_MV", "SPLITS", "SAMPLES_PER_PERIOD", "N_INIT",
+__all__ = ["axis_design_plant", "axis_loop_response", "SAMPLING_FREQUENCY_HZ", "LEVELS_MV", "SPLITS", "SAMPLES_PER_PERIOD", "N_INIT",
            "INPUT_LABELS", "OUTPUT_LABELS", "PUBLISHED_NRMSE_PERCENT", "PUBLISHED_RMSE_UM",
            "BASELINE_SOURCE", "data_folder", "file_name", "load", "check_files",
            "write_manifest", "Score", "score", "score_simulation", "noise_floor"]
@@ -328,3 +330,100 @@ def noise_floor(level_mV, split="test", folder=None):
     nrmse = noise_std[..., None] / np.std(kept, axis=0)                           # (3, R, P)
     return Score(level_mV=_level(level_mV), rmse_um=1e6 * noise_std.mean(axis=1),
                  nrmse=nrmse.mean(axis=(1, 2)))
+
+
+def axis_design_plant(G, W_m, W_S, W_T, W_u, *, fs, delay_samples=1, pade_order=2):
+    """Synthesis plant of one mirror axis: output-multiplicative uncertainty, delay, roll-off.
+
+    For a SISO loop the input- and output-multiplicative sets G (1 + W_m Delta)
+    are the same; placing Delta at the output (the measured displacement)
+    makes the robust-performance matrix of the loop nearly rank one with a
+    constant D-scaling, where the input placement of
+    :func:`piezolib.problem.genplant.delay_aware_plant` needs D-scalings that
+    follow the plant's lightly damped resonances (the mirror's |G| varies by a
+    factor 50 between 5 Hz and 923 Hz), which low-order D fits cannot.  With
+    u_a the controller output after the effective delay tau = (d + 1/2)/fs
+    (Pade, order ``pade_order``; the hold and ``delay_samples``):
+
+        v_y = G u_a + u_Delta,  y_Delta = W_m G u_a,  v_e = v_r - v_y,
+        y1 = W_S v_e,  y2 = W_T v_y,  y_u = W_u u_b.
+
+    Parameters
+    ----------
+    G : control.LTI
+        Continuous SISO plant, actuator voltage [V] -> displacement [um].
+    W_m : control.LTI
+        Relative uncertainty weight [-].
+    W_S, W_T : control.LTI
+        Performance weights on S and T [-] (templates, e.g.
+        :func:`piezolib.robust.sensitivity_weight`).
+    W_u : control.LTI
+        Weight on the controller output [um/V] (roll-off requirement, e.g.
+        :func:`piezolib.problem.genplant.rolloff_weight`).
+    fs : float
+        Loop rate [Hz].
+    delay_samples : int or None
+        Computation delay [samples]; None leaves the delay out (u_a = u_b).
+    pade_order : int
+        Order of the Pade approximation of the delay.
+
+    Returns
+    -------
+    control.StateSpace
+        Inputs ``u_Delta, v_r, u_b``; outputs ``y_Delta, y1, y2, y_u, v_e``;
+        block structure ((1, 1), (1, 3)).
+    """
+    if delay_samples is None:
+        delay = ct.ss([], [], [], [[1.0]], inputs="u_b", outputs="u_a")
+    else:
+        num, den = ct.pade(effective_delay(fs, delay_samples), pade_order)
+        delay = ct.ss(ct.tf(num, den), inputs="u_b", outputs="u_a")
+    blocks = [delay,
+              ct.ss(G, inputs="u_a", outputs="v_y0"),
+              ct.ss(W_m, inputs="v_y0", outputs="y_Delta"),
+              ct.summing_junction(["v_y0", "u_Delta"], "v_y"),
+              ct.summing_junction(["v_r", "-v_y"], "v_e"),
+              ct.ss(W_S, inputs="v_e", outputs="y1"),
+              ct.ss(W_T, inputs="v_y", outputs="y2"),
+              ct.ss(W_u, inputs="u_b", outputs="y_u")]
+    return balance(ct.interconnect(blocks, inputs=["u_Delta", "v_r", "u_b"],
+                                   outputs=["y_Delta", "y1", "y2", "y_u", "v_e"],
+                                   name="P_axis"))
+
+
+def axis_loop_response(K, G, W_m, W_S, W_T, W_u, omega, *, fs, delay_samples=1):
+    """Frequency response of F_l(P, K) of :func:`axis_design_plant` with the exact delay.
+
+    The delay is e^{-j omega tau}, tau = (d + 1/2) / fs (the hold as half a
+    sample) instead of its Pade approximation; a discrete ``K`` is evaluated
+    at z = e^{j omega / fs}, so the response is that of the controller that is
+    implemented (up to the hold's approximation).
+
+    Parameters
+    ----------
+    K : control.LTI
+        SISO controller v_e [um] -> u_b [V], continuous or discrete (sample
+        time 1 / ``fs``).
+    G, W_m, W_S, W_T, W_u : control.LTI
+        As in :func:`axis_design_plant`.
+    omega : array_like
+        Frequencies [rad/s] (below pi ``fs`` for a discrete K).
+    fs : float
+        Loop rate [Hz].
+    delay_samples : int
+        Computation delay [samples].
+
+    Returns
+    -------
+    ndarray, shape (len(omega), 4, 2)
+        Outputs ``y_Delta, y1, y2, y_u``; inputs ``u_Delta, v_r``; block
+        structure ((1, 1), (1, 3)).
+    """
+    omega = np.asarray(omega, dtype=float)
+    P = axis_design_plant(G, W_m, W_S, W_T, W_u, fs=fs, delay_samples=None)
+    R = np.moveaxis(P(1j * omega, squeeze=False), -1, 0)
+    R[:, :, 2] *= np.exp(-1j * omega * effective_delay(fs, delay_samples))[:, None]
+    s = np.exp(1j * omega / fs) if K.isdtime(strict=True) else 1j * omega
+    k = np.ravel(K(s))
+    f = k / (1 - R[:, -1, 2] * k)
+    return R[:, :-1, :2] + f[:, None, None] * R[:, :-1, 2][:, :, None] * R[:, -1, :2][:, None, :]

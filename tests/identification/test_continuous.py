@@ -53,7 +53,23 @@ def test_d2c_refuses_impossible_models():
     with pytest.raises(ValueError, match="numeric sample time"):
         I.d2c(ct.tf([1.0], [1.0, 1.0]))
     with pytest.raises(ValueError, match="method"):
-        I.d2c(ct.tf([1.0], [1.0, -0.5], 0.1), method="tustin")
+        I.d2c(ct.tf([1.0], [1.0, -0.5], 0.1), method="bilinear")
+    with pytest.raises(ValueError, match="z = -1"):
+        I.d2c(ct.tf([1.0], [1.0, 1.0], 0.1), method="tustin")
+
+
+def test_d2c_tustin_inverts_c2d_and_takes_negative_real_poles():
+    # a model with a pole on the negative real axis has no ZOH inverse but a Tustin one
+    sysd = ct.tf([1.0, 0.3], [1.0, -0.2, -0.63], 0.01)     # poles 0.9 and -0.7
+    back = I.d2c(sysd, method="tustin")
+    assert back.isctime(strict=True)
+    z = np.exp(1j * np.linspace(0.01, 3.1, 50))
+    again = ct.c2d(back, 0.01, "tustin")
+    assert np.allclose(np.ravel(again(z)), np.ravel(sysd(z)), rtol=1e-10)
+    # and the Hankel singular values are kept (balanced truncation commutes with the map)
+    sys = realize(ct.tf([1.0, 0.5], [1.0, 0.2, 4.0]) * ct.tf([3.0], [1.0, 3.0]))
+    hsv = ct.hankel_singular_values(I.d2c(ct.c2d(sys, 0.05, "tustin"), method="tustin"))
+    assert np.allclose(hsv, ct.hankel_singular_values(sys), rtol=1e-8)
 
 
 def test_zoh_simulate_matches_python_control():
