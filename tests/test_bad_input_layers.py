@@ -53,6 +53,7 @@ FIG.set_label("fig99_campaign")
 AXES = FIG.add_subplot()
 OMEGA = np.logspace(2, 5, 20)
 MEMBERS = importlib.import_module("piezolib.uncertainty").random_model_set(G, 0.05, 2)
+AXIS_G = ct.tf([2e7], [1.0, 400.0, 4e7])             # a mirror-like resonance, V -> um
 SECTIONS_10K = importlib.import_module("piezolib.robust").controller_sos(
     ct.tf([1.0, -0.5], [1.0, -0.2], 1 / FS), name="other")
 
@@ -240,6 +241,21 @@ CASES = {
                                                      "wrong shape": lambda u: u[:, :2]},
                                         "level_mV": {"other level": 150},
                                         "split": {"other": "x"}}),
+    "fsm_benchmark.axis_design_plant": (
+        dict(G=AXIS_G, W_m=ct.tf([0.1], [1.0]), W_S=ct.tf([1.0], [1.0, 1.0]),
+             W_T=ct.tf([0.1], [1.0]), W_u=ct.tf([0.01], [1.0]), fs=6400.0),
+        {"G": {"discrete": ct.tf([1.0], [1.0, -0.5], 1 / 6400), "text": "x",
+               "improper": ct.tf([1.0, 0.0, 0.0], [1.0, 1.0])},
+         "W_m": {"text": "x"}, "W_S": {"discrete": ct.tf([1.0], [1.0, -0.5], 1 / 6400)},
+         "W_T": {"number": 3}, "W_u": {"text": "x"}, "fs": POSITIVE,
+         "delay_samples": {"negative": -1, "fraction": 0.5}, "pade_order": {"zero": 0}}),
+    "fsm_benchmark.axis_loop_response": (
+        dict(K=ct.tf([1.0], [1.0, 1.0]), G=AXIS_G, W_m=ct.tf([0.1], [1.0]),
+             W_S=ct.tf([1.0], [1.0, 1.0]), W_T=ct.tf([0.1], [1.0]), W_u=ct.tf([0.01], [1.0]),
+             omega=OMEGA, fs=6400.0),
+        {"K": {"text": "x", "improper": ct.tf([1.0, 0.0], [1.0])},
+         "omega": {"empty": [], "negative": -OMEGA, "nan": np.r_[OMEGA[:-1], np.nan]},
+         "G": {"text": "x"}, "fs": POSITIVE, "delay_samples": {"negative": -1}}),
     "fsm_benchmark.noise_floor": (dict(level_mV=100),
                                   {"level_mV": {"other level": 150}, "split": {"other": "x"},
                                    "folder": {"number": 3}}),

@@ -30,7 +30,8 @@ import control as ct
 import numpy as np
 
 from piezolib import metrics
-from piezolib._checks import check_type
+from piezolib._checks import (check_finite_array, check_integer, check_positive, check_proper,
+                              check_siso, check_type)
 from piezolib.identification import freqfit
 from piezolib.robust.lti import balance
 from piezolib.problem import paths
@@ -271,10 +272,9 @@ def score(model, level_mV, split="test", folder=None):
                          f"{model.noutputs}")
     if not model.isdtime(strict=True) or abs(model.dt * SAMPLING_FREQUENCY_HZ - 1) > 1e-9:
         raise ValueError(f"model must be discrete with dt = 1/{SAMPLING_FREQUENCY_HZ:g} s")
-    u, y = load(level_mV, split, folder)
-    y_model = freqfit.simulate_discrete(model, u)       # each (realisation, period) from rest
-    rmse, nrmse = metrics.simulation_error(y_model, y, N_INIT)
-    return Score(level_mV=_level(level_mV), rmse_um=1e6 * rmse, nrmse=nrmse)
+    # each (realisation, period) from rest
+    return score_simulation(lambda u: freqfit.simulate_discrete(model, u), level_mV, split,
+                            folder)
 
 
 def score_simulation(simulate, level_mV, split="test", folder=None):
@@ -332,6 +332,15 @@ def noise_floor(level_mV, split="test", folder=None):
                  nrmse=nrmse.mean(axis=(1, 2)))
 
 
+def _check_axis_models(**models):
+    """Raise unless every model is a continuous-time (or static) SISO proper LTI system."""
+    for name, sys in models.items():
+        check_siso(name, sys)
+        check_proper(name, sys)
+        if sys.isdtime(strict=True):
+            raise ValueError(f"{name} must be a continuous-time model, got dt = {sys.dt!r}")
+
+
 def axis_design_plant(G, W_m, W_S, W_T, W_u, *, fs, delay_samples=1, pade_order=2):
     """Synthesis plant of one mirror axis: output-multiplicative uncertainty, delay, roll-off.
 
@@ -373,6 +382,9 @@ def axis_design_plant(G, W_m, W_S, W_T, W_u, *, fs, delay_samples=1, pade_order=
         Inputs ``u_Delta, v_r, u_b``; outputs ``y_Delta, y1, y2, y_u, v_e``;
         block structure ((1, 1), (1, 3)).
     """
+    _check_axis_models(G=G, W_m=W_m, W_S=W_S, W_T=W_T, W_u=W_u)
+    fs = check_positive("fs", fs)
+    pade_order = check_integer("pade_order", pade_order, minimum=1)
     if delay_samples is None:
         delay = ct.ss([], [], [], [[1.0]], inputs="u_b", outputs="u_a")
     else:
@@ -419,7 +431,12 @@ def axis_loop_response(K, G, W_m, W_S, W_T, W_u, omega, *, fs, delay_samples=1):
         Outputs ``y_Delta, y1, y2, y_u``; inputs ``u_Delta, v_r``; block
         structure ((1, 1), (1, 3)).
     """
-    omega = np.asarray(omega, dtype=float)
+    check_siso("K", K)
+    check_proper("K", K)
+    omega = check_finite_array("omega", omega, ndim=1, min_length=1, real=True)
+    if np.any(omega <= 0):
+        raise ValueError("omega must be positive [rad/s]")
+    delay_samples = check_integer("delay_samples", delay_samples, minimum=0)
     P = axis_design_plant(G, W_m, W_S, W_T, W_u, fs=fs, delay_samples=None)
     R = np.moveaxis(P(1j * omega, squeeze=False), -1, 0)
     R[:, :, 2] *= np.exp(-1j * omega * effective_delay(fs, delay_samples))[:, None]
