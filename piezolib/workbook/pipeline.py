@@ -484,9 +484,15 @@ def study_feedforward_sections(study):
     study = studies.load(study)
     if not study.is_reference:
         return export_feedforward_sections(study, outputs.study_controllers_dir(study.name))
-    path = outputs.study_controllers_dir(study.name) / f"{FEEDFORWARD_FILE}.json"
+    return _committed_sections(study, FEEDFORWARD_FILE)
+
+
+def _committed_sections(study, stem):
+    """The reference study's committed ``<stem>.json`` sections, read in float32."""
+    path = outputs.study_controllers_dir(study.name) / f"{stem}.json"
     if not path.is_file():
-        raise ArtifactError(f"{path} is missing: run `{_WRITE_REFERENCE}` to export it")
+        raise ArtifactError(f"{path} is missing: run `{_WRITE_REFERENCE}` to derive and export "
+                            "the reference study's committed sections")
     return export.read_json(path, "float32")
 
 
@@ -507,15 +513,7 @@ def study_sections(study):
     study = studies.load(study)
     if not study.is_reference:
         return export_sections(study, outputs.study_controllers_dir(study.name))
-    found = {}
-    for stem in SECTION_FILES:
-        path = outputs.study_controllers_dir(study.name) / f"{stem}.json"
-        if not path.is_file():
-            raise ArtifactError(f"{path} is missing: run `python -m piezolib controllers "
-                                "--write-reference` to derive and export the reference "
-                                "controllers")
-        found[stem] = export.read_json(path, "float32")
-    return found
+    return {stem: _committed_sections(study, stem) for stem in SECTION_FILES}
 
 
 #: Command that writes the committed reference artifacts anew.
