@@ -20,7 +20,7 @@ It prints one line per notebook and exits 1 when anything is surprising
 
 Set-up (once, in the workbook's virtual environment; no browser download)::
 
-    apt-get install -y chromium          # Debian/Ubuntu: /usr/bin/chromium
+    apt-get install -y chromium          # Debian/Ubuntu: chromium on the PATH
     pip install playwright==1.65.2       # the Python client only; never `playwright install`
 
 Run from the checkout::
@@ -46,6 +46,8 @@ import tempfile
 import time
 import urllib.request
 from pathlib import Path
+
+from piezolib.workbook.document import find_chromium
 
 CHECKOUT = Path(__file__).resolve().parents[1]
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
@@ -275,11 +277,16 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("prefixes", nargs="*", default=["04", "05", "06"],
                         help="notebook prefixes (default 04 05 06)")
-    parser.add_argument("--chromium", default="/usr/bin/chromium", help="browser executable")
+    parser.add_argument("--chromium", default=None,
+                        help="browser executable (default: chromium or chrome on the PATH)")
     parser.add_argument("--timeout", type=float, default=900.0,
                         help="seconds one notebook may take (default 900)")
     parser.add_argument("--keep", action="store_true", help="keep the temporary copy")
     args = parser.parse_args(argv)
+    chromium = args.chromium or find_chromium()     # the report's --pdf looks it up the same way
+    if chromium is None:
+        print("needs Chromium on the PATH (Debian: apt-get install chromium) or --chromium PATH")
+        return 2
     try:
         from playwright.sync_api import sync_playwright
     except ImportError:
@@ -297,7 +304,7 @@ def main(argv=None):
     ok = True
     try:
         with sync_playwright() as pw:
-            browser = pw.chromium.launch(executable_path=args.chromium, args=CHROMIUM_ARGS,
+            browser = pw.chromium.launch(executable_path=str(chromium), args=CHROMIUM_ARGS,
                                          headless=True)
             for name in names:
                 try:
