@@ -158,21 +158,10 @@ def _solve_BD(A, C, G, z, w):
 
 
 def _solve_CD(A, B, G, z, w):
-    """Weighted least squares for C, D with A, B fixed (one row of C, D per output)."""
-    n_y, n_u, F = G.shape
-    n = A.shape[0]
-    Psi = _resolvent_right(A, B, z)                                   # (F, n, n_u)
-    C, D = np.zeros((n_y, n)), np.zeros((n_y, n_u))
-    for i in range(n_y):
-        sw = np.sqrt(w[i, :, :]).T[:, :, None]                          # (F, n_u, 1)
-        X = np.concatenate([np.swapaxes(Psi, 1, 2),
-                            np.broadcast_to(np.eye(n_u), (F, n_u, n_u))], axis=2) * sw
-        rhs = G[i, :, :].T[:, :, None] * sw
-        X, rhs = X.reshape(F * n_u, n + n_u), rhs.reshape(F * n_u)
-        theta = np.linalg.lstsq(np.vstack([X.real, X.imag]), np.r_[rhs.real, rhs.imag],
-                                rcond=None)[0]
-        C[i], D[i] = theta[:n], theta[n:]
-    return C, D
+    """Weighted least squares for C, D with A, B fixed: :func:`_solve_BD` of the transposed
+    model (G^T = B^T (zI - A^T)^-1 C^T + D^T)."""
+    Ct, Dt = _solve_BD(A.T, B.T, np.swapaxes(G, 0, 1), z, np.swapaxes(w, 0, 1))
+    return Ct.T, Dt.T
 
 
 def _response(A, B, C, D, z):
