@@ -112,6 +112,42 @@ class SetTracking:
         }).rename_axis("frequency [Hz]")
 
 
+    def overview(self, frequencies_Hz=(10.0, 50.0)):
+        """One line of the set: members run, unstable, lightly damped and saturated, and the
+        median, 95th percentile and worst error [%] at each of ``frequencies_Hz`` it has."""
+        s = self.summary()
+        at = [f for f in frequencies_Hz if f in s.index]
+        return {"members run": int(s["members run"].iloc[0]),
+                "unstable": len(self.unstable),
+                f"lightly damped (zeta < {LIGHT_DAMPING:g})": len(self.lightly_damped()),
+                "saturated": int((self.saturated > 0).any(axis=1).sum()),
+                **{f"median at {f:g} Hz [%]": s.loc[f, "median [%]"] for f in at},
+                **{f"95th pct at {f:g} Hz [%]": s.loc[f, "95th percentile [%]"] for f in at},
+                **{f"worst at {f:g} Hz [%]": s.loc[f, "worst [%]"] for f in at}}
+
+    def goal_shares(self, goals=None, stretch_pct=2.0):
+        """Share [%] of the stable members meeting each goal of Sec. IV-B, both, and
+        < ``stretch_pct`` at 50 Hz (NaN without a 50 Hz column).
+
+        Parameters
+        ----------
+        goals : dict, optional
+            Default the paper's :data:`~piezolib.problem.paper.DESIGN_GOALS`.
+        stretch_pct : float
+            The stricter bound at 50 Hz [%].
+        """
+        goals = paper.DESIGN_GOALS if goals is None else goals
+        g10, g50 = goals["peak_to_peak_error_pct_up_to_10Hz"], goals["peak_to_peak_error_pct_at_50Hz"]
+        e = self.errors.dropna()
+        low = e[[f for f in e.columns if f <= 10.0]].max(axis=1) < g10
+        at_50 = (e[50.0] < g50) if 50.0 in e else None
+        return {f"meets < {g10:g} % up to 10 Hz [%]": 100 * low.mean(),
+                f"meets < {g50:g} % at 50 Hz [%]": np.nan if at_50 is None else 100 * at_50.mean(),
+                "meets both [%]": np.nan if at_50 is None else 100 * (low & at_50).mean(),
+                f"< {stretch_pct:g} % at 50 Hz [%]":
+                    100 * (e[50.0] < stretch_pct).mean() if 50.0 in e else np.nan}
+
+
 def _loop_poles(mset, controller, fs, delay):
     """(spectral radius, smallest damping ratio) of each member's sampled loop with the
     controller as it runs."""

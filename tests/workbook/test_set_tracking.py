@@ -86,3 +86,15 @@ def test_saturation_is_counted_not_warned():
         warnings.simplefilter("error")
         res = tracking_over_set(STAGE, mset, MODEL, K, frequencies_Hz=[50.0], amplitude_um=40.0)
     assert (res.saturated > 0).all().all()
+
+
+def test_overview_and_goal_shares_count_the_stable_members():
+    mset = random_model_set(STAGE.settings.plant, 0.05, 4, seed=2)
+    res = tracking_over_set(STAGE, mset, MODEL, K, frequencies_Hz=[10.0, 50.0])
+    line = res.overview()
+    assert line["members run"] == 4 - len(res.unstable)
+    assert line["worst at 50 Hz [%]"] == res.errors[50.0].max()
+    shares = res.goal_shares({"peak_to_peak_error_pct_up_to_10Hz": 100.0,
+                              "peak_to_peak_error_pct_at_50Hz": 0.0})
+    assert shares["meets < 100 % up to 10 Hz [%]"] == 100.0
+    assert shares["meets < 0 % at 50 Hz [%]"] == 0.0 == shares["meets both [%]"]
