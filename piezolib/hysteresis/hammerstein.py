@@ -31,6 +31,7 @@ from piezolib._checks import check_finite_array, check_integer, check_positive
 from piezolib.hysteresis.common import (FitScores, check_loops, covariance, estimates,
                                         loop_errors, warn_about)
 from piezolib.hysteresis.pi import PI_STARTS, PIModel, pi_regressors
+from piezolib.identification.continuous import zoh_coefficients
 
 __all__ = ["HammersteinModel", "HammersteinFit", "fit_hammerstein", "unit_dc_dynamics"]
 
@@ -67,17 +68,18 @@ def unit_dc_dynamics(dynamics, fs):
     if dynamics.ninputs != 1 or dynamics.noutputs != 1:
         raise ValueError(f"dynamics must be SISO, got {dynamics.noutputs}x{dynamics.ninputs}")
     if dynamics.isctime():
-        sysd = ct.sample_system(ct.tf(dynamics), 1.0 / fs, method="zoh")
+        # exact ZOH from a scaled realisation: a plant's coefficients may reach 1e23
+        b, a = zoh_coefficients(dynamics, 1.0 / fs)
     else:
         if not math.isclose(float(dynamics.dt), 1.0 / fs, rel_tol=1e-9):
             raise ValueError(f"dynamics is sampled at dt = {dynamics.dt!r} s, the records at "
                              f"1/fs = {1.0 / fs:g} s")
         sysd = ct.tf(dynamics)
-    num, den = np.ravel(sysd.num[0][0]), np.ravel(sysd.den[0][0])
-    if np.any(np.abs(np.roots(den)) >= 1):
+        num, den = np.ravel(sysd.num[0][0]), np.ravel(sysd.den[0][0])
+        b, a = np.r_[np.zeros(den.size - num.size), num] / den[0], den / den[0]
+    if np.any(np.abs(np.roots(a)) >= 1):
         raise ValueError("dynamics must be stable")
-    b = np.r_[np.zeros(den.size - num.size), num] / den[0]
-    return _unit_gain(b, den / den[0])
+    return _unit_gain(b, a)
 
 
 def _filter_at_rest(b, a, u):

@@ -28,7 +28,7 @@ import scipy.signal as sg
 
 from piezolib._checks import check_positive, check_siso, check_type
 from piezolib.hysteresis.common import HysteresisModel
-from piezolib.identification import zoh_coefficients
+from piezolib.hysteresis.hammerstein import unit_dc_dynamics
 from piezolib.robust.export import SOSController, controller_sos, sos_filter
 from piezolib.robust.preview import PreviewFeedforward, zpetc
 
@@ -97,16 +97,19 @@ def dynamics_inverse(G, fs, radius=1.0):
     -------
     PreviewFeedforward
     """
+    fs = check_positive("fs", fs)
+    return zpetc(ct.tf(*_unit_dc_zoh(G, fs), 1.0 / fs), radius=radius)
+
+
+def _unit_dc_zoh(G, fs):
+    """(b, a) of the exact ZOH model of G / G(0) at ``fs``, G checked (errors name it)."""
     check_siso("G", G)
     if not G.isctime(strict=True):
         raise ValueError("G must be a continuous-time model (u_c [V] -> v_y [V])")
-    fs = check_positive("fs", fs)
     dc = float(np.real(ct.dcgain(G)))
     if not np.isfinite(dc) or dc == 0:
         raise ValueError(f"G must have a finite nonzero DC gain, got {dc!r}")
-    # the exact ZOH model from a scaled realisation (G's coefficients reach 1e23)
-    b, a = zoh_coefficients(G * (1.0 / dc), 1.0 / fs)
-    return zpetc(ct.tf(b, a, 1.0 / fs), radius=radius)
+    return unit_dc_dynamics(G, fs)
 
 
 def two_dof_feedforward(G, model, fs, radius=1.0, sections=None):
@@ -140,7 +143,9 @@ def two_dof_feedforward(G, model, fs, radius=1.0, sections=None):
         ``sections`` at another rate, or whose response is not the ZPETC
         of G's dynamics (relative error above 1e-6 below 0.49 fs).
     """
-    dynamics = dynamics_inverse(G, fs, radius)
+    fs = check_positive("fs", fs)
+    b, a = _unit_dc_zoh(G, fs)
+    dynamics = zpetc(ct.tf(b, a, 1.0 / fs), radius=radius)
     check_type("model", model, HysteresisModel, "a hysteresis model with simulate(v) and "
                "feedforward(x_r) (DahlModel, PIModel)")
     if sections is None:
@@ -148,8 +153,6 @@ def two_dof_feedforward(G, model, fs, radius=1.0, sections=None):
     else:
         _check_sections(sections, dynamics, fs)
     sections.check_float32(what="the dynamics inverse")
-    dc = float(np.real(ct.dcgain(G)))
-    b, a = zoh_coefficients(G * (1.0 / dc), 1.0 / fs)
     return TwoDofFeedforward(dynamics, sections, model, b, a)
 
 
