@@ -22,7 +22,8 @@ import numpy as np
 import pandas as pd
 
 from piezolib._checks import check_frequency_grid, check_model, check_positive, check_siso
-from piezolib.problem.genplant import BLOCK_STRUCTURE, check_models, generalized_plant
+from piezolib.problem.genplant import (BLOCK_STRUCTURE, check_models, effective_delay,
+                                       generalized_plant)
 from piezolib.robust.lft import lft_response
 from piezolib.robust.mu import mussv
 from piezolib.robust.achievable import performance_lower_bound
@@ -32,7 +33,7 @@ from piezolib.robust.margins import delay_tolerance, loop_margins
 
 __all__ = ["RobustnessAnalysis", "analyze", "table3", "table3_peaks", "robust_performance_peak",
            "ANALYSIS_GRID",
-           "margins_table", "achievable_mu_lower_bound", "MARGIN_DELAYS"]
+           "margins_table", "achievable_mu_lower_bound", "MARGIN_DELAYS", "box_stability_table"]
 
 #: Computation delays [samples] of the sampled-loop check in :func:`margins_table`.
 MARGIN_DELAYS = (0, 1, 2, 3)
@@ -315,3 +316,58 @@ def achievable_mu_lower_bound(G, H_m, H_e, H_y, **kwargs):
     G, H_m, H_e, H_y = check_models(G, H_m, H_e, H_y)
     P = generalized_plant(G, H_m, H_e, H_y)
     return performance_lower_bound(P, 1, 1, ["y1", "y2"], ["v_r"], **kwargs)
+
+
+def box_stability_table(controllers, G, spread, fs, *, delays=MARGIN_DELAYS, levels=3):
+    """How much of G's coefficient box each controller keeps stable, by four methods.
+
+    Rows, per controller (one column each): the exact parametric margin
+    (zero exclusion) of the continuous loop with the effective delay
+    (d + 1/2) / fs for each d in ``delays``; the members of the ``levels``^n
+    grid of the box of ``spread`` whose continuous loop (no delay) is
+    unstable; the members whose sampled loop (exact ZOH model, the controller
+    as given, z^-d) is unstable for each d; the grid spread of the sampled loop
+    with the first nonzero delay (an upper bound of its margin).
+
+    Parameters
+    ----------
+    controllers : dict
+        {name: (K, Kd)}: the continuous controller (v_e [V] -> u_b [V]) and the
+        discrete one the target runs (e.g. float32 sections as a state space).
+    G : control.LTI
+        Nominal plant u_c [V] -> v_y [V].
+    spread : float
+        Relative size of the box [-].
+    fs : float
+        Loop rate [Hz].
+    delays : sequence of int
+        Computation delays [samples].
+    levels : int
+        Values per coefficient of the grid.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Margins in % of the coefficients, counts as integers.
+    """
+    from piezolib import uncertainty as unc
+    from piezolib.uncertainty import sampled
+
+    spread = check_positive("spread", spread)
+    fs = check_positive("fs", fs)
+    grid = unc.model_set(G, spread, levels=levels)
+    first = next((d for d in delays if d > 0), max(delays))
+    data = {}
+    for name, (K, Kd) in controllers.items():
+        col = {f"exact margin, delay {d} [%]":
+               100 * unc.parametric_stability_margin(G, K, delay=effective_delay(fs, d)).spread
+               for d in delays}
+        col[f"unstable of {grid.size}, continuous, no delay"] = int(
+            unc.unstable_members(grid, K).size)
+        for d in delays:
+            col[f"unstable of {grid.size}, sampled, delay {d}"] = int(
+                sampled.sampled_loop_unstable(grid, Kd, 1.0 / fs, d).size)
+        col[f"grid spread, sampled, delay {first} [%]"] = 100 * sampled.sampled_loop_spread(
+            G, Kd, 1.0 / fs, first)
+        data[name] = col
+    return pd.DataFrame(data)

@@ -16,14 +16,19 @@ from piezolib.problem import paper
 from piezolib._checks import check_integer, check_positive
 from piezolib.problem.genplant import (DESIGN_BLOCK_STRUCTURE, DESIGN_DELAY_SAMPLES,
                                        DESIGN_EFFORT_WEIGHT, DESIGN_PADE_ORDER, DESIGN_ROLLOFF,
-                                       check_models, delay_aware_plant, design_plant)
+                                       check_models, delay_aware_plant, design_plant,
+                                       effective_delay, parametric_block_structure,
+                                       parametric_design_plant)
 from piezolib.robust.discrete import DiscreteController, discretize
 from piezolib.robust.dk import MusynResult, musyn
 from piezolib.robust.fixed_order import FixedOrderResult, fixed_order_musyn
 from piezolib.robust.lti import loop_functions, with_signals
 from piezolib.robust.reduction import ReducedController, reduce_controller
 
-__all__ = ["ControllerDesign", "design_controller", "DESIGN_GRID", "DESIGN_D_ORDER"]
+__all__ = ["ControllerDesign", "design_controller", "DESIGN_GRID", "DESIGN_D_ORDER",
+           "MIXED_GRID", "MIXED_PERFORMANCE_SCALES", "MIXED_CHECK_DELAYS", "MixedDesign",
+           "exact_margins_with_delay", "design_mixed_controller", "mixed_tradeoff",
+           "choose_mixed_design"]
 
 logger = logging.getLogger(__name__)
 
@@ -172,3 +177,138 @@ def design_controller(G, H_m, H_e, H_y, *, order=6, d_order=DESIGN_D_ORDER, max_
     return ControllerDesign(K_full=K_full, K_reduced=K_red, K_discrete=disc.K, musyn=mu,
                             reduction=red, discrete=disc, plant=P, fs=fs,
                             delay_samples=delay_samples, **extra)
+
+
+# --- mixed mu: the coefficient box as real blocks -------------------------------------
+
+#: Grid [rad/s] of the mixed-mu design: sparse over nine decades, dense over G's modes
+#: (1e3 ... 1e5 rad/s), where the real blocks give mu its narrow peaks.
+MIXED_GRID = np.union1d(np.logspace(-2, 7, 60), np.logspace(3, 5, 160))
+#: Performance levels of the trade-off designs: H_e and H_y times this factor.
+MIXED_PERFORMANCE_SCALES = (0.1, 0.2, 0.3, 0.5, 0.7, 1.0, 1.2, 1.5, 2.0)
+#: Computation delays [samples] every mixed design is checked with.
+MIXED_CHECK_DELAYS = (0, 1, 2, 3)
+
+
+@dataclass(frozen=True)
+class MixedDesign:
+    """A fixed-order mixed-mu controller for G's coefficient box, and its certificates.
+
+    Attributes
+    ----------
+    K : control.StateSpace
+        Controller v_e [V] -> u_b [V], ordinary time.
+    performance_scale : float
+        Factor on H_e and H_y in the design plant (1: the paper's weights).
+    spread : float
+        Relative size of the coefficient box designed for.
+    mu_peak, mu_lower_peak : float
+        Mixed mu_RP of the design plant (upper and lower bound) on the final grid.
+    start_mu_peak : float
+        The same for the starting controller.
+    margins : dict
+        {delay in samples: exact parametric margin of the continuous loop with the
+        effective delay (d + 1/2) / fs}; 0 when the nominal loop is unstable.
+    steps : FixedOrderResult
+        The D,G-K steps.
+    """
+
+    K: ct.StateSpace
+    performance_scale: float
+    spread: float
+    mu_peak: float
+    mu_lower_peak: float
+    start_mu_peak: float
+    margins: dict
+    steps: FixedOrderResult = field(repr=False)
+
+
+def exact_margins_with_delay(G, K, fs, delays=MIXED_CHECK_DELAYS):
+    """{d: exact parametric margin with the loop delay (d + 1/2) / fs} for each d in ``delays``."""
+    from piezolib.uncertainty import parametric_stability_margin
+
+    return {int(d): parametric_stability_margin(G, K, delay=effective_delay(fs, d)).spread
+            for d in delays}
+
+
+def design_mixed_controller(G, H_e, H_y, K0, *, performance_scale=1.0, spread=None,
+                            fs=paper.SAMPLING_FREQUENCY_HZ, delay_samples=DESIGN_DELAY_SAMPLES,
+                            rolloff=DESIGN_ROLLOFF, omega=None, dg_steps=25):
+    """Mixed-mu synthesis for G's coefficient box on the delay-aware plant, from ``K0``.
+
+    The plant is :func:`~piezolib.problem.genplant.parametric_design_plant`
+    with H_e and H_y scaled by ``performance_scale``; the D,G-K steps
+    (:func:`piezolib.robust.fixed_order.fixed_order_musyn` with six real
+    blocks) keep K0's order.  mu_RP <= 1 then certifies the box of ``spread``
+    (with the Pade-modelled delay) together with the scaled performance.
+
+    Parameters
+    ----------
+    G, H_e, H_y : control.LTI
+        Plant and weights (e.g. from :func:`piezolib.problem.paper.problem`).
+    K0 : control.LTI
+        Stable starting controller that stabilises the design plant.
+    performance_scale : float
+        Factor (> 0) on H_e and H_y.
+    spread : float, optional
+        Box size; default the paper's ``paper.UNCERTAINTY_SPREAD`` (0.05).
+    fs : float
+        Loop rate [Hz].
+    delay_samples : int
+        Computation delay [samples] of the design plant.
+    rolloff : RolloffWeight
+    omega : array_like, optional
+        Design grid [rad/s]; default :data:`MIXED_GRID`.
+    dg_steps : int
+        Maximum D,G-K steps per grid.
+
+    Returns
+    -------
+    MixedDesign
+    """
+    G, _, H_e, H_y = check_models(G, ct.tf([1.0], [1.0]), H_e, H_y)
+    scale = check_positive("performance_scale", performance_scale)
+    spread = paper.UNCERTAINTY_SPREAD if spread is None else check_positive("spread", spread)
+    fs = check_positive("fs", fs)
+    P = parametric_design_plant(G, scale * H_e, scale * H_y, spread, fs=fs,
+                                delay_samples=delay_samples, rolloff=rolloff)
+    blk = parametric_block_structure(len(P.input_labels) - 2)
+    omega = MIXED_GRID if omega is None else omega
+    steps = fixed_order_musyn(P, blk, K0, omega, max_iter=dg_steps)
+    K = with_signals(steps.K, ["v_e"], ["u_b"], name=f"K_mixed{steps.K.nstates}")
+    return MixedDesign(K=K, performance_scale=scale, spread=spread, mu_peak=steps.mu_peak,
+                       mu_lower_peak=steps.mu_lower_peak, start_mu_peak=steps.start_mu_peak,
+                       margins=exact_margins_with_delay(G, K, fs), steps=steps)
+
+
+def mixed_tradeoff(G, H_e, H_y, K0, scales=MIXED_PERFORMANCE_SCALES, n_jobs=1, **options):
+    """One :func:`design_mixed_controller` per performance scale, each started from ``K0``.
+
+    The designs are independent; ``n_jobs`` > 1 runs them in that many
+    processes (joblib), with the same results.
+
+    Returns
+    -------
+    list of MixedDesign
+        In the order of ``scales``.
+    """
+    from joblib import Parallel, delayed
+
+    scales = [check_positive("scales", s) for s in scales]
+    n_jobs = check_integer("n_jobs", n_jobs, minimum=1)
+    return Parallel(n_jobs=n_jobs)(
+        delayed(design_mixed_controller)(G, H_e, H_y, K0, performance_scale=s, **options)
+        for s in scales)
+
+
+def choose_mixed_design(designs, spread=None, design_delay=DESIGN_DELAY_SAMPLES):
+    """The design with the largest performance scale that is certified for the box.
+
+    Certified: the exact margin with the design delay is at least ``spread``
+    and the nominal loop is stable with every checked delay.  None if no
+    design qualifies.
+    """
+    spread = paper.UNCERTAINTY_SPREAD if spread is None else check_positive("spread", spread)
+    ok = [d for d in designs
+          if d.margins.get(design_delay, 0.0) >= spread and min(d.margins.values()) > 0]
+    return max(ok, key=lambda d: d.performance_scale, default=None)

@@ -26,6 +26,7 @@ __all__ = [
     "closed_loop_matrix", "RolloffWeight", "DESIGN_ROLLOFF", "DESIGN_DELAY_SAMPLES",
     "DESIGN_PADE_ORDER", "effective_delay", "rolloff_weight", "delay_aware_plant",
     "delayed_closed_loop_response", "parametric_design_plant", "parametric_block_structure",
+    "delayed_parametric_loop_response",
 ]
 
 PLANT_INPUTS = ("u_Delta", "v_r", "u_b")
@@ -512,3 +513,46 @@ def parametric_design_plant(G, H_e, H_y, spread, *, fs, delay_samples=DESIGN_DEL
     outputs = z + ["y1", "y2", "y_u", "v_e"]
     P = balance(ct.interconnect(blocks, inputs=inputs, outputs=outputs))
     return from_scaled(P, omega_s, inputs, outputs, name="P_par")
+
+
+def delayed_parametric_loop_response(K, G, H_e, H_y, spread, omega, *, fs, delay_samples,
+                                     rolloff=DESIGN_ROLLOFF):
+    """F_l(P_par, K)(j omega) of :func:`parametric_design_plant` with the exact loop delay.
+
+    The plant's Pade model of the delay is replaced by e^{-j omega tau}, tau =
+    (d + 1/2) / fs, on every path from u_b except the roll-off output y_u,
+    which reads u_b before the delay.
+
+    Parameters
+    ----------
+    K : control.LTI
+        Continuous SISO controller, v_e [V] -> u_b [V].
+    G, H_e, H_y, spread : as in :func:`parametric_design_plant`.
+    omega : array_like
+        Frequencies [rad/s], positive and increasing.
+    fs : float
+        Sampling rate [Hz].
+    delay_samples : int
+        Computation delay d [samples].
+    rolloff : RolloffWeight
+
+    Returns
+    -------
+    ndarray, shape (len(omega), n + 3, n + 1)
+        Outputs ``z_0 ... z_{n-1}, y1, y2, y_u``; inputs ``w_0 ... w_{n-1}, v_r``
+        (structure :func:`parametric_block_structure`).
+    """
+    _check_controller(K)
+    omega = check_frequency_grid("omega", omega, min_length=1)
+    tau = effective_delay(fs, delay_samples)
+    P = parametric_design_plant(G, H_e, H_y, spread, fs=fs, delay_samples=delay_samples,
+                                pade_order=DESIGN_PADE_ORDER, rolloff=rolloff)
+    num, den = ct.pade(tau, DESIGN_PADE_ORDER)
+    pade = np.ravel(ct.tf(num, den)(1j * omega))
+    R = np.moveaxis(P(1j * omega, squeeze=False), -1, 0)
+    y_u = P.output_labels.index("y_u")
+    rows = [i for i in range(P.noutputs) if i != y_u]
+    R[:, rows, -1] *= (np.exp(-1j * omega * tau) / pade)[:, None]
+    k = np.ravel(K(1j * omega))
+    f = k / (1 - R[:, -1, -1] * k)
+    return R[:, :-1, :-1] + f[:, None, None] * R[:, :-1, -1][:, :, None] * R[:, -1, :-1][:, None, :]

@@ -40,8 +40,12 @@ def parser():
                               "float32 section exports K_*.json / K_*.h and the workbook Dahl "
                               "model (data/models/workbook_dahl.json)")
     ctl.add_argument("--write-reference", action="store_true",
-                     help="re-derive them (Dahl fit, DK-iteration, fixed order) and rewrite "
-                          "those files")
+                     help="re-derive them (Dahl fit, DK-iteration, fixed order, the mixed-mu "
+                          "designs) and rewrite those files")
+    ctl.add_argument("--write-mixed", action="store_true",
+                     help="re-derive only the mixed-mu designs of notebook 09 (about ten "
+                          "minutes) and rewrite data/controllers/mixed_design.json and "
+                          "K_mixed.json / .h")
     doc = sub.add_parser("report",
                          help="the reproduction report (notebook 07) as an HTML document "
                               "without code: runs/report/<study>.html")
@@ -154,6 +158,9 @@ def _controllers(args, stream):
               + ", ".join(f"{stem}.json/.h" for stem in (*pipeline.SECTION_FILES,
                                                          pipeline.FEEDFORWARD_FILE))
               + " and the workbook Dahl model", file=stream)
+    if args.write_mixed and not args.write_reference:
+        path = pipeline.write_reference_mixed_designs()
+        print(f"wrote {path} and the sections {pipeline.MIXED_SECTIONS_FILE}.json/.h", file=stream)
     found = pipeline.read_controllers(pipeline.reference_design_path())
     print(f"{found.source}: designed for choices {found.digest}; mu_RP "
           + ", ".join(f"{k} {v:.4f}" for k, v in found.mu.items()), file=stream)

@@ -36,7 +36,7 @@ import numpy as np
 
 from piezolib._checks import check_path, check_type
 from piezolib.problem import paper
-from piezolib.problem.design import design_controller
+from piezolib.problem.design import choose_mixed_design, design_controller, mixed_tradeoff
 from piezolib.problem.hysteresis_fits import write_workbook_dahl
 from piezolib.files import CONTENT_KEY, atomic_write, seal, seal_problem
 from piezolib.robust import export, frequency_grid
@@ -52,7 +52,11 @@ __all__ = ["StudyControllers", "study_problem", "study_uncertainty_weight",
            "write_controllers", "read_controllers", "write_reference_design",
            "case_III_controllers", "discretized_controllers", "export_sections",
            "study_sections", "SECTION_FILES", "ArtifactError", "CACHE_ENV",
-           "FEEDFORWARD_FILE", "export_feedforward_sections", "study_feedforward_sections"]
+           "FEEDFORWARD_FILE", "export_feedforward_sections", "study_feedforward_sections",
+           "MixedDesigns", "MIXED_FILE", "MIXED_SECTIONS_FILE", "mixed_design_path",
+           "derive_mixed_designs", "write_mixed_designs", "read_mixed_designs",
+           "write_reference_mixed_designs",
+           "study_mixed_designs", "study_mixed_sections"]
 
 logger = logging.getLogger(__name__)
 
@@ -399,6 +403,20 @@ def write_reference_design(cache=False):
     path = write_controllers(found, reference_design_path(), reference)
     export_sections(reference, outputs.study_controllers_dir(reference.name), found)
     export_feedforward_sections(reference, outputs.study_controllers_dir(reference.name))
+    write_reference_mixed_designs(found)
+    return path
+
+
+def write_reference_mixed_designs(controllers=None):
+    """Design the reference study's mixed-mu trade-off and write the committed files.
+
+    ``data/controllers/mixed_design.json`` and the chosen controller's sections
+    ``K_mixed.json`` / ``.h``; returns the path of the first.
+    """
+    reference = studies.load(studies.REFERENCE)
+    mixed = derive_mixed_designs(reference, controllers)
+    path = write_mixed_designs(mixed, mixed_design_path(), reference)
+    _export_mixed_sections(reference, mixed)
     return path
 
 
@@ -602,3 +620,149 @@ def _ss_from_dict(d):
     C = np.array(d["C"], dtype=float).reshape(len(d["outputs"]), n)
     D = np.array(d["D"], dtype=float).reshape(len(d["outputs"]), len(d["inputs"]))
     return ct.ss(A, B, C, D, inputs=d["inputs"], outputs=d["outputs"], name=d["name"])
+
+
+# --- mixed-mu controllers for the coefficient box (notebook 09) ---------------------
+
+#: The committed mixed-mu designs of the reference study, in ``data/controllers/``.
+MIXED_FILE = "mixed_design.json"
+#: File stem of the chosen mixed-mu controller's sections (``.json`` and ``.h``).
+MIXED_SECTIONS_FILE = "K_mixed"
+
+
+@dataclass(frozen=True)
+class MixedDesigns:
+    """The trade-off designs of :func:`~piezolib.problem.design.mixed_tradeoff`, as stored.
+
+    Attributes
+    ----------
+    study : str
+    records : tuple of dict
+        One per design, in the order of the performance scales: ``scale``,
+        ``spread``, ``mu``, ``mu_lower``, ``start_mu`` (as the design
+        reported them), ``margins`` ({delay [samples]: exact margin}) and ``K``
+        (control.StateSpace, v_e [V] -> u_b [V]).
+    chosen : float or None
+        Performance scale of the design to deploy
+        (:func:`~piezolib.problem.design.choose_mixed_design`).
+    source : str
+        Where the designs came from.
+    """
+
+    study: str
+    records: tuple
+    chosen: float | None
+    source: str
+
+    @property
+    def K(self):
+        """The chosen controller (None when no design is certified for the box)."""
+        return next((r["K"] for r in self.records if r["scale"] == self.chosen), None)
+
+
+def mixed_design_path():
+    """``data/controllers/mixed_design.json``: the committed mixed-mu designs."""
+    return outputs.study_controllers_dir(studies.REFERENCE) / MIXED_FILE
+
+
+def derive_mixed_designs(study, controllers=None, n_jobs=2):
+    """Design the mixed-mu trade-off of ``study`` from its deployed controller (minutes;
+    ``n_jobs`` processes).
+
+    Returns
+    -------
+    MixedDesigns
+    """
+    study = studies.load(study)
+    found = study_controllers(study) if controllers is None else _check_controllers(controllers)
+    G, _, H_e, H_y, _ = study_problem(study)
+    designs = mixed_tradeoff(G, H_e, H_y, found.K_deployed, fs=study.loop.fs_Hz, n_jobs=n_jobs)
+    chosen = choose_mixed_design(designs)
+    records = tuple({"scale": d.performance_scale, "spread": d.spread, "mu": d.mu_peak,
+                     "mu_lower": d.mu_lower_peak, "start_mu": d.start_mu_peak,
+                     "margins": dict(d.margins), "K": d.K} for d in designs)
+    return MixedDesigns(study=study.name, records=records,
+                        chosen=None if chosen is None else chosen.performance_scale,
+                        source="designed now")
+
+
+def write_mixed_designs(designs, path, study):
+    """Write :class:`MixedDesigns` as sealed JSON (full float precision); return the path."""
+    check_type("designs", designs, MixedDesigns, "MixedDesigns")
+    path = check_path("path", path)
+    study = studies.load(study)
+    doc = {"format": ARTIFACT_FORMAT, "study": study.name, "library": library_fingerprint(),
+           "chosen": designs.chosen,
+           "designs": [{**{k: v for k, v in r.items() if k != "K"},
+                        "margins": {str(d): m for d, m in r["margins"].items()},
+                        "K": _ss_to_dict(r["K"])} for r in designs.records]}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return atomic_write(path, json.dumps(seal(doc), indent=1) + "\n")
+
+
+def read_mixed_designs(path):
+    """Read a file of :func:`write_mixed_designs`.
+
+    Raises
+    ------
+    ArtifactError
+        Naming the file: not such a file, or its content fails its checksum.
+    """
+    path = check_path("path", path)
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+        if not isinstance(doc, dict) or doc.get("format") != ARTIFACT_FORMAT:
+            raise ArtifactError(f"{path}: not a mixed-design file of format {ARTIFACT_FORMAT}")
+        _check_seal(doc, path)
+        records = tuple({**{k: v for k, v in r.items() if k not in ("K", "margins")},
+                         "margins": {int(d): float(m) for d, m in r["margins"].items()},
+                         "K": _ss_from_dict(r["K"])} for r in doc["designs"])
+        return MixedDesigns(study=doc["study"], records=records, chosen=doc["chosen"],
+                            source=str(path))
+    except ArtifactError:
+        raise
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ArtifactError(f"{path}: not a mixed-design artifact ({exc})") from None
+
+
+def study_mixed_designs(study):
+    """The mixed-mu designs of ``study``: committed for the reference, else designed (minutes)
+    and written to ``runs/<study>/artifacts/mixed_design.json``, which later calls read."""
+    study = studies.load(study)
+    if study.is_reference:
+        path = mixed_design_path()
+        if not path.is_file():
+            raise ArtifactError(f"{path} is missing: run `{_WRITE_REFERENCE}`")
+        return read_mixed_designs(path)
+    path = study.output_dir / "artifacts" / MIXED_FILE
+    if path.is_file():
+        return read_mixed_designs(path)
+    designs = derive_mixed_designs(study)
+    write_mixed_designs(designs, path, study)
+    return designs
+
+
+def _export_mixed_sections(study, designs):
+    """Export the chosen mixed controller, Tustin at the loop rate, as sections."""
+    if designs.K is None:
+        return None
+    d = discretize(designs.K, study.loop.fs_Hz, G=study_problem(study).G)
+    return export.export_controller(
+        d.K, outputs.study_controllers_dir(study.name), MIXED_SECTIONS_FILE,
+        meta={"controller": f"mixed mu, {designs.K.nstates}th order, performance scale "
+                            f"{designs.chosen:g}", "states": d.K.nstates,
+              "discretisation": "Tustin", "prewarp_rad_s": d.prewarp_frequency})
+
+
+def study_mixed_sections(study):
+    """The chosen mixed controller's float32 sections (committed for the reference study).
+
+    Returns
+    -------
+    SOSController or None
+        None when no design of the study is certified for the box.
+    """
+    study = studies.load(study)
+    if study.is_reference:
+        return _committed_sections(study, MIXED_SECTIONS_FILE)
+    return _export_mixed_sections(study, study_mixed_designs(study))

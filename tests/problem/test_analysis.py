@@ -115,3 +115,22 @@ def test_achievable_mu_lower_bound_below_published_mu(models, published):
     # and of its nominal-performance part, sqrt(|H_e S|^2 + |H_y T|^2) >= each alone
     assert lb.value <= lb.hinf_upper
     assert lb.hinf_upper >= lb.value and lb.method == "hinf"
+
+
+def test_box_stability_table_of_the_published_controller(models):
+    from piezolib import uncertainty as unc
+
+    G, published = models[0], models[4]
+    Kd = robust.discretize(published, paper.SAMPLING_FREQUENCY_HZ).K
+    table = analysis.box_stability_table({"published": (published, Kd)}, G, 0.05,
+                                         paper.SAMPLING_FREQUENCY_HZ, delays=(0, 1))
+    col = table["published"]
+    # four of the 729 continuous loops are unstable (notebook 02), and the exact margins
+    # are those of the margin function with the effective delays 0.5 and 1.5 samples
+    assert col["unstable of 729, continuous, no delay"] == 4
+    for d in (0, 1):
+        exact = unc.parametric_stability_margin(G, published, delay=(d + 0.5) / 1e4).spread
+        assert col[f"exact margin, delay {d} [%]"] == pytest.approx(100 * exact, rel=1e-12)
+    assert col["exact margin, delay 1 [%]"] < col["exact margin, delay 0 [%]"] < 5
+    assert col["unstable of 729, sampled, delay 1"] >= col["unstable of 729, sampled, delay 0"]
+    assert 0 < col["grid spread, sampled, delay 1 [%]"] < 5

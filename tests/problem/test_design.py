@@ -127,3 +127,32 @@ def test_design_rejects_bad_arguments(models, change, error, match):
 def test_design_constants():
     assert design.DESIGN_D_ORDER == 4 and design.DESIGN_GRID.size == 300
     assert genplant.DESIGN_EFFORT_WEIGHT == 1e-3 and genplant.DESIGN_DELAY_SAMPLES == 1
+
+
+# --- mixed mu ----------------------------------------------------------------------
+
+def _fake(scale, margins):
+    return design.MixedDesign(K=ct.ss(ct.tf([1.0], [1.0, 1.0])), performance_scale=scale,
+                              spread=0.05, mu_peak=1.0, mu_lower_peak=1.0, start_mu_peak=2.0,
+                              margins=margins, steps=None)
+
+
+def test_the_chosen_mixed_design_is_the_best_performance_certified_for_the_box():
+    ok = {0: 0.04, 1: 0.06, 2: 0.05, 3: 0.02}
+    designs = [_fake(0.1, ok), _fake(0.3, {**ok, 1: 0.051}), _fake(0.5, {**ok, 1: 0.049}),
+               _fake(1.0, {**ok, 3: 0.0})]
+    # 0.5 misses the box at the design delay, 1.0 is unstable with 3 samples of delay
+    assert design.choose_mixed_design(designs).performance_scale == 0.3
+    assert design.choose_mixed_design(designs, spread=0.07) is None
+
+
+def test_a_short_mixed_design_keeps_the_order_and_reports_exact_margins(models):
+    G, _, H_e, H_y, K_pub = models
+    K0 = ct.ss(K_pub)
+    res = design.design_mixed_controller(G, H_e, H_y, K0, performance_scale=0.2,
+                                         omega=np.logspace(2, 6, 40), dg_steps=2)
+    assert res.K.nstates == K0.nstates and res.K.input_labels == ["v_e"]
+    assert res.mu_peak <= res.start_mu_peak and res.mu_lower_peak <= res.mu_peak * (1 + 1e-9)
+    assert set(res.margins) == set(design.MIXED_CHECK_DELAYS)
+    margins = design.exact_margins_with_delay(G, res.K, FS, delays=(1,))
+    assert margins[1] == res.margins[1]

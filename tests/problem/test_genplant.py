@@ -237,3 +237,15 @@ def test_parametric_design_plant_closed_with_offsets_is_that_member(models):
     # v_r -> y1 is H_e (1 - 0) at the reference input: the error weight sees v_r directly
     h_e = np.ravel(H_e(1j * omega))
     np.testing.assert_allclose([c[0, 0] for c in closed], h_e, rtol=1e-7)
+
+
+def test_delayed_parametric_loop_response_is_the_pade_loop_where_pade_is_exact(models):
+    G, _, H_e, H_y, K = models
+    omega = np.logspace(1, 3, 30)                    # omega tau <= 0.15: Pade error < 1e-9
+    got = genplant.delayed_parametric_loop_response(K, G, H_e, H_y, 0.05, omega, fs=FS,
+                                                    delay_samples=1)
+    P = genplant.parametric_design_plant(G, H_e, H_y, 0.05, fs=FS)
+    from piezolib.robust.lft import lft_response
+    pade_loop = lft_response(P, K, omega)
+    np.testing.assert_allclose(got, pade_loop, rtol=1e-6, atol=1e-7 * np.abs(pade_loop).max())
+    assert got.shape == (omega.size, 9, 7)

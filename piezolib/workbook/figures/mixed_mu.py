@@ -1,12 +1,13 @@
-"""Figure of notebook 09 (mixed mu): mu for robust stability against the coefficient box,
-with the coefficients as real blocks and as complex ones."""
+"""Figures of notebook 09 (mixed mu): mu for robust stability against the coefficient box,
+with the coefficients as real blocks and as complex ones, and the trade-off of the mixed-mu
+designs between robust performance and the box they keep stable."""
 
 import numpy as np
 
 from piezolib.workbook import plotting
 from piezolib.workbook.style import new_figure
 
-__all__ = ["extra_mixed_mu"]
+__all__ = ["extra_mixed_mu", "extra_mixed_tradeoff"]
 
 
 def extra_mixed_mu(omega, real_upper, real_lower, complex_upper, complex_lower, spread,
@@ -89,4 +90,67 @@ def extra_mixed_mu(omega, real_upper, real_lower, complex_upper, complex_lower, 
     ax_zoom.set_ylim(0.0, 1.15 * top)
     ax_zoom.set_title("(b) near the peak; μ = 1 is the stability limit")
     plotting.name_figure(fig, None, "mixed_mu")
+    return fig
+
+
+def extra_mixed_tradeoff(scales, mu_upper, mu_lower, mu_bound, margins, spread, chosen=None):
+    """Mixed-mu designs at several performance levels: robust performance and the stable box.
+
+    Parameters
+    ----------
+    scales : array_like
+        Performance scale of each design (factor on H_e and H_y), increasing.
+    mu_upper, mu_lower : array_like
+        Mixed mu_RP of each design (upper and lower bound) at the box ``spread``.
+    mu_bound : array_like
+        At each scale, a lower bound of mu_RP for every controller (the
+        nominal-performance H-infinity optimum): no design can lie below it.
+    margins : dict
+        {label: array of exact parametric margins [-] per design}, e.g. one
+        entry per computation delay.
+    spread : float
+        The box the designs are for [-] (drawn as the goal line of panel b).
+    chosen : float, optional
+        Scale of the deployed design (marked).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Saved as ``extra_mixed_tradeoff.png``.
+    """
+    scales = np.asarray(scales, dtype=float)
+    if scales.ndim != 1 or scales.size < 1 or np.any(scales <= 0):
+        raise ValueError("scales must be a 1-D array of positive numbers")
+    arrays = {}
+    for name, values in (("mu_upper", mu_upper), ("mu_lower", mu_lower), ("mu_bound", mu_bound)):
+        values = np.asarray(values, dtype=float)
+        if values.shape != scales.shape or not np.all(np.isfinite(values)):
+            raise ValueError(f"{name} must hold one finite value per scale")
+        arrays[name] = values
+    fig, (ax_mu, ax_margin) = new_figure(1, 2, figsize=(10, 4.2))
+    ax_mu.plot(scales, arrays["mu_upper"], "o-", color="C0", label="design: mixed μ_RP, upper")
+    ax_mu.plot(scales, arrays["mu_lower"], "x--", color="C0", label="design: lower bound")
+    ax_mu.fill_between(scales, 0, arrays["mu_bound"], color="0.85",
+                       label="no controller: below the\nnominal H∞ optimum")
+    ax_mu.axhline(1.0, color="k", lw=0.8, ls=":")
+    ax_mu.set_xlabel("performance scale (× H_e, H_y)")
+    ax_mu.set_ylabel(f"μ_RP at ±{100 * spread:g} %")
+    ax_mu.set_title("(a) robust performance; ≤ 1: certified")
+    ax_mu.legend(fontsize=8)
+    for k, (label, values) in enumerate(margins.items()):
+        values = np.asarray(values, dtype=float)
+        if values.shape != scales.shape:
+            raise ValueError(f"margins[{label!r}] must hold one value per scale")
+        ax_margin.plot(scales, 100 * values, "o-", color=f"C{k + 1}", label=label)
+    ax_margin.axhline(100 * spread, color="k", lw=0.8, ls=":")
+    ax_margin.set_xlabel("performance scale (× H_e, H_y)")
+    ax_margin.set_ylabel("exact parametric margin [%]")
+    ax_margin.set_title(f"(b) box kept stable; goal ±{100 * spread:g} %")
+    ax_margin.legend(fontsize=8)
+    if chosen is not None:
+        for ax in (ax_mu, ax_margin):
+            ax.axvline(chosen, color="0.4", lw=0.8, ls="--")
+    for ax in (ax_mu, ax_margin):
+        ax.set_xscale("log")
+    plotting.name_figure(fig, None, "mixed_tradeoff")
     return fig
