@@ -1,0 +1,229 @@
+"""Mixed-mu synthesis (D,G-K iteration) on textbook problems with known answers.
+
+The problems, their closed forms and sources are in ``textbook_problems.py``:
+
+* gain-margin optimisation of P0 = (s - z)/((s - p)(s + a)) (p = 1, z = 2) with the gain
+  in [0.5, 1.5] (ratio 3): no controller stabilises a ratio of (z/p)^2 = 4 or more, a
+  complex disc certifies less than z/p = 2 [T80, KT85, DFT92];
+* the ACC benchmark's two carts with the spring 0.5 <= k <= 2 [WB92]: controllers
+  stabilising the whole interval exist.
+
+Every verdict on a controller is computed from the physical loop (plant and K, not the
+LFT the design saw) by the exact crossing gains of :func:`tp.real_stability_interval`
+and a root locus on a fine grid of the parameter (numpy/scipy only), never by
+piezolib's margin code.  ``benchmarks/bench_mixed_musyn.py`` prints the same designs
+as a table, with times and dkpy's complex DK beside them.
+"""
+
+import control as ct
+import numpy as np
+import pytest
+
+import textbook_problems as tp
+from piezolib.robust.dgk import mixed_musyn
+from piezolib.robust.dk import musyn
+
+# design grids [rad/s]: 200 points cover the gain problem's p, z and the wide
+# bandwidth its high-gain controllers need, and the carts' rigid body and flexible mode
+GAIN_GRID = np.logspace(-3, 3, 200)
+ACC_GRID = np.logspace(-3, 2, 200)
+# root-locus points per unit of the parameter interval (the exact crossings decide; the
+# grid is a second, independent route)
+LOCUS_POINTS = 2001
+
+
+def exact_range(loop):
+    """(k_lo, k_hi): the exact stable interval of the physical parameter around k0."""
+    A0, b, c, k0 = loop
+    t_lo, t_hi = tp.real_stability_interval(A0, b, c)
+    return k0 + t_lo, k0 + t_hi
+
+
+def assert_locus_stable(loop, k_lo, k_hi):
+    """Every closed loop on a fine grid of [k_lo, k_hi] is Hurwitz (an independent route)."""
+    A0, b, c, k0 = loop
+    k = np.linspace(k_lo, k_hi, LOCUS_POINTS)
+    worst = tp.stable_on_grid(A0, b, c, k - k0)
+    assert worst.max() < 0, f"unstable at k = {k[np.argmax(worst)]:.6g}"
+
+
+def certified_interval(prob_k0, r, mu, additive):
+    """The parameter interval a mu upper bound certifies (nothing when mu <= r is not < 1).
+
+    k = k0 (1 + r delta) (gain problem) or k = k0 + r delta (carts), |delta| < 1/mu.
+    """
+    rho = r / mu
+    if additive:
+        return prob_k0 - rho, prob_k0 + rho
+    return prob_k0 * (1 - min(rho, 1.0)), prob_k0 * (1 + rho)
+
+
+# --- 1. gain-margin optimisation -----------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def gain():
+    return tp.gain_margin()
+
+
+@pytest.fixture(scope="module")
+def gain_mixed(gain):
+    return mixed_musyn(gain.P, gain.blk_mixed, 1, 1, GAIN_GRID)
+
+
+@pytest.fixture(scope="module")
+def gain_complex(gain):
+    return musyn(gain.P, gain.blk_complex, 1, 1, GAIN_GRID, d_order=2)
+
+
+def test_crossing_gains_of_a_static_controller_are_exact():
+    """u = kappa y on (s - z)/((s - p)(s + a)): the closed loop is
+    s^2 + (a - p - k kappa) s + (k kappa z - a p), Hurwitz iff a p / z < k kappa < a - p
+    (one crossing at s = 0, one on the imaginary axis)."""
+    prob = tp.gain_margin(p=1.0, z=2.0, a=3.0, k_lo=1.6, k_hi=1.9)
+    kappa = 1.0
+    K = ct.ss([], [], [], [[kappa]])
+    k_lo, k_hi = exact_range(tp.gain_loop(prob, K))
+    assert k_lo == pytest.approx(3.0 * 1.0 / 2.0 / kappa, rel=1e-12)
+    assert k_hi == pytest.approx((3.0 - 1.0) / kappa, rel=1e-12)
+
+
+def test_closed_forms_of_the_gain_problem(gain):
+    p, z = gain.p, gain.z
+    assert tp.gain_ratio_sup_real(p, z) == 4.0
+    assert tp.gain_ratio_sup_complex(p, z) == 2.0
+    # the complex disc of radius (z - p)/(z + p) holds exactly the real ratio z/p
+    assert tp.ratio_of_radius((z - p) / (z + p)) == pytest.approx(z / p, rel=1e-15)
+    assert (gain.k_lo, gain.k_hi) == (gain.k0 * (1 - gain.r), gain.k0 * (1 + gain.r))
+    assert tp.ratio_of_radius(gain.r) == pytest.approx(3.0, rel=1e-15)
+
+
+def test_mixed_design_certifies_more_than_any_complex_disc(gain, gain_mixed):
+    """The design interval (ratio 3) is certified: beyond z/p = 2, below (z/p)^2 = 4."""
+    res = gain_mixed
+    loop = tp.gain_loop(gain, res.K)
+    k_lo, k_hi = exact_range(loop)
+    ratio = k_hi / k_lo
+    # the theorem: no controller reaches (z/p)^2, whatever mixed_musyn reports
+    assert ratio < tp.gain_ratio_sup_real(gain.p, gain.z)
+    # mu < 1 certifies the design interval [0.5, 1.5], which no complex disc can (z/p = 2)
+    assert res.mu_peak < 1
+    assert k_lo <= gain.k_lo and k_hi >= gain.k_hi
+    assert ratio > tp.gain_ratio_sup_complex(gain.p, gain.z)
+    assert_locus_stable(loop, gain.k_lo, gain.k_hi)
+    # the certificate of the dense verification grid holds in the exact loop
+    cert_lo, cert_hi = certified_interval(gain.k0, gain.r, res.verified_peak, additive=False)
+    assert k_lo <= cert_lo and k_hi >= cert_hi
+
+
+def test_complex_design_cannot_certify_more_than_z_over_p(gain, gain_complex):
+    """Nevanlinna-Pick: sup |r T0| >= r (z + p)/(z - p) = 1.5 for every stabilising K, so a
+    complex certificate stays below z/p; musyn's mu bounds |r T0| from above."""
+    res = gain_complex
+    bound = tp.complex_mu_bound(gain.p, gain.z, gain.r)
+    T_design = np.abs(tp.gain_T0(gain, res.K, GAIN_GRID))
+    # mu of the whole loop >= mu of its 1 x 1 delta channel = |r T0| at each grid point
+    assert np.all(res.mu_upper >= gain.r * T_design * (1 - 1e-9))
+    # the theorem on this controller: the peak of |T0| (dense grid) reaches the bound
+    dense = np.logspace(-4, 4, 20001)
+    assert gain.r * np.abs(tp.gain_T0(gain, res.K, dense)).max() >= bound * (1 - 1e-6)
+    # the exact loop is stable over what its mu certifies
+    loop = tp.gain_loop(gain, res.K)
+    k_lo, k_hi = exact_range(loop)
+    cert_lo, cert_hi = certified_interval(gain.k0, gain.r, res.mu_peak, additive=False)
+    assert k_lo <= cert_lo and k_hi >= cert_hi
+    # so musyn's grid bound certifies no more than z/p, up to the sampling of the peak of
+    # |T0|, which a near-optimal complex design makes flat (T0 ~ all-pass times 1.5/r)
+    assert tp.ratio_of_radius(gain.r / res.mu_peak) < tp.gain_ratio_sup_complex(gain.p, gain.z) \
+        * (1 + 1e-2)
+
+
+def test_mixed_certificate_beats_the_complex_one(gain, gain_mixed, gain_complex):
+    """Same plant, same grid: the real-parameter certificate is strictly wider (ratio 3
+    against below 2), and its mu is below the complex design's by at least 1/1.5."""
+    assert gain_mixed.mu_peak < 1 < tp.complex_mu_bound(gain.p, gain.z, gain.r) \
+        <= gain_complex.mu_peak * (1 + 1e-2)
+
+
+# --- 2. ACC benchmark: two carts, uncertain spring -----------------------------------------
+
+@pytest.fixture(scope="module")
+def carts():
+    return tp.acc_benchmark()
+
+
+@pytest.fixture(scope="module")
+def carts_mixed(carts):
+    return mixed_musyn(carts.P, carts.blk_mixed, 1, 1, ACC_GRID)
+
+
+@pytest.fixture(scope="module")
+def carts_complex(carts):
+    return musyn(carts.P, carts.blk_complex, 1, 1, ACC_GRID, d_order=2)
+
+
+def test_spring_loop_matches_the_lft(carts):
+    """The physical loop of :func:`tp.spring_loop` at k is the LFT P closed by delta =
+    (k - k0)/r (a check of the builder, with a static stabilising-free controller: the
+    open-loop eigenvalues are compared, K = 0)."""
+    K = ct.ss([], [], [], [[0.0]])
+    A0, b, c, k0 = tp.spring_loop(carts, K)
+    for k in (0.5, 1.0, 2.0):
+        delta = (k - carts.k0) / carts.r
+        A_lft = carts.P.A + delta * carts.P.B[:, :1] @ carts.P.C[:1]
+        A_phys = (A0 + (k - k0) * b @ c)[:4, :4]
+        np.testing.assert_allclose(A_phys, A_lft, rtol=0, atol=1e-15)
+        # the undamped mode sqrt(2 k) rad/s (m1 = m2 = 1) and the rigid body at 0
+        w = np.sort(np.abs(np.linalg.eigvals(A_phys)))
+        np.testing.assert_allclose(w, [0, 0, np.sqrt(2 * k), np.sqrt(2 * k)], atol=1e-7)
+
+
+def test_mixed_design_stabilises_the_benchmark_interval(carts, carts_mixed):
+    """[WB92]: one controller stabilises 0.5 <= k <= 2 (exact crossings and root locus)."""
+    res = carts_mixed
+    loop = tp.spring_loop(carts, res.K)
+    k_lo, k_hi = exact_range(loop)
+    assert k_lo < tp.ACC_K_RANGE[0] and k_hi > tp.ACC_K_RANGE[1]
+    assert_locus_stable(loop, *tp.ACC_K_RANGE)
+    assert res.mu_peak < 1
+    cert_lo, cert_hi = certified_interval(carts.k0, carts.r, res.verified_peak, additive=True)
+    assert k_lo <= cert_lo and k_hi >= cert_hi
+
+
+def test_carts_mixed_certificate_is_no_worse_than_complex(carts, carts_mixed, carts_complex):
+    """Mixed mu of a loop never exceeds its complex mu, and a D,G-K iteration can fall back
+    on the complex design; so the mixed design should certify at least the complex design's
+    range (both iterations stop within rtol = 5e-3 of their best, twice over)."""
+    assert carts_mixed.mu_peak <= carts_complex.mu_peak * (1 + 2 * 5e-3)
+    loop = tp.spring_loop(carts, carts_complex.K)
+    k_lo, k_hi = exact_range(loop)
+    cert_lo, cert_hi = certified_interval(carts.k0, carts.r, carts_complex.mu_peak,
+                                          additive=True)
+    assert k_lo <= cert_lo and k_hi >= cert_hi
+
+
+# --- 3. bad input ------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("blk, match", [
+    ([(-2, 0)], "repeated"),             # a repeated real scalar
+    ([(2, 0)], "repeated"),              # a repeated complex scalar
+])
+def test_mixed_musyn_refuses_repeated_scalars(blk, match):
+    # inputs [w1, w2, u], outputs [z1, z2, y]: a 2 x 2 uncertainty channel
+    P = ct.ss(-np.eye(2), np.array([[1.0, 0, 1], [0, 1, 1]]),
+              np.array([[1.0, 0], [0, 1], [1, 1]]), np.array([[0, 0, 1.0], [0, 0, 1], [0, 1, 0]]))
+    with pytest.raises(ValueError, match=match):
+        mixed_musyn(P, blk, 1, 1, GAIN_GRID)
+
+
+def test_mixed_musyn_refuses_a_structure_not_fitting_p(gain):
+    with pytest.raises(ValueError):
+        mixed_musyn(gain.P, [(-1, 0), (2, 2)], 1, 1, GAIN_GRID)     # 3 x 3 for a 2 x 2 channel
+    with pytest.raises(ValueError):
+        mixed_musyn(gain.P, [(-1, 0)], 1, 1, GAIN_GRID)             # 1 x 1 for a 2 x 2 channel
+
+
+@pytest.mark.parametrize("option", [dict(g_order=-1), dict(d_order=-1), dict(max_iter=0),
+                                    dict(rtol=0.0), dict(patience=0)])
+def test_mixed_musyn_refuses_bad_options(gain, option):
+    with pytest.raises((ValueError, TypeError)):
+        mixed_musyn(gain.P, gain.blk_mixed, 1, 1, GAIN_GRID, **option)
