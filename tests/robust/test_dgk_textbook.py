@@ -97,6 +97,23 @@ def test_closed_forms_of_the_gain_problem(gain):
     assert tp.ratio_of_radius(gain.r) == pytest.approx(3.0, rel=1e-15)
 
 
+@pytest.mark.parametrize("ratio, alpha", [(3.0, 10.0), (3.5, 30.0), (3.9, 200.0)])
+def test_explicit_controllers_approach_the_real_supremum(gain, ratio, alpha):
+    """The closed-form controllers of :func:`tp.gain_margin_controller` (order 3) stabilise
+    [1, ratio] for ratios up to (z/p)^2 = 4 and never beyond: the supremum is approached.
+    T = c (w^2 - 1) keeps off the slit including its end, so the interval is open around
+    [1, ratio] (strict inequalities, no tolerance)."""
+    C = tp.gain_margin_controller(gain.p, gain.z, 1.0, ratio, alpha)
+    prob = tp.gain_margin(p=gain.p, z=gain.z, a=1.0, k_lo=1.0, k_hi=ratio)
+    loop = tp.gain_loop(prob, -ct.ss(C))
+    k_lo, k_hi = exact_range(loop)
+    assert k_lo < 1.0 and k_hi > ratio
+    assert k_hi / k_lo < tp.gain_ratio_sup_real(gain.p, gain.z)
+    assert_locus_stable(loop, 1.0, ratio)
+    with pytest.raises(ValueError, match="too small"):
+        tp.gain_margin_controller(gain.p, gain.z, 1.0, ratio, alpha / 10)
+
+
 def test_mixed_design_certifies_more_than_any_complex_disc(gain, gain_mixed):
     """The design interval (ratio 3) is certified: beyond z/p = 2, below (z/p)^2 = 4."""
     res = gain_mixed

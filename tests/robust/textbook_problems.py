@@ -53,7 +53,7 @@ __all__ = [
     "lundstrom_scaling",
     "pointwise_lft", "exact_response",
     "GainMargin", "gain_margin", "gain_ratio_sup_real", "gain_ratio_sup_complex",
-    "complex_mu_bound", "ratio_of_radius", "radius_of_ratio", "gain_T0", "gain_loop",
+    "gain_margin_controller", "complex_mu_bound", "ratio_of_radius", "radius_of_ratio", "gain_T0", "gain_loop",
     "AccBenchmark", "acc_benchmark", "ACC_K_RANGE", "spring_loop",
     "real_stability_interval", "stable_on_grid",
 ]
@@ -393,12 +393,12 @@ def gain_ratio_sup_real(p, z):
     onto the open right half plane, with w(z) = 1 and w(p) = sqrt(1 + 1/c) = sqrt(K),
     and phi(w) = (w - 1)/(w + 1) maps that onto the unit disc, phi(w(z)) = 0.  By
     Schwarz-Pick a function from the right half plane into the disc with a zero at z
-    satisfies |f(p)| <= |(p - z)/(p + z)|, and every value below is reached by a Blaschke
-    factor times a constant, so feasibility is
-    (sqrt K - 1)/(sqrt K + 1) < (z - p)/(z + p), i.e. sqrt K < z/p.  The bound is a
-    supremum: reaching it needs T with values on the slit, i.e. controllers of growing
-    order (the optimal T is not rational).  The gain interval may sit anywhere on the
-    positive axis: only the ratio counts (k -> k/k_lo rescales C).
+    satisfies |f(p)| <= |(p - z)/(p + z)|, so feasibility needs
+    (sqrt K - 1)/(sqrt K + 1) < (z - p)/(z + p), i.e. sqrt K < z/p; every K below is
+    reached by a rational T (:func:`gain_margin_controller`, order 3).  The bound is a
+    supremum, not a maximum: the constraint T(inf) = 0 (P0 strictly proper) makes the
+    controllers' bandwidth grow without bound as K -> (z/p)^2.  The gain interval may sit
+    anywhere on the positive axis: only the ratio counts (k -> k/k_lo rescales C).
     """
     return (z / p) ** 2
 
@@ -414,6 +414,47 @@ def gain_ratio_sup_complex(p, z):
     complex bound is the square root of the real one.
     """
     return z / p
+
+
+def gain_margin_controller(p, z, a, ratio, alpha):
+    """A controller C (negative feedback) stabilising k P0 for every k in [1, ratio].
+
+    The construction behind :func:`gain_ratio_sup_real`, made rational: take
+    g(s) = q alpha (s - z)/((s + z)(s + alpha)), |q| < 1, which maps the closed right half
+    plane (and infinity) into the open unit disc; w = (1 + g)/(1 - g) then lies in the
+    open right half plane, w^2 off (-inf, 0], and T = c (w^2 - 1), c = 1/(ratio - 1),
+    off the slit (-inf, -c]: 1 + (k - 1) T has no zero in the closed right half plane for
+    1 <= k <= ratio.  g(z) = 0 gives T(z) = 0; T(p) = 1 needs w(p) = sqrt(ratio), i.e.
+    g(p) = (sqrt(ratio) - 1)/(sqrt(ratio) + 1), which fixes
+    q = g(p) (p + z)/(p - z) (p + alpha)/alpha; |q| < 1 holds for alpha large enough
+    exactly when sqrt(ratio) < z/p.  g(inf) = 0 makes T strictly proper, so C is proper.
+
+    With g = n_g/d_g, T = 4 c n_g d_g/(d_g - n_g)^2, and
+    C = T/(P0 (1 - T)) = 4 c q alpha (s + z)(s + alpha)(s + a)/R(s),
+    R = ((d_g - n_g)^2 - 4 c n_g d_g)/(s - p) (T(p) = 1 makes s - p a factor; the
+    factor s - z of n_g cancels P0's zero).  So the supremum (z/p)^2 is approached by
+    controllers of fixed order 3 whose bandwidth alpha grows without bound, not by
+    controllers of growing order.
+
+    Returns
+    -------
+    control.TransferFunction
+        C(s), for the loop 1 + k P0 C (python-control's and hinfsyn's u = K y: K = -C).
+    """
+    if not 1 < ratio < (z / p) ** 2:
+        raise ValueError(f"need 1 < ratio < (z/p)^2 = {(z / p) ** 2:g}, got {ratio!r}")
+    c = 1 / (ratio - 1)
+    g_p = (np.sqrt(ratio) - 1) / (np.sqrt(ratio) + 1)
+    q = g_p * (p + z) / (p - z) * (p + alpha) / alpha
+    if abs(q) >= 1:
+        raise ValueError(f"alpha = {alpha!r} is too small for ratio {ratio!r} (|q| = {abs(q):.3g})")
+    n_g = q * alpha * np.array([1.0, -z])
+    d_g = np.polymul([1.0, z], [1.0, alpha])
+    margin = np.polysub(d_g, n_g)
+    R, _ = np.polydiv(np.polysub(np.polymul(margin, margin), 4 * c * np.polymul(n_g, d_g)),
+                      [1.0, -p])
+    num = 4 * c * q * alpha * np.polymul(np.polymul([1.0, z], [1.0, alpha]), [1.0, a])
+    return ct.tf(num, R)
 
 
 def complex_mu_bound(p, z, r):
@@ -538,7 +579,9 @@ def acc_benchmark(k_range=ACC_K_RANGE, m1=1.0, m2=1.0, w_x=0.1, rho=0.1, sigma=0
     noise)], outputs [z_x = w_x x2, z_u = rho u]; y = x2 + sigma n.  D12 = [0; 0; rho]
     and D21 = [0, 0, sigma] have full rank; the rigid-body double integrator is
     stabilisable from u and detectable from x2.  The weights (0.1) are small so that mu
-    is dominated by the spring: the test is about the stiffness range.
+    is dominated by the spring: the test is about the stiffness range.  No controller's
+    interval reaches below k = 0: there cart 2 (a free double integrator) is no longer
+    driven by u, and its two poles at 0 stay in every closed loop.
     """
     k_lo, k_hi = k_range
     k0, r = (k_lo + k_hi) / 2, (k_hi - k_lo) / 2
