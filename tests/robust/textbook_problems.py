@@ -53,7 +53,8 @@ __all__ = [
     "lundstrom_scaling",
     "pointwise_lft", "exact_response",
     "GainMargin", "gain_margin", "gain_ratio_sup_real", "gain_ratio_sup_complex",
-    "gain_margin_controller", "complex_mu_bound", "ratio_of_radius", "radius_of_ratio", "gain_T0", "gain_loop",
+    "gain_margin_controller", "complex_mu_bound", "ratio_of_radius", "radius_of_ratio",
+    "gain_T0", "gain_loop",
     "AccBenchmark", "acc_benchmark", "ACC_K_RANGE", "spring_loop",
     "real_stability_interval", "stable_on_grid",
 ]
