@@ -67,6 +67,7 @@ class Problem(NamedTuple):
     additive: bool         # k = k0 + r delta (True) or k0 (1 + r delta)
     known: str
     settling: object = None    # K -> settling time [s] or None
+    reference: object = None   # () -> (label, K) of a known controller, or None
 
 
 class Row(NamedTuple):
@@ -91,7 +92,9 @@ def problems():
                 gain.P, gain.blk_mixed, gain.blk_complex, GAIN_GRID,
                 lambda K: tp.gain_loop(gain, K), gain.k0, gain.r, False,
                 f"ratio < (z/p)^2 = {tp.gain_ratio_sup_real(gain.p, gain.z):g}; complex "
-                f"certifies < z/p = {tp.gain_ratio_sup_complex(gain.p, gain.z):g}"),
+                f"certifies < z/p = {tp.gain_ratio_sup_complex(gain.p, gain.z):g}",
+                reference=lambda: ("closed form, ratio 3.5", -ct.ss(
+                    tp.gain_margin_controller(gain.p, gain.z, 1.0, 3.5, 30.0)) * 2.25)),
         Problem("ACC two carts, k in [0.5, 2]", carts.P, carts.blk_mixed, carts.blk_complex,
                 ACC_GRID, lambda K: tp.spring_loop(carts, K), carts.k0, carts.r, True,
                 "[0.5, 2] stabilisable (WB92)", lambda K: cart_settling(carts, K)),
@@ -145,6 +148,11 @@ def our_rows(prob):
     from piezolib.robust.dgk import mixed_musyn
     from piezolib.robust.dk import musyn
     rows = []
+    if prob.reference:
+        # a known controller (tp.gain_margin_controller, its interval [1, 3.5] rescaled by
+        # (1 + 3.5)/2 to be centred on k0 = 1): what the mixed design can aim at
+        label, K = prob.reference()
+        rows.append(measure(prob, label, K, None, "-"))
     t0 = time.perf_counter()
     try:
         res = mixed_musyn(prob.P, prob.blk_mixed, 1, 1, prob.grid)

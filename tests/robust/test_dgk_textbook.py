@@ -22,6 +22,7 @@ import pytest
 import textbook_problems as tp
 from piezolib.robust.dgk import mixed_musyn
 from piezolib.robust.dk import musyn
+from piezolib.robust.mu import mussv
 
 # design grids [rad/s]: 200 points cover the gain problem's p, z and the wide
 # bandwidth its high-gain controllers need, and the carts' rigid body and flexible mode
@@ -119,7 +120,6 @@ def test_design_target_is_attainable_in_mixed_mu(gain):
     rescaled so that its interval is centred on k0 = 1, has mixed mu < 1 on the design
     structure (the regularising channels included), so mixed_musyn missing mu < 1 would be
     the synthesis' shortfall, not the problem's."""
-    from piezolib.robust.mu import mussv
     ratio = 3.5
     K = -ct.ss(tp.gain_margin_controller(gain.p, gain.z, 1.0, ratio, 30.0)) * ((1 + ratio) / 2)
     k_lo, k_hi = exact_range(tp.gain_loop(gain, K))
