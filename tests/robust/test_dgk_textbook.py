@@ -33,6 +33,11 @@ ACC_GRID = np.logspace(-3, 2, 200)
 LOCUS_POINTS = 2001
 
 
+def design_mixed(P, blk, omega):
+    """mixed_musyn with its defaults, one measurement and one control (the API in one place)."""
+    return mixed_musyn(P, blk, 1, 1, omega)
+
+
 def exact_range(loop):
     """(k_lo, k_hi): the exact stable interval of the physical parameter around k0."""
     A0, b, c, k0 = loop
@@ -68,7 +73,7 @@ def gain():
 
 @pytest.fixture(scope="module")
 def gain_mixed(gain):
-    return mixed_musyn(gain.P, gain.blk_mixed, 1, 1, GAIN_GRID)
+    return design_mixed(gain.P, gain.blk_mixed, GAIN_GRID)
 
 
 @pytest.fixture(scope="module")
@@ -184,7 +189,7 @@ def carts():
 
 @pytest.fixture(scope="module")
 def carts_mixed(carts):
-    return mixed_musyn(carts.P, carts.blk_mixed, 1, 1, ACC_GRID)
+    return design_mixed(carts.P, carts.blk_mixed, ACC_GRID)
 
 
 @pytest.fixture(scope="module")
