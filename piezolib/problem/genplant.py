@@ -25,7 +25,7 @@ __all__ = [
     "DESIGN_EFFORT_WEIGHT", "check_models", "generalized_plant", "design_plant",
     "closed_loop_matrix", "RolloffWeight", "DESIGN_ROLLOFF", "DESIGN_DELAY_SAMPLES",
     "DESIGN_PADE_ORDER", "effective_delay", "rolloff_weight", "delay_aware_plant",
-    "delayed_closed_loop_response",
+    "delayed_closed_loop_response", "parametric_design_plant", "parametric_block_structure",
 ]
 
 PLANT_INPUTS = ("u_Delta", "v_r", "u_b")
@@ -443,3 +443,72 @@ def delayed_closed_loop_response(K, G, H_m, H_e, H_y, omega, *, fs, delay_sample
     f = k / (1 - R[:, -1, 2] * k)
     return R[:, :-1, :2] + f[:, None, None] * R[:, :-1, 2][:, :, None] * R[:, -1, :2][:, None, :]
 
+
+
+def parametric_block_structure(n_coefficients):
+    """Block structure of :func:`parametric_design_plant`: one real scalar per
+    coefficient, then the 1 x 3 performance block (v_r -> y1, y2, y_u)."""
+    n_coefficients = check_integer("n_coefficients", n_coefficients, minimum=1)
+    return ((-1, 0),) * n_coefficients + ((1, 3),)
+
+
+def parametric_design_plant(G, H_e, H_y, spread, *, fs, delay_samples=DESIGN_DELAY_SAMPLES,
+                            pade_order=DESIGN_PADE_ORDER, rolloff=DESIGN_ROLLOFF, omega_s=None):
+    """Delay-aware synthesis plant whose uncertainty is G's real coefficient box.
+
+    :func:`delay_aware_plant` with the complex weight H_m replaced by the
+    exact upper LFT of :func:`piezolib.uncertainty.parametric.parametric_lft`:
+    one real scalar q_i in [-1, 1] per denominator coefficient of G, which
+    then varies by +-``spread`` (relative).  With u_b' = e^{-s tau} u_b (Pade),
+
+        [z; v_y] = P_G [w; u_b'],  y1 = H_e (v_r - v_y),  y2 = H_y v_y,
+        y_u = W_u u_b,             v_e = v_r - v_y.
+
+    mu_RS <= 1 on the first n blocks certifies the box of relative size
+    ``spread``; the block structure is :func:`parametric_block_structure`.
+
+    Parameters
+    ----------
+    G : control.LTI
+        Nominal plant u_c [V] -> v_y [V], SISO, proper.
+    H_e, H_y : control.LTI
+        Error and output weights, as in :func:`generalized_plant`.
+    spread : float
+        Relative size of the coefficient box (0.05 is the paper's +-5 %).
+    fs : float
+        Sampling rate [Hz] of the loop.
+    delay_samples, pade_order, rolloff : as in :func:`delay_aware_plant`.
+    omega_s : float, optional
+        Internal time scale [rad/s]; default ``time_scale_of(G, H_e, H_y)``.
+
+    Returns
+    -------
+    control.StateSpace
+        Inputs ``w_0 ... w_{n-1}, v_r, u_b``; outputs ``z_0 ... z_{n-1}, y1, y2,
+        y_u, v_e``; named ``P_par``.
+    """
+    from piezolib.uncertainty.parametric import parametric_lft
+
+    G, _, H_e, H_y = check_models(G, ct.tf([1.0], [1.0]), H_e, H_y)
+    spread = check_positive("spread", spread)
+    tau = effective_delay(fs, delay_samples)
+    pade_order = check_integer("pade_order", pade_order, minimum=1)
+    W_u = _rolloff_weight(rolloff, "rolloff")
+    omega_s = (time_scale_of(G, H_e, H_y) if omega_s is None
+               else check_positive("omega_s", omega_s))
+    lft = parametric_lft(G, spread)
+    n = len(lft.blk)
+    w = [f"w_{i}" for i in range(n)]
+    z = [f"z_{i}" for i in range(n)]
+    plant = with_signals(to_scaled(lft.P, omega_s), w + ["u_b_applied"], z + ["v_y"])
+    num, den = ct.pade(tau * omega_s, pade_order)          # in scaled time
+    delay = with_signals(balance(ct.ss(ct.tf(num, den))), ["u_b"], ["u_b_applied"])
+    blocks = [plant, delay,
+              with_signals(to_scaled(W_u, omega_s), ["u_b"], ["y_u"]),
+              with_signals(to_scaled(ct.ss(H_e), omega_s), ["v_e"], ["y1"]),
+              with_signals(to_scaled(ct.ss(H_y), omega_s), ["v_y"], ["y2"]),
+              ct.summing_junction(["v_r", "-v_y"], "v_e")]
+    inputs = w + ["v_r", "u_b"]
+    outputs = z + ["y1", "y2", "y_u", "v_e"]
+    P = balance(ct.interconnect(blocks, inputs=inputs, outputs=outputs))
+    return from_scaled(P, omega_s, inputs, outputs, name="P_par")

@@ -10,7 +10,9 @@ hinf        verified H-infinity synthesis by gamma-iteration (``hinfsyn``)
 sos         second-order-section magnitude model (shared by dfit and uncertainty)
 dfit        stable minimum-phase fits of magnitude data (D-scalings)
 dk          mu-synthesis by DK-iteration (``musyn``)
-fixed_order fixed-order mu-synthesis of a SISO controller (``fixed_order_musyn``)
+fixed_order fixed-order mu-synthesis of a SISO controller (``fixed_order_musyn``),
+            complex blocks and real scalars (D,G-scaled bound)
+dgk         mixed-mu synthesis of a SISO controller: DK start, then D,G-K steps (``mixed_musyn``)
 reduction   (weighted) balanced controller reduction
 discrete    Tustin discretisation with response checks
 margins     gain, phase, delay and disk margins; sampled-loop delay tolerance
@@ -39,6 +41,7 @@ from piezolib.robust.hinf import *         # noqa: F401,F403
 from piezolib.robust.dfit import *         # noqa: F401,F403
 from piezolib.robust.dk import *           # noqa: F401,F403
 from piezolib.robust.fixed_order import *  # noqa: F401,F403
+from piezolib.robust.dgk import *          # noqa: F401,F403
 from piezolib.robust.reduction import *    # noqa: F401,F403
 from piezolib.robust.discrete import *     # noqa: F401,F403
 from piezolib.robust.margins import *      # noqa: F401,F403
@@ -46,10 +49,11 @@ from piezolib.robust.achievable import *   # noqa: F401,F403
 from piezolib.robust.performance_weights import *  # noqa: F401,F403
 from piezolib.robust.export import *       # noqa: F401,F403
 from piezolib.robust.preview import *      # noqa: F401,F403
-from piezolib.robust import (achievable, blocks, dfit, discrete, dk, export, fixed_order, hinf,
-                             lft, lti, margins, mu, performance_weights, preview, reduction)
+from piezolib.robust import (achievable, blocks, dfit, dgk, discrete, dk, export, fixed_order,
+                             hinf, lft, lti, margins, mu, performance_weights, preview,
+                             reduction)
 
 __all__ = (lti.__all__ + lft.__all__ + blocks.__all__ + mu.__all__ + hinf.__all__
-           + dfit.__all__ + dk.__all__ + fixed_order.__all__ + reduction.__all__
+           + dfit.__all__ + dk.__all__ + fixed_order.__all__ + dgk.__all__ + reduction.__all__
            + discrete.__all__ + margins.__all__ + achievable.__all__ + export.__all__
            + performance_weights.__all__ + preview.__all__)

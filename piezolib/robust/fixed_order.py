@@ -280,10 +280,63 @@ class _Loop:
         return np.linalg.eigvals(A) * self.ws if A.size else np.zeros(0)
 
 
-def _k_step(loop, modal, omega, Dl, Dr, radius, scale, maxiter):
-    """Minimise max_k sigma_max(Dl M Dr^-1) over a trust region; return (theta, peak)."""
-    dr_inv = 1.0 / np.diagonal(Dr, axis1=1, axis2=2)
-    dl = np.diagonal(Dl, axis1=1, axis2=2)
+def _scalings(mu_res):
+    """(dl, 1/dr, Gh) of a MuResult: diagonals of Dl, Dr^-1 and Gh = Dr^-1 G Dl^-1 (or None)."""
+    dl = np.diagonal(mu_res.Dl, axis1=1, axis2=2)
+    dr_inv = 1.0 / np.diagonal(mu_res.Dr, axis1=1, axis2=2)
+    Gh = None if mu_res.G is None else dr_inv[:, :, None] * mu_res.G.real / dl[:, None, :]
+    return dl, dr_inv, Gh
+
+
+def _scalings_between(omega, scalings, fine, fine_loop, modal):
+    """Scalings at the points ``fine`` between the grid points, the best of three.
+
+    Any D > 0 and structured Gh give an upper bound of mu, so each fine point
+    takes, of its two neighbours' scalings and their interpolation (log D and
+    Gh linear in log omega), the one with the lowest bound for ``modal``.
+    """
+    lw, lf = np.log(omega), np.log(fine)
+    right = np.clip(np.searchsorted(lw, lf), 1, lw.size - 1)
+    left = right - 1
+    t = np.clip((lf - lw[left]) / (lw[right] - lw[left]), 0.0, 1.0)
+
+    def mix(y, log):
+        y = np.log(y) if log else y
+        shape = (-1,) + (1,) * (y.ndim - 1)
+        out = y[left] + t.reshape(shape) * (y[right] - y[left])
+        return np.exp(out) if log else out
+
+    def pick(idx):
+        return tuple(None if y is None else y[idx] for y in scalings)
+
+    interp = (mix(scalings[0], True), mix(scalings[1], True),
+              None if scalings[2] is None else mix(scalings[2], False))
+    options = [pick(left), pick(right), interp]
+    zero = np.zeros(modal.theta.size)
+    bounds = np.stack([_scaled_bound(fine_loop, modal, fine, sc, np.ones(zero.size))(zero, False)
+                       for sc in options])
+    best = np.argmin(bounds, axis=0)
+    chosen = []
+    for part in range(3):
+        if options[0][part] is None:
+            chosen.append(None)
+            continue
+        stack = np.stack([o[part] for o in options])
+        chosen.append(stack[best, np.arange(fine.size)])
+    return tuple(chosen)
+
+
+def _scaled_bound(loop, modal, omega, scalings, scale):
+    """sigma(x, grad): the scaled mu bound at theta0 + scale x on the grid (and its gradient).
+
+    The ``scalings`` (from :func:`_scalings`) are held fixed.  With complex blocks the bound
+    is sigma_max(X), X = Dl M Dr^-1.  With real blocks it is the smallest beta
+    for which the D,G inequality ``M^H Dl^2 M + j (G M - M^H G^T) <= beta^2 Dr^2``
+    holds with these D and G, i.e. sqrt(lambda_max(X^H X + j (Gh X - X^H Gh^T)))
+    with Gh = Dr^-1 G Dl^-1 (``docs/robust.md``): an upper bound of mixed mu
+    for every controller, equal to ``mu_res.upper`` at the current one.
+    """
+    dl, dr_inv, Gh = scalings
     A0 = dl[:, :, None] * loop.P11 * dr_inv[:, None, :]
     u = dl * loop.P12
     v = loop.P21 * dr_inv
@@ -293,15 +346,38 @@ def _k_step(loop, modal, omega, Dl, Dr, radius, scale, maxiter):
         m = ModalController.from_theta(theta0 + scale * x, order)
         k, J = m.response(omega, jacobian=True)
         f = k / (1 - loop.P22 * k)
-        Ms = A0 + f[:, None, None] * u[:, :, None] * v[:, None, :]
-        U, S, Vh = np.linalg.svd(Ms)
-        if not grad:
-            return S[:, 0]
-        left = np.einsum("ki,ki->k", U[:, :, 0].conj(), u)
-        right = np.einsum("ki,ki->k", v, Vh[:, 0, :].conj())
-        c = left * right / (1 - loop.P22 * k) ** 2
-        return S[:, 0], np.real(c[:, None] * J) * scale
+        X = A0 + f[:, None, None] * u[:, :, None] * v[:, None, :]
+        if Gh is None:
+            U, S, Vh = np.linalg.svd(X)
+            bound = S[:, 0]
+            if not grad:
+                return bound
+            dbound = (np.einsum("ki,ki->k", U[:, :, 0].conj(), u)
+                      * np.einsum("ki,ki->k", v, Vh[:, 0, :].conj()))
+        else:
+            GX = Gh @ X
+            Q = np.conj(np.swapaxes(X, 1, 2)) @ X + 1j * (GX - np.conj(np.swapaxes(GX, 1, 2)))
+            lam, vec = np.linalg.eigh(Q)
+            bound = np.sqrt(np.maximum(lam[:, -1], 0.0))
+            if not grad:
+                return bound
+            # d lambda = 2 Re(df (v^T e) ((X e)^H u + j e^H Gh u)), e the top eigenvector
+            e = vec[:, :, -1]
+            Xe = np.einsum("kij,kj->ki", X, e)
+            Ge = np.einsum("kij,ki->kj", Gh, e.conj())
+            dbound = (np.einsum("ki,ki->k", v, e)
+                      * (np.einsum("ki,ki->k", Xe.conj(), u) + 1j * np.einsum("ki,ki->k", Ge, u))
+                      / np.maximum(bound, 1e-300))
+        c = dbound / (1 - loop.P22 * k) ** 2
+        return bound, np.real(c[:, None] * J) * scale
 
+    return sigma
+
+
+def _k_step(loop, modal, omega, scalings, radius, scale, maxiter):
+    """Minimise the peak of the scaled mu bound over a trust region; return (theta, peak)."""
+    theta0 = modal.theta
+    sigma = _scaled_bound(loop, modal, omega, scalings, scale)
     s0 = sigma(np.zeros(theta0.size), False)
     active = s0 >= 0.3 * s0.max()
     idx = np.flatnonzero(active)
@@ -343,7 +419,23 @@ def _iterate(P, blk, modal, omega, ws, opts, rows, bar):
     """D-K steps on one grid (advancing ``bar`` per step); return (modal, stop reason)."""
     loop = _Loop(P, omega, ws)
     mu_res = mussv(loop.M(modal.response(omega)), blk, omega, lower=False)
-    best, radius, stall = float(mu_res.upper.max()), opts["radius"], 0
+    # with real blocks mu has narrow peaks that a K-step would push between the
+    # grid points: the K-step and the acceptance also bound mu on a grid four
+    # times as dense, with the scalings interpolated (a valid upper bound there)
+    mixed = mu_res.G is not None
+    if mixed:
+        fine = _dense(omega, 4)
+        fine_loop = _Loop(P, fine, ws)
+
+    def certified(m, res):
+        peak = float(res.upper.max())
+        if not mixed:
+            return peak
+        sc = _scalings_between(omega, _scalings(res), fine, fine_loop, m)
+        between = _scaled_bound(fine_loop, m, fine, sc, np.ones(m.theta.size))
+        return max(peak, float(between(np.zeros(m.theta.size), False).max()))
+
+    best, radius, stall = certified(modal, mu_res), opts["radius"], 0
     lin = _linear_mask(modal)
     for _ in range(opts["max_iter"]):
         t_it = time.perf_counter()
@@ -351,13 +443,18 @@ def _iterate(P, blk, modal, omega, ws, opts, rows, bar):
         scale = np.ones(theta0.size)
         size = max(np.sqrt(np.mean(theta0[lin] ** 2)), 1e-12)
         scale[lin] = np.maximum(np.abs(theta0[lin]), 0.1 * size)
-        theta, fixed_peak = _k_step(loop, modal, omega, mu_res.Dl, mu_res.Dr, radius, scale,
-                                    opts["k_step_iterations"])
+        if mixed:
+            sc = _scalings_between(omega, _scalings(mu_res), fine, fine_loop, modal)
+            theta, fixed_peak = _k_step(fine_loop, modal, fine, sc, radius, scale,
+                                        opts["k_step_iterations"])
+        else:
+            theta, fixed_peak = _k_step(loop, modal, omega, _scalings(mu_res), radius, scale,
+                                        opts["k_step_iterations"])
         cand = ModalController.from_theta(theta, modal.order)
         accepted, improvement = False, 0.0
         if np.all(loop.closed_loop_poles(cand).real < 0):
             cand_mu = mussv(loop.M(cand.response(omega)), blk, omega, lower=False)
-            peak = float(cand_mu.upper.max())
+            peak = certified(cand, cand_mu)
             if peak < best:
                 accepted, improvement = True, (best - peak) / best
                 modal, mu_res, best = cand, cand_mu, peak
@@ -449,8 +546,10 @@ def fixed_order_musyn(P, blk, K0, omega, *, max_iter=20, rtol=1e-3, patience=2,
     check_siso("K0", K0)
     omega = check_frequency_grid("omega", omega, min_length=16)
     blocks = parse_blk(blk, P.noutputs - 1, P.ninputs - 1)
-    if any(b.is_real for b in blocks):
-        raise ValueError("fixed_order_musyn supports complex blocks only")
+    if any(b.is_real and b.size > 1 for b in blocks):
+        raise ValueError("fixed_order_musyn supports real 1 x 1 scalars (-1, 0) and complex "
+                         "blocks; write a repeated real parameter as independent (-1, 0) "
+                         "blocks (conservative)")
     opts = {"max_iter": check_integer("max_iter", max_iter, minimum=1),
             "patience": check_integer("patience", patience, minimum=1),
             "k_step_iterations": check_integer("k_step_iterations", k_step_iterations,

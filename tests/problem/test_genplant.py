@@ -209,3 +209,31 @@ def test_improper_plant_is_refused_naming_it(models):
         genplant.generalized_plant(G * s ** 4, H_m, H_e, H_y)
     with pytest.raises(ValueError, match=r"H_e must be proper"):
         genplant.generalized_plant(G, H_m, H_e * s * s, H_y)
+
+
+# --- the delay-aware plant with the coefficient box as real blocks ---------------
+
+def test_parametric_design_plant_closed_with_offsets_is_that_member(models):
+    from piezolib import uncertainty as unc
+
+    G, _, H_e, H_y, _ = models
+    spread, q = 0.05, np.array([0.7, -1.0, 0.3, 1.0, -0.4, 0.0])
+    P = genplant.parametric_design_plant(G, H_e, H_y, spread, fs=FS)
+    n = len(q)
+    assert genplant.parametric_block_structure(n) == ((-1, 0),) * n + ((1, 3),)
+    assert P.input_labels == [f"w_{i}" for i in range(n)] + ["v_r", "u_b"]
+    assert P.output_labels[n:] == ["y1", "y2", "y_u", "v_e"]
+    omega = np.logspace(2, 5, 40)
+    R = response(P, omega)
+    # close the real channels with diag(q): the u_b -> v_e path is -G_q times the Pade delay
+    Q = np.diag(q)
+    closed = [r[n:, n:] + r[n:, :n] @ Q @ np.linalg.solve(np.eye(n) - r[:n, :n] @ Q, r[:n, n:])
+              for r in R]
+    member = np.ravel(unc.perturbed_plant(G, spread, q)(1j * omega))
+    num, den = ct.pade(genplant.effective_delay(FS, 1), genplant.DESIGN_PADE_ORDER)
+    pade = np.ravel(ct.tf(num, den)(1j * omega))
+    got = np.array([c[3, 1] for c in closed])                   # u_b -> v_e
+    np.testing.assert_allclose(got, -member * pade, rtol=1e-7)
+    # v_r -> y1 is H_e (1 - 0) at the reference input: the error weight sees v_r directly
+    h_e = np.ravel(H_e(1j * omega))
+    np.testing.assert_allclose([c[0, 0] for c in closed], h_e, rtol=1e-7)

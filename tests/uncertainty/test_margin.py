@@ -148,3 +148,38 @@ def test_bad_inputs():
         unc.parametric_stability_margin(None)
     with pytest.raises(ValueError, match="omega must be non-negative"):
         unc.stability_gauge(G, None, np.array([-1.0]))
+
+
+# --- with a loop delay ------------------------------------------------------------
+
+def _delayed_characteristic(G, K, spread, offsets, s, tau):
+    """a_q(s) d(s) + b(s) n(s) e^{-s tau} of the member with ``offsets`` (numpy only)."""
+    a, b = np.asarray(G.den[0][0], float), np.asarray(G.num[0][0], float)
+    n_k, d_k = np.asarray(K.num[0][0], float), np.asarray(K.den[0][0], float)
+    a = a / a[0]
+    b = b / G.den[0][0][0]
+    low = a[::-1].copy()                         # lowest power first
+    low[:-1] = low[:-1] * (1 + spread * np.asarray(offsets))
+    aq = np.polyval(low[::-1], s)
+    return aq * np.polyval(d_k, s) + np.polyval(b, s) * np.polyval(n_k, s) * np.exp(-s * tau)
+
+
+def test_delay_margin_tends_to_the_delay_free_one_and_its_critical_member_is_on_the_axis():
+    G = paper.plant()
+    K = ct.tf(paper.controller())
+    free = unc.parametric_stability_margin(G, K)
+    tiny = unc.parametric_stability_margin(G, K, delay=1e-12)
+    assert tiny.spread == pytest.approx(free.spread, rel=1e-6)
+    tau = 1.5e-4                                  # 1.5 samples at 10 kHz
+    m = unc.parametric_stability_margin(G, K, delay=tau)
+    assert m.nominal_stable and m.bounded and 0 < m.spread < free.spread
+    # the critical member of the delayed loop has a root at j omega*: the characteristic
+    # function vanishes there relative to its terms
+    s = 1j * m.omega
+    value = _delayed_characteristic(ct.tf(G), K, m.spread, m.offsets, s, tau)
+    scale = abs(_delayed_characteristic(ct.tf(G), K, 0.0, m.offsets, s, 0.0))
+    assert abs(value) < 1e-6 * scale
+    with pytest.raises(ValueError, match="delay"):
+        unc.parametric_stability_margin(G, K, delay=-1.0)
+    with pytest.raises(ValueError, match="delay"):
+        unc.parametric_stability_margin(G, None, delay=1e-4)
