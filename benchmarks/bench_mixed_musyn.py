@@ -7,7 +7,9 @@ of Wie & Bernstein) it designs a controller three ways and prints one table:
     problem | method | time [s] | K order | own mu | mixed mu (same yardstick) |
     certified range | exact range | ratio hi/lo | known answer | settling [s]
 
-* ``mixed_musyn``: piezolib's D,G-K iteration, the parameter as a real scalar block;
+* ``mixed_musyn``: piezolib's mixed-mu synthesis (complex DK start, then D,G-K steps), the
+  parameter as a real scalar block; for the gain problem also started (``K0``) from the
+  closed-form controller of ``textbook_problems.gain_margin_controller`` (its own row);
 * ``musyn (complex)``: piezolib's DK iteration with the parameter as a complex 1 x 1 block;
 * ``dkpy DK (complex)``: dkpy's fixed-order DK iteration (complex blocks only), run in the
   benchmark venv ``benchmarks/.dkpy-venv`` as a subprocess (``sh benchmarks/setup_dkpy.sh``),
@@ -153,15 +155,19 @@ def our_rows(prob):
         # (1 + 3.5)/2 to be centred on k0 = 1): what the mixed design can aim at
         label, K = prob.reference()
         rows.append(measure(prob, label, K, None, "-"))
-    t0 = time.perf_counter()
-    try:
-        res = mixed_musyn(prob.P, prob.blk_mixed, 1, 1, prob.grid)
-    except Exception as exc:                      # a failure is a finding, printed in the table
-        rows.append(Row(prob.name, "mixed_musyn", time.perf_counter() - t0, "-",
-                        f"failed: {type(exc).__name__}: {exc}"[:60], "-", "-", "-", prob.known,
-                        None))
-    else:
-        rows.append(measure(prob, "mixed_musyn", res.K, time.perf_counter() - t0, res.mu_peak))
+    starts = [("mixed_musyn", {})]
+    if prob.reference:
+        starts.append(("mixed_musyn from it", {"K0": prob.reference()[1]}))
+    for method, options in starts:
+        t0 = time.perf_counter()
+        try:
+            res = mixed_musyn(prob.P, prob.blk_mixed, prob.grid, **options)
+        except Exception as exc:                  # a failure is a finding, printed in the table
+            rows.append(Row(prob.name, method, time.perf_counter() - t0, "-",
+                            f"failed: {type(exc).__name__}: {exc}"[:60], "-", "-", "-",
+                            prob.known, None))
+        else:
+            rows.append(measure(prob, method, res.K, time.perf_counter() - t0, res.mu_peak))
     t0 = time.perf_counter()
     res = musyn(prob.P, prob.blk_complex, 1, 1, prob.grid, d_order=2)
     rows.append(measure(prob, "musyn (complex)", res.K, time.perf_counter() - t0, res.mu_peak))
