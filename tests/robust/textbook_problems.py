@@ -1,7 +1,7 @@
 """Textbook robust-control problems with published or closed-form answers (test data).
 
-Shared by ``tests/robust/test_textbook.py``, ``test_dk.py``, ``test_hinf.py`` and
-``benchmarks/bench_textbook.py``; nothing
+Shared by ``tests/robust/test_textbook.py``, ``test_dk.py``, ``test_hinf.py``,
+``test_dgk_textbook.py``, ``benchmarks/bench_textbook.py`` and ``bench_mixed_musyn.py``; nothing
 in ``piezolib`` imports it.  Every builder is written from the textbook definition of the
 problem; every closed form is derived in the docstring or comment next to it.  Only
 ``numpy``, ``scipy`` and python-control are used here, so the references are independent
