@@ -44,9 +44,16 @@ def design_mixed(P, blk, omega, **options):
 
 
 def exact_range(loop):
-    """(k_lo, k_hi): the exact stable interval of the physical parameter around k0."""
+    """(k_lo, k_hi): the exact stable interval of the physical parameter around k0.
+
+    Its finite ends are checked to be tight: 1e-4 (relative to k - k0) beyond each, the
+    loop has a right-half-plane eigenvalue (an eigenvalue crosses the axis there, so the
+    interval is not shortened by a spurious candidate; crossings are transversal).
+    """
     A0, b, c, k0 = loop
     t_lo, t_hi = tp.real_stability_interval(A0, b, c)
+    ends = [t for t in (t_lo, t_hi) if np.isfinite(t)]
+    assert np.all(tp.stable_on_grid(A0, b, c, np.array(ends) * (1 + 1e-4)) > 0)
     return k0 + t_lo, k0 + t_hi
 
 
