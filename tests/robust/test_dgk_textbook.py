@@ -66,10 +66,9 @@ def assert_locus_stable(loop, k_lo, k_hi):
 
 
 def certified_interval(prob_k0, r, mu, additive):
-    """The parameter interval a mu upper bound certifies (nothing when mu <= r is not < 1).
-
-    k = k0 (1 + r delta) (gain problem) or k = k0 + r delta (carts), |delta| < 1/mu.
-    """
+    """The parameter interval a mu upper bound certifies: |delta| < 1/mu with
+    k = k0 (1 + r delta) (gain problem; the lower end clipped at 0) or k = k0 + r delta
+    (carts)."""
     rho = r / mu
     if additive:
         return prob_k0 - rho, prob_k0 + rho
@@ -238,9 +237,9 @@ def carts_complex(carts):
 
 
 def test_spring_loop_matches_the_lft(carts):
-    """The physical loop of :func:`tp.spring_loop` at k is the LFT P closed by delta =
-    (k - k0)/r (a check of the builder, with a static stabilising-free controller: the
-    open-loop eigenvalues are compared, K = 0)."""
+    """The physical model of :func:`tp.spring_loop` at k is the LFT P closed by
+    delta = (k - k0)/r (a check of both builders against each other, with K = 0: the
+    open-loop state matrices are compared)."""
     K = ct.ss([], [], [], [[0.0]])
     A0, b, c, k0 = tp.spring_loop(carts, K)
     for k in (0.5, 1.0, 2.0):
