@@ -493,9 +493,10 @@ def gain_margin(p=1.0, z=2.0, a=1.0, k_lo=0.5, k_hi=1.5, eps=0.05):
     acts at the plant input: u_p = k0 (u + w_delta), z_delta = r u, w_delta = delta
     z_delta.  hinfsyn needs D12 of full column rank (z_delta = r u gives it) and D21 of
     full row rank: the sensor noise eps n on y, seen by the performance output
-    e = eps y_p (y_p the noise-free plant output).  Both regularising channels carry
-    eps (default 0.05), so the performance block adds at most about eps^2 |S| and
-    eps (r |K S| |P0 S|)^(1/2) to mu; mu is dominated by the gain channel r T0.
+    e = eps y_p (y_p the noise-free plant output).  With u = K y and S = 1/(1 - k0 P0 K)
+    the closed loop is M = [[r T0, eps r K S], [eps k0 P0 S, eps^2 T0]] (T0 = k0 P0 K S):
+    both regularising channels carry eps (default 0.05), so mu is dominated by the gain
+    channel r T0 unless K S or P0 S is large.
 
     Realisation of P0 (controller form): A = [[0, 1], [a p, p - a]], B = [0; 1],
     C = [-z, 1]: C (sI - A)^-1 B = (s - z)/(s^2 + (a - p) s - a p).
