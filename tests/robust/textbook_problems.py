@@ -1,7 +1,7 @@
 """Textbook robust-control problems with published or closed-form answers (test data).
 
-Shared by ``tests/robust/test_textbook.py``, ``test_dk.py``, ``test_hinf.py`` and
-``benchmarks/bench_textbook.py``; nothing
+Shared by ``tests/robust/test_textbook.py``, ``test_dk.py``, ``test_hinf.py``,
+``test_dgk_textbook.py``, ``benchmarks/bench_textbook.py`` and ``bench_mixed_musyn.py``; nothing
 in ``piezolib`` imports it.  Every builder is written from the textbook definition of the
 problem; every closed form is derived in the docstring or comment next to it.  Only
 ``numpy``, ``scipy`` and python-control are used here, so the references are independent
@@ -21,6 +21,18 @@ Sources of the published numbers:
 * [Y94] P. M. Young, "The rank one mixed mu problem and 'Kharitonov-type' analysis",
   Automatica 30(12), 1994: mu of a rank-one matrix in closed form (re-derived in
   :func:`rank_one_mu`).
+* [T80] A. Tannenbaum, "Feedback stabilization of linear dynamical plants with uncertainty
+  in the gain factor", Int. J. Control 32(1), 1980; [KT85] P. P. Khargonekar and
+  A. Tannenbaum, "Non-Euclidean metrics and the robust stabilization of systems with
+  parameter uncertainty", IEEE Trans. Automat. Contr. 30(10), 1985; [DFT92] J. C. Doyle,
+  B. A. Francis and A. R. Tannenbaum, *Feedback Control Theory*, Macmillan 1992, Ch. 11
+  (gain-margin optimisation by a conformal map and Nevanlinna-Pick interpolation): the
+  largest gain interval one controller can stabilise (re-derived in :func:`gain_margin`).
+* [WB92] B. Wie and D. S. Bernstein, "Benchmark problems for robust control design",
+  J. Guidance, Control, and Dynamics 15(5), 1992 (first posed at the 1990 ACC): two carts
+  joined by a spring of unknown stiffness 0.5 <= k <= 2, force on cart 1, position of
+  cart 2 measured; the benchmark's published designs stabilise the whole interval
+  (:func:`acc_benchmark`).
 """
 
 import warnings
@@ -40,6 +52,11 @@ __all__ = [
     "G0", "BLK_RP", "SP_GRID", "SP_MU_RP", "SP_MU_RS", "SP_MU_NP", "SP_DK_MU", "SP_DOPT_MU",
     "lundstrom_scaling",
     "pointwise_lft", "exact_response",
+    "GainMargin", "gain_margin", "gain_ratio_sup_real", "gain_ratio_sup_complex",
+    "gain_margin_controller", "complex_mu_bound", "ratio_of_radius", "radius_of_ratio",
+    "gain_T0", "gain_loop",
+    "AccBenchmark", "acc_benchmark", "ACC_K_RANGE", "spring_loop",
+    "real_stability_interval", "stable_on_grid",
 ]
 
 
@@ -342,6 +359,347 @@ def lundstrom_scaling():
     num = np.polymul(np.polymul(*D_OPT_NUM[:2]), D_OPT_NUM[2]) * 2
     den = np.polymul(*D_OPT_DEN)
     return ct.tf(num, den)
+
+
+# --- 6. Gain-margin optimisation: real versus complex gain [T80, KT85, DFT92 Ch. 11] -----
+
+class GainMargin(NamedTuple):
+    """Plant P0, gain interval [k_lo, k_hi] as k = k0 (1 + r delta), generalized plant P.
+
+    P has inputs [w_delta, n, u] and outputs [z_delta, e, y]; the structure is
+    ``blk_mixed`` (delta real) or ``blk_complex`` (delta a complex disc), the second
+    block a small 1 x 1 performance block (noise n -> plant output e).
+    """
+    P0: ct.StateSpace
+    P: ct.StateSpace
+    p: float
+    z: float
+    k_lo: float
+    k_hi: float
+    k0: float
+    r: float
+    eps: float
+    blk_mixed: list
+    blk_complex: list
+
+
+def gain_ratio_sup_real(p, z):
+    """sup k_hi / k_lo over all controllers for real gains: (z/p)^2 (z > p > 0).
+
+    One controller C stabilises k P0 for every k in [1, K] iff T = P0 C / (1 + P0 C) is
+    stable and 1 + (k - 1) T has no zero in the closed right half plane for those k
+    (1 + k P0 C = (1 + (k - 1) T) / (1 - T) and 1/(1 - T) = 1 + P0 C):  T must map the
+    right half plane into the slit plane C minus (-inf, -c], c = 1/(K - 1).  Interpolation
+    (internal stability): T(p) = 1, T(z) = 0.  w = sqrt(1 + T/c) maps the slit plane
+    onto the open right half plane, with w(z) = 1 and w(p) = sqrt(1 + 1/c) = sqrt(K),
+    and phi(w) = (w - 1)/(w + 1) maps that onto the unit disc, phi(w(z)) = 0.  By
+    Schwarz-Pick a function from the right half plane into the disc with a zero at z
+    satisfies |f(p)| <= |(p - z)/(p + z)|, so feasibility needs
+    (sqrt K - 1)/(sqrt K + 1) < (z - p)/(z + p), i.e. sqrt K < z/p; every K below is
+    reached by a rational T (:func:`gain_margin_controller`, order 3).  The bound is a
+    supremum, not a maximum: the constraint T(inf) = 0 (P0 strictly proper) makes the
+    controllers' bandwidth grow without bound as K -> (z/p)^2.  The gain interval may sit
+    anywhere on the positive axis: only the ratio counts (k -> k/k_lo rescales C).
+    """
+    return (z / p) ** 2
+
+
+def gain_ratio_sup_complex(p, z):
+    """sup k_hi / k_lo certified by a complex disc: z/p (z > p > 0).
+
+    The disc k = k0 (1 + r delta), |delta| <= 1 complex, is stabilised iff
+    ||r T0||_inf < 1 (T0 = k0 P0 C / (1 + k0 P0 C)), small-gain on a 1 x 1 block.  T0 is
+    stable with T0(p) = 1, T0(z) = 0, so by Nevanlinna-Pick min ||T0||_inf =
+    (z + p)/(z - p) (:func:`complex_mu_bound`): r < (z - p)/(z + p), and the real segment
+    inside that disc has ratio (1 + r)/(1 - r) < z/p (:func:`ratio_of_radius`).  The
+    complex bound is the square root of the real one.
+    """
+    return z / p
+
+
+def gain_margin_controller(p, z, a, ratio, alpha):
+    """A controller C (negative feedback) stabilising k P0 for every k in [1, ratio].
+
+    The construction behind :func:`gain_ratio_sup_real`, made rational: take
+    g(s) = q alpha (s - z)/((s + z)(s + alpha)), |q| < 1, which maps the closed right half
+    plane (and infinity) into the open unit disc; w = (1 + g)/(1 - g) then lies in the
+    open right half plane, w^2 off (-inf, 0], and T = c (w^2 - 1), c = 1/(ratio - 1),
+    off the slit (-inf, -c]: 1 + (k - 1) T has no zero in the closed right half plane for
+    1 <= k <= ratio.  g(z) = 0 gives T(z) = 0; T(p) = 1 needs w(p) = sqrt(ratio), i.e.
+    g(p) = (sqrt(ratio) - 1)/(sqrt(ratio) + 1), which fixes
+    q = g(p) (p + z)/(p - z) (p + alpha)/alpha; |q| < 1 holds for alpha large enough
+    exactly when sqrt(ratio) < z/p.  g(inf) = 0 makes T strictly proper, so C is proper.
+
+    With g = n_g/d_g, T = 4 c n_g d_g/(d_g - n_g)^2, and
+    C = T/(P0 (1 - T)) = 4 c q alpha (s + z)(s + alpha)(s + a)/R(s),
+    R = ((d_g - n_g)^2 - 4 c n_g d_g)/(s - p) (T(p) = 1 makes s - p a factor; the
+    factor s - z of n_g cancels P0's zero).  So the supremum (z/p)^2 is approached by
+    controllers of fixed order 3 whose bandwidth alpha grows without bound, not by
+    controllers of growing order.
+
+    Returns
+    -------
+    control.TransferFunction
+        C(s), for the loop 1 + k P0 C (python-control's and hinfsyn's u = K y: K = -C).
+    """
+    if not 1 < ratio < (z / p) ** 2:
+        raise ValueError(f"need 1 < ratio < (z/p)^2 = {(z / p) ** 2:g}, got {ratio!r}")
+    c = 1 / (ratio - 1)
+    g_p = (np.sqrt(ratio) - 1) / (np.sqrt(ratio) + 1)
+    q = g_p * (p + z) / (p - z) * (p + alpha) / alpha
+    if abs(q) >= 1:
+        raise ValueError(f"alpha = {alpha!r} is too small for ratio {ratio!r} (|q| = {abs(q):.3g})")
+    n_g = q * alpha * np.array([1.0, -z])
+    d_g = np.polymul([1.0, z], [1.0, alpha])
+    margin = np.polysub(d_g, n_g)
+    R, _ = np.polydiv(np.polysub(np.polymul(margin, margin), 4 * c * np.polymul(n_g, d_g)),
+                      [1.0, -p])
+    num = 4 * c * q * alpha * np.polymul(np.polymul([1.0, z], [1.0, alpha]), [1.0, a])
+    return ct.tf(num, R)
+
+
+def complex_mu_bound(p, z, r):
+    """Lower bound r (z + p)/(z - p) of complex mu for every stabilising controller.
+
+    mu of the closed loop over [delta (complex), performance] is at least mu of its
+    1 x 1 delta channel, r |T0|, whose peak is at least r (z + p)/(z - p)
+    (Nevanlinna-Pick, :func:`gain_ratio_sup_complex`).
+    """
+    return r * (z + p) / (z - p)
+
+
+def ratio_of_radius(rho):
+    """k_hi / k_lo = (1 + rho)/(1 - rho) of the segment k0 (1 + rho delta), delta in [-1, 1]."""
+    return (1 + rho) / (1 - rho)
+
+
+def radius_of_ratio(ratio):
+    """Relative radius r = (K - 1)/(K + 1) of an interval of ratio K = k_hi / k_lo."""
+    return (ratio - 1) / (ratio + 1)
+
+
+def gain_margin(p=1.0, z=2.0, a=1.0, k_lo=0.5, k_hi=1.5, eps=0.05):
+    """P0(s) = (s - z)/((s - p)(s + a)) with an uncertain gain k in [k_lo, k_hi].
+
+    The gain problem of [T80, KT85], [DFT92, Ch. 11]: one unstable pole p, one
+    non-minimum-phase zero z > p.  No controller stabilises a gain ratio
+    k_hi / k_lo >= (z/p)^2 (:func:`gain_ratio_sup_real`); treating the gain as a complex
+    disc certifies at most z/p (:func:`gain_ratio_sup_complex`).  The defaults (p = 1,
+    z = 2: bounds 4 and 2) ask for the ratio 3, between the two, so a real-mu design can
+    certify it and a complex one cannot (its mu is at least 1.5, :func:`complex_mu_bound`).
+    The stable pole -a only makes P0 strictly proper; it plays no role in either bound.
+
+    k = k0 (1 + r delta) with k0 = (k_lo + k_hi)/2 and r = (k_hi - k_lo)/(k_hi + k_lo)
+    acts at the plant input: u_p = k0 (u + w_delta), z_delta = r u, w_delta = delta
+    z_delta.  hinfsyn needs D12 of full column rank (z_delta = r u gives it) and D21 of
+    full row rank: the sensor noise eps n on y, seen by the performance output
+    e = eps y_p (y_p the noise-free plant output).  With u = K y and S = 1/(1 - k0 P0 K)
+    the closed loop is M = [[r T0, eps r K S], [eps k0 P0 S, eps^2 T0]] (T0 = k0 P0 K S):
+    both regularising channels carry eps (default 0.05), so mu is dominated by the gain
+    channel r T0 unless K S or P0 S is large.
+
+    Realisation of P0 (controller form): A = [[0, 1], [a p, p - a]], B = [0; 1],
+    C = [-z, 1]: C (sI - A)^-1 B = (s - z)/(s^2 + (a - p) s - a p).
+    """
+    if not z > p > 0 or a <= 0 or not 0 < k_lo < k_hi:
+        raise ValueError("need z > p > 0, a > 0 and 0 < k_lo < k_hi")
+    A = np.array([[0.0, 1.0], [a * p, p - a]])
+    B = np.array([[0.0], [1.0]])
+    C = np.array([[-z, 1.0]])
+    k0 = (k_lo + k_hi) / 2
+    r = (k_hi - k_lo) / (k_hi + k_lo)
+    zero = np.zeros((1, 2))
+    P = ct.ss(A, np.hstack([k0 * B, np.zeros((2, 1)), k0 * B]),
+              np.vstack([zero, eps * C, C]),
+              np.array([[0.0, 0.0, r], [0.0, 0.0, 0.0], [0.0, eps, 0.0]]),
+              inputs=["w_delta", "n", "u"], outputs=["z_delta", "e", "y"])
+    return GainMargin(ct.ss(A, B, C, 0), P, p, z, k_lo, k_hi, k0, r, eps,
+                      [(-1, 0), (1, 1)], [(1, 1), (1, 1)])
+
+
+def gain_T0(prob, K, omega):
+    """T0(j omega) = k0 P0 K / (1 - k0 P0 K) at the nominal gain (u = K y), shape (nf,).
+
+    The closed-loop map w_delta -> u of P is T0, so its uncertainty channel is r T0;
+    |T0| is the usual complementary sensitivity's (the sign is the feedback convention's),
+    T0(p) = -1 and T0(z) = 0 for every internally stabilising K.
+    """
+    L = prob.k0 * response(prob.P0, omega)[:, 0, 0] * response(K, omega)[:, 0, 0]
+    return L / (1 - L)
+
+
+def gain_loop(prob, K):
+    """(A0, b, c, k0) with A(k) = A0 + (k - k0) b c the closed loop of k P0 and u = K y.
+
+    Built from P0 and K alone (not from the LFT P): plant x' = A x + B k u, y = C x,
+    controller x_K' = A_K x_K + B_K y, u = C_K x_K + D_K y (python-control's and
+    hinfsyn's u = K y convention), so A(k) = [[A + k B D_K C, k B C_K], [B_K C, A_K]],
+    affine in k with the rank-one slope [B; 0] [D_K C, C_K].
+    """
+    G, K = prob.P0, ct.ss(K)
+    A, B, C = (np.asarray(m, float) for m in (G.A, G.B, G.C))
+    Ak, Bk, Ck, Dk = (np.asarray(m, float) for m in (K.A, K.B, K.C, K.D))
+    b = np.vstack([B, np.zeros((Ak.shape[0], 1))])
+    c = np.hstack([Dk @ C, Ck])
+    A_open = np.block([[A, np.zeros((A.shape[0], Ak.shape[0]))], [Bk @ C, Ak]])
+    return A_open + prob.k0 * b @ c, b, c, prob.k0
+
+
+# --- 7. ACC benchmark: two carts, uncertain spring [WB92] ---------------------------------
+
+ACC_K_RANGE = (0.5, 2.0)     # the spring stiffness interval of [WB92] (m1 = m2 = 1)
+
+
+class AccBenchmark(NamedTuple):
+    """Generalized plant P of the two-cart benchmark with the spring as an LFT block.
+
+    Inputs [w_delta, w, n, u], outputs [z_delta, z_x, z_u, y]; k = k0 + r delta.
+    """
+    P: ct.StateSpace
+    k0: float
+    r: float
+    m1: float
+    m2: float
+    blk_mixed: list
+    blk_complex: list
+
+
+def acc_benchmark(k_range=ACC_K_RANGE, m1=1.0, m2=1.0, w_x=0.1, rho=0.1, sigma=0.1):
+    """Two carts joined by a spring k in ``k_range`` [N/m], force u on cart 1, x2 measured.
+
+    [WB92], problem 1: m1 = m2 = 1 kg, 0.5 <= k <= 2 N/m, noncollocated (actuator on
+    cart 1, sensor on cart 2); the published answer is that controllers stabilising the
+    whole interval exist (every design in the benchmark's special issue does; they are
+    compared on effort and settling time, which [WB92] specifies for k = 1 only).  That
+    is a yes/no statement, so a test can check it exactly (:func:`spring_loop`,
+    :func:`real_stability_interval`) whatever digits a design has.
+
+    States [x1, x2, v1, v2]; m1 v1' = k (x2 - x1) + u, m2 v2' = -k (x2 - x1) + w.  The
+    spring k = k0 + r delta (k0 the midpoint, r the half width) is an LFT: z_delta =
+    x2 - x1, and the force r w_delta (w_delta = delta z_delta) pushes cart 1 and pulls
+    cart 2.  Performance block (last, 2 x 2): inputs [w (force on cart 2), n (sensor
+    noise)], outputs [z_x = w_x x2, z_u = rho u]; y = x2 + sigma n.  D12 = [0; 0; rho]
+    and D21 = [0, 0, sigma] have full rank; the rigid-body double integrator is
+    stabilisable from u and detectable from x2.  The weights (0.1) are small so that mu
+    is dominated by the spring: the test is about the stiffness range.  No controller's
+    interval reaches below k = 0: there cart 2 (a free double integrator) is no longer
+    driven by u, and its two poles at 0 stay in every closed loop.
+    """
+    k_lo, k_hi = k_range
+    k0, r = (k_lo + k_hi) / 2, (k_hi - k_lo) / 2
+    A = np.array([[0, 0, 1, 0], [0, 0, 0, 1],
+                  [-k0 / m1, k0 / m1, 0, 0], [k0 / m2, -k0 / m2, 0, 0]], float)
+    b_delta = np.array([[0], [0], [r / m1], [-r / m2]])
+    b_w = np.array([[0], [0], [0], [1 / m2]])
+    b_u = np.array([[0], [0], [1 / m1], [0]])
+    c_delta = np.array([[-1.0, 1, 0, 0]])
+    c_x2 = np.array([[0.0, 1, 0, 0]])
+    B = np.hstack([b_delta, b_w, np.zeros((4, 1)), b_u])
+    C = np.vstack([c_delta, w_x * c_x2, np.zeros((1, 4)), c_x2])
+    D = np.zeros((4, 4))
+    D[2, 3] = rho
+    D[3, 2] = sigma
+    P = ct.ss(A, B, C, D, inputs=["w_delta", "w", "n", "u"],
+              outputs=["z_delta", "z_x", "z_u", "y"])
+    return AccBenchmark(P, k0, r, m1, m2, [(-1, 0), (2, 2)], [(1, 1), (2, 2)])
+
+
+def spring_loop(prob, K):
+    """(A0, b, c, k0) with A(k) = A0 + (k - k0) b c the closed loop of the carts and u = K y.
+
+    Built from the physical model (not from P): the spring adds (k - k0) (x2 - x1) to
+    m1 v1' and subtracts it from m2 v2', a rank-one change b c of the state matrix with
+    b = [0, 0, 1/m1, -1/m2, 0...], c = [-1, 1, 0, 0, 0...]; y = x2 (noise-free),
+    u = C_K x_K + D_K y.
+    """
+    K = ct.ss(K)
+    m1, m2, k0 = prob.m1, prob.m2, prob.k0
+    A = np.array([[0, 0, 1, 0], [0, 0, 0, 1],
+                  [-k0 / m1, k0 / m1, 0, 0], [k0 / m2, -k0 / m2, 0, 0]], float)
+    B = np.array([[0], [0], [1 / m1], [0]])
+    C = np.array([[0.0, 1, 0, 0]])
+    Ak, Bk, Ck, Dk = (np.asarray(m, float) for m in (K.A, K.B, K.C, K.D))
+    A0 = np.block([[A + B @ Dk @ C, B @ Ck], [Bk @ C, Ak]])
+    nk = Ak.shape[0]
+    b = np.vstack([[[0], [0], [1 / m1], [-1 / m2]], np.zeros((nk, 1))])
+    c = np.hstack([[[-1.0, 1, 0, 0]], np.zeros((1, nk))])
+    return A0, b, c, k0
+
+
+# --- exact stability interval of a real parameter entering with rank one ------------------
+
+def real_stability_interval(A0, b, c, grid=None):
+    """Largest open interval (t_lo, t_hi) around 0 on which A0 + t b c is Hurwitz.
+
+    A0 (n x n) must be Hurwitz; b (n x 1), c (1 x n).  For s = j w not an eigenvalue of
+    A0, det(j w I - A0 - t b c) = det(j w I - A0) (1 - t g(j w)) with
+    g(s) = c (sI - A0)^-1 b (matrix determinant lemma), so an eigenvalue reaches the
+    imaginary axis exactly at t = 1/g(j w) for the w >= 0 where g(j w) is real and
+    nonzero; the eigenvalues move continuously in t, so the interval ends at the
+    crossing gains of smallest modulus on each side (+-inf if there is none).
+
+    The frequencies where g(j w) is real are the imaginary-axis zeros of the odd function
+    h(s) = g(s) - g(-s) = c (sI - A0)^-1 b + c (sI + A0)^-1 b, the finite eigenvalues of
+    its Rosenbrock pencil (backward stable, no grid).  A log grid of w (``grid``,
+    default 1e-4 ... 1e4 scaled by the spectral radius of A0) is scanned for sign
+    changes of Im g(j w) as a second route; the union of both candidate sets is used
+    (a spurious candidate can only shorten the interval, a missed one would lengthen
+    it).  The pencil's candidates are polished by Newton steps on Im g(j w), the grid's
+    brackets solved by Brent's method; a candidate counts where |Im g| <= 1e-9 |g|.
+    """
+    A0, b, c = (np.asarray(m, float) for m in (A0, b, c))
+    n = A0.shape[0]
+    if np.linalg.eigvals(A0).real.max() >= 0:
+        raise ValueError("A0 must be Hurwitz (the nominal closed loop is unstable)")
+    from scipy import linalg, optimize
+
+    def g(w):
+        return (c @ np.linalg.solve(1j * w * np.eye(n) - A0, b))[0, 0]
+
+    def dg(w):          # d g(j w) / d w = -j c (j w I - A0)^-2 b
+        x = np.linalg.solve(1j * w * np.eye(n) - A0, b)
+        return (-1j * c @ np.linalg.solve(1j * w * np.eye(n) - A0, x))[0, 0]
+
+    # Rosenbrock pencil of h: [[A_h - s I, B_h], [C_h, 0]]
+    A_h = linalg.block_diag(A0, -A0)
+    pencil_a = np.block([[A_h, np.vstack([b, b])], [np.hstack([c, c]), np.zeros((1, 1))]])
+    pencil_b = linalg.block_diag(np.eye(2 * n), np.zeros((1, 1)))
+    lam = linalg.eigvals(pencil_a, pencil_b)
+    lam = lam[np.isfinite(lam)]
+    scale = max(1.0, np.abs(np.linalg.eigvals(A0)).max())
+    cands = [abs(x.imag) for x in lam if abs(x.real) <= 1e-6 * max(scale, abs(x))]
+    if grid is None:
+        grid = scale * np.logspace(-4, 4, 20001)
+    crossings = [0.0]
+    for w in cands:
+        for _ in range(8):              # Newton on Im g(j w) = 0
+            step = g(w).imag / dg(w).imag if dg(w).imag != 0 else 0.0
+            if not np.isfinite(step):
+                break
+            w = abs(w - step)
+            if abs(step) <= 1e-15 * max(1.0, w):
+                break
+        crossings.append(w)
+    im = np.array([g(w).imag for w in grid])
+    for i in np.nonzero(np.sign(im[:-1]) * np.sign(im[1:]) < 0)[0]:
+        # a bracket keeps its root (Brent), whatever Newton did with the pencil's candidates
+        crossings.append(optimize.brentq(lambda w: g(w).imag, grid[i], grid[i + 1],
+                                         xtol=1e-15, rtol=4 * np.finfo(float).eps))
+    gains = []
+    for w in crossings:
+        value = g(w)
+        if abs(value.imag) <= 1e-9 * max(abs(value), 1e-300) and value.real != 0:
+            gains.append(1.0 / value.real)
+    gains = np.array(gains)
+    t_hi = gains[gains > 0].min() if np.any(gains > 0) else np.inf
+    t_lo = gains[gains < 0].max() if np.any(gains < 0) else -np.inf
+    return float(t_lo), float(t_hi)
+
+
+def stable_on_grid(A0, b, c, t):
+    """Largest real part of the eigenvalues of A0 + t b c for every t in ``t`` (root locus)."""
+    A0, b, c = (np.asarray(m, float) for m in (A0, b, c))
+    return np.array([np.linalg.eigvals(A0 + ti * b @ c).real.max() for ti in np.atleast_1d(t)])
 
 
 # --- independent evaluation of closed loops -----------------------------------------------
