@@ -23,10 +23,16 @@ value from the exact crossing gains (``textbook_problems.real_stability_interval
 piezolib code).  "settling" is the ACC benchmark's nominal (k = 1) settling time of x2
 after a unit impulse force on cart 2, to |x2| <= 0.1.  No timing is asserted.
 
+The last rows are the paper's problem (G's +-5 % coefficient box as six real blocks, the
+loop's delay, the paper's performance weights): the D,G-K steps of notebook 09 from our
+deployed 6th-order K (``problem.design.design_mixed_controller``) beside complex DK on the
+same plant (ours and dkpy's), each judged by mixed mu_RP on ``problem.design.MIXED_GRID``
+and by the exact parametric margin with the loop's delay (zero exclusion).
+
 Usage, from the repository root (``PYTHONPATH=.`` when this checkout is not the one the
 environment has installed)::
 
-    python benchmarks/bench_mixed_musyn.py              # about 30 s, plus dkpy
+    python benchmarks/bench_mixed_musyn.py              # about 4 minutes, plus dkpy
     python benchmarks/bench_mixed_musyn.py --no-dkpy
 """
 
@@ -103,9 +109,67 @@ def problems():
     ]
 
 
-def paper_problem_rows():
-    """Rows of the paper's problem (hook: the lead adds the paper's mixed-mu problem here)."""
-    return []
+def paper_plant(scale=1.0):
+    """The paper's problem with G's +-5 % coefficient box as six real blocks, the loop's delay
+    (one sample) and the performance weights times ``scale``: (P, mixed blk, complex blk)."""
+    from piezolib import paper
+    from piezolib.problem import genplant
+    G, _, H_e, H_y, _ = paper.problem()
+    P = genplant.parametric_design_plant(G, scale * H_e, scale * H_y, paper.UNCERTAINTY_SPREAD,
+                                        fs=paper.SAMPLING_FREQUENCY_HZ)
+    blk = list(genplant.parametric_block_structure(6))
+    return P, blk, [(1, 1)] * 6 + [blk[-1]]
+
+
+def paper_measure(method, K, seconds, own_mu):
+    """A row of the paper's problem: mixed mu_RP on the design grid, exact margin (delay 1)."""
+    from piezolib import paper, robust
+    from piezolib import uncertainty as unc
+    from piezolib.problem import design
+    P, blk, _ = paper_plant()
+    G = paper.plant()
+    poles = np.linalg.eigvals(robust.lower_lft(P, K).A)
+    if poles.real.max() >= 0:
+        return Row(PAPER, method, seconds, K.nstates, own_mu,
+                   f"unstable loop (pole at {poles.real.max():+.3g})", "-", "-", PAPER_KNOWN, None)
+    N = robust.lft_response(P, K, design.MIXED_GRID)
+    mu = float(robust.mussv(N, blk, lower=False).upper.max())
+    margin = unc.parametric_stability_margin(G, K, delay=1.5 / paper.SAMPLING_FREQUENCY_HZ).spread
+    return Row(PAPER, method, seconds, K.nstates, own_mu, mu, "-",
+               f"+-{100 * margin:.3g} % (delay 1)", PAPER_KNOWN, None)
+
+
+PAPER = "paper: G's +-5 % box, delay 1, paper's weights"
+PAPER_KNOWN = "goal: exact margin >= +-5 %"
+
+
+def paper_problem_rows(dkpy_design=None):
+    """The paper's problem (performance scale 1): D,G-K steps from our deployed K against
+    complex DK on the same plant (ours, and dkpy's when given)."""
+    from piezolib import paper
+    from piezolib.problem import design
+    from piezolib.robust.dk import musyn
+    from piezolib.workbook import pipeline
+    G, _, H_e, H_y, _ = paper.problem()
+    K0 = pipeline.study_controllers("reference").K_deployed
+    rows = [paper_measure("start: our deployed K (6)", K0, None, "-")]
+    t0 = time.perf_counter()
+    res = design.design_mixed_controller(G, H_e, H_y, K0, performance_scale=1.0)
+    rows.append(paper_measure("D,G-K steps from it", res.K, time.perf_counter() - t0,
+                              res.mu_peak))
+    P, _, blk_complex = paper_plant()
+    t0 = time.perf_counter()
+    dk = musyn(P, blk_complex, 1, 1, design.MIXED_GRID, d_order=2)
+    rows.append(paper_measure("musyn (complex)", dk.K, time.perf_counter() - t0, dk.mu_peak))
+    if dkpy_design is not None:
+        if "error" in dkpy_design:
+            rows.append(Row(PAPER, "dkpy DK (complex)", dkpy_design["seconds"], "-",
+                            dkpy_design["error"], "-", "-", "-", PAPER_KNOWN, None))
+        else:
+            K = ct.ss(*(np.array(m, float) for m in dkpy_design["K"]))
+            rows.append(paper_measure("dkpy DK (complex)", K, dkpy_design["seconds"],
+                                      dkpy_design["mu"]))
+    return rows
 
 
 # --- yardstick -------------------------------------------------------------------------------
@@ -197,6 +261,22 @@ def dkpy_designs():
         except Exception as exc:                  # report dkpy's failure in the table
             out[prob.name] = {"seconds": time.perf_counter() - t0,
                               "error": f"failed: {type(exc).__name__}"}
+    from piezolib.problem import design
+    P, _, blk_complex = paper_plant()
+    t0 = time.perf_counter()
+    try:
+        it = dkpy.DkIterFixedOrder(controller_synthesis=dkpy.HinfSynSlicot(),
+                                   structured_singular_value=dkpy.SsvLmiBisection(),
+                                   d_scale_fit=dkpy.DScaleFitSlicot(),
+                                   n_iterations=DKPY_ITERATIONS, fit_order=2)
+        K, _, mu, _, _ = it.synthesize(P, 1, 1, design.MIXED_GRID[::DKPY_STRIDE],
+                                       [list(b) for b in blk_complex])
+        K = ct.ss(K)
+        out[PAPER] = {"seconds": time.perf_counter() - t0, "mu": float(np.max(mu)),
+                      "K": [np.asarray(m, float).tolist() for m in (K.A, K.B, K.C, K.D)]}
+    except Exception as exc:                      # report dkpy's failure in the table
+        out[PAPER] = {"seconds": time.perf_counter() - t0,
+                      "error": f"failed: {type(exc).__name__}"}
     return out
 
 
@@ -276,7 +356,7 @@ def main():
         rows += our_rows(prob)
         rows.append(dkpy_row(prob, dk.get(prob.name)) if dk or not args.no_dkpy
                     else dkpy_row(prob, None))
-    rows += paper_problem_rows()
+    rows += paper_problem_rows(dk.get(PAPER))
     print_table(rows)
     print(f"\n{note}; dkpy: {DKPY_ITERATIONS} DK iterations, D-fit order 2, every "
           f"{DKPY_STRIDE}th grid point; ours: the full grid, d_order 2")

@@ -165,7 +165,7 @@ def _full_blocks(blk, p, q):
         if not b.is_full:
             raise ValueError("musyn supports complex full blocks only; got the "
                              f"{b.kind} repeated scalar block {b.blk_row} (real 1 x 1 "
-                             "scalars: mixed mu-synthesis is not available yet)")
+                             "scalars: use piezolib.robust.mixed_musyn for mixed mu-synthesis)")
     return blocks
 
 

@@ -163,8 +163,10 @@ def modal_controller(K, omega=None):
     """
     check_finite_lti("K", K)
     K = ct.ss(K)
-    if K.ninputs != 1 or K.noutputs != 1 or not K.isctime(strict=True):
-        raise ValueError("K must be a continuous-time SISO controller")
+    if K.ninputs != 1 or K.noutputs != 1:
+        raise ValueError(f"K must be SISO, got {K.noutputs} outputs x {K.ninputs} inputs")
+    if not K.isctime(strict=False):          # dt = None (a static gain) counts as continuous
+        raise ValueError(f"K must be a continuous-time controller, got dt = {K.dt}")
     poles = np.linalg.eigvals(K.A) if K.nstates else np.zeros(0)
     if np.any(poles.real >= 0):
         raise ValueError(f"K must be stable (poles {poles[poles.real >= 0]}); the modal "
@@ -187,6 +189,8 @@ def modal_controller(K, omega=None):
         omega = np.logspace(np.log10(mags.min()) - 2, np.log10(mags.max()) + 2, 400)
     omega = check_finite_array("omega", omega, ndim=1, min_length=4)
     target = np.ravel(K(1j * omega))
+    if not np.any(target):
+        raise ValueError("K is zero at every frequency: the modal form needs a nonzero controller")
     probe = ModalController(np.array(log_w), np.array(log_z), np.zeros(n), np.zeros(n),
                             log_wr, 0.0 if log_wr is not None else None, 0.0)
     _, J = probe.response(omega, jacobian=True)

@@ -146,10 +146,11 @@ def extra_mixed_tradeoff(scales, mu_upper, mu_lower, mu_bound, margins, spread, 
     ax_margin.set_xlabel("performance scale (× H_e, H_y)")
     ax_margin.set_ylabel("exact parametric margin [%]")
     ax_margin.set_title(f"(b) box kept stable; goal ±{100 * spread:g} %")
-    ax_margin.legend(fontsize=8)
     if chosen is not None:
         for ax in (ax_mu, ax_margin):
-            ax.axvline(chosen, color="0.4", lw=0.8, ls="--")
+            ax.axvline(chosen, color="0.4", lw=0.8, ls="--",
+                       label="chosen: deployed" if ax is ax_margin else None)
+    ax_margin.legend(fontsize=8)
     for ax in (ax_mu, ax_margin):
         ax.set_xscale("log")
     plotting.name_figure(fig, None, "mixed_tradeoff")
