@@ -21,7 +21,8 @@ import control as ct
 import numpy as np
 import pandas as pd
 
-from piezolib._checks import check_frequency_grid, check_model, check_positive, check_siso
+from piezolib._checks import (check_frequency_grid, check_integer, check_model, check_positive,
+                              check_siso)
 from piezolib.problem.genplant import (BLOCK_STRUCTURE, check_models, effective_delay,
                                        generalized_plant)
 from piezolib.robust.lft import lft_response
@@ -355,7 +356,18 @@ def box_stability_table(controllers, G, spread, fs, *, delays=MARGIN_DELAYS, lev
 
     spread = check_positive("spread", spread)
     fs = check_positive("fs", fs)
+    if isinstance(delays, str) or not hasattr(delays, "__len__") or len(delays) == 0:
+        raise TypeError(f"delays must be a non-empty sequence of integers, got {delays!r}")
+    delays = [check_integer("delays", d, minimum=0) for d in delays]
     grid = unc.model_set(G, spread, levels=levels)
+    if not isinstance(controllers, dict) or not controllers:
+        raise TypeError("controllers must be a non-empty dict {name: (K, Kd)}, got "
+                        f"{controllers!r}"[:200])
+    for name, pair in controllers.items():
+        if not (isinstance(pair, tuple) and len(pair) == 2):
+            raise TypeError(f"controllers[{name!r}] must be a pair (K, Kd), got {pair!r}"[:200])
+        check_model(f"controllers[{name!r}] K", pair[0])
+        check_model(f"controllers[{name!r}] Kd", pair[1])
     first = next((d for d in delays if d > 0), max(delays))
     data = {}
     for name, (K, Kd) in controllers.items():

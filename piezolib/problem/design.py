@@ -13,7 +13,7 @@ import control as ct
 import numpy as np
 
 from piezolib.problem import paper
-from piezolib._checks import check_integer, check_positive
+from piezolib._checks import check_integer, check_model, check_positive
 from piezolib.problem.genplant import (DESIGN_BLOCK_STRUCTURE, DESIGN_DELAY_SAMPLES,
                                        DESIGN_EFFORT_WEIGHT, DESIGN_PADE_ORDER, DESIGN_ROLLOFF,
                                        check_models, delay_aware_plant, design_plant,
@@ -227,8 +227,16 @@ def exact_margins_with_delay(G, K, fs, delays=MIXED_CHECK_DELAYS):
     """{d: exact parametric margin with the loop delay (d + 1/2) / fs} for each d in ``delays``."""
     from piezolib.uncertainty import parametric_stability_margin
 
-    return {int(d): parametric_stability_margin(G, K, delay=effective_delay(fs, d)).spread
+    delays = _check_delays(delays)
+    return {d: parametric_stability_margin(G, K, delay=effective_delay(fs, d)).spread
             for d in delays}
+
+
+def _check_delays(delays):
+    """A non-empty sequence of computation delays [samples] as ints >= 0."""
+    if isinstance(delays, str) or not hasattr(delays, "__len__") or len(delays) == 0:
+        raise TypeError(f"delays must be a non-empty sequence of integers, got {delays!r}")
+    return [check_integer("delays", d, minimum=0) for d in delays]
 
 
 def design_mixed_controller(G, H_e, H_y, K0, *, performance_scale=1.0, spread=None,
@@ -267,6 +275,8 @@ def design_mixed_controller(G, H_e, H_y, K0, *, performance_scale=1.0, spread=No
     MixedDesign
     """
     G, _, H_e, H_y = check_models(G, ct.tf([1.0], [1.0]), H_e, H_y)
+    check_model("K0", K0, proper=True)
+    dg_steps = check_integer("dg_steps", dg_steps, minimum=1)
     scale = check_positive("performance_scale", performance_scale)
     spread = paper.UNCERTAINTY_SPREAD if spread is None else check_positive("spread", spread)
     fs = check_positive("fs", fs)
@@ -294,6 +304,8 @@ def mixed_tradeoff(G, H_e, H_y, K0, scales=MIXED_PERFORMANCE_SCALES, n_jobs=1, *
     """
     from joblib import Parallel, delayed
 
+    if isinstance(scales, str) or not hasattr(scales, "__len__") or len(scales) == 0:
+        raise TypeError(f"scales must be a non-empty sequence of positive numbers, got {scales!r}")
     scales = [check_positive("scales", s) for s in scales]
     n_jobs = check_integer("n_jobs", n_jobs, minimum=1)
     return Parallel(n_jobs=n_jobs)(
@@ -309,6 +321,9 @@ def choose_mixed_design(designs, spread=None, design_delay=DESIGN_DELAY_SAMPLES)
     design qualifies.
     """
     spread = paper.UNCERTAINTY_SPREAD if spread is None else check_positive("spread", spread)
+    if isinstance(designs, str) or not hasattr(designs, "__iter__") \
+            or not all(isinstance(d, MixedDesign) for d in designs):
+        raise TypeError(f"designs must be a sequence of MixedDesign, got {designs!r}"[:200])
     ok = [d for d in designs
           if d.margins.get(design_delay, 0.0) >= spread and min(d.margins.values()) > 0]
     return max(ok, key=lambda d: d.performance_scale, default=None)
