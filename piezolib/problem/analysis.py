@@ -21,8 +21,8 @@ import control as ct
 import numpy as np
 import pandas as pd
 
-from piezolib._checks import (check_frequency_grid, check_integer, check_model, check_positive,
-                              check_siso)
+from piezolib._checks import (check_finite_lti, check_frequency_grid, check_integer, check_model,
+                              check_positive, check_siso)
 from piezolib.problem.genplant import (BLOCK_STRUCTURE, check_models, effective_delay,
                                        generalized_plant)
 from piezolib.robust.lft import lft_response
@@ -367,7 +367,10 @@ def box_stability_table(controllers, G, spread, fs, *, delays=MARGIN_DELAYS, lev
         if not (isinstance(pair, tuple) and len(pair) == 2):
             raise TypeError(f"controllers[{name!r}] must be a pair (K, Kd), got {pair!r}"[:200])
         check_model(f"controllers[{name!r}] K", pair[0])
-        check_model(f"controllers[{name!r}] Kd", pair[1])
+        check_finite_lti(f"controllers[{name!r}] Kd", pair[1])
+        if not pair[1].isdtime(strict=True):
+            raise ValueError(f"controllers[{name!r}] Kd must be the discrete-time controller "
+                             "the loop runs (dt = 1 / fs)")
     first = next((d for d in delays if d > 0), max(delays))
     data = {}
     for name, (K, Kd) in controllers.items():
