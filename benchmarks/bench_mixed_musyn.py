@@ -240,43 +240,32 @@ def our_rows(prob):
 
 # --- dkpy --------------------------------------------------------------------------------------
 
-def dkpy_designs():
-    """problem name -> {'seconds', 'mu', 'K': [A, B, C, D]} or {'error'}, computed by dkpy."""
+def dkpy_design(P, grid, blk_complex):
+    """{'seconds', 'mu', 'K': [A, B, C, D]} or {'seconds', 'error'}: dkpy's DK on P."""
     import dkpy
-    out = {}
-    for prob in problems():
-        t0 = time.perf_counter()
-        try:
-            it = dkpy.DkIterFixedOrder(controller_synthesis=dkpy.HinfSynSlicot(),
-                                       structured_singular_value=dkpy.SsvLmiBisection(),
-                                       d_scale_fit=dkpy.DScaleFitSlicot(),
-                                       n_iterations=DKPY_ITERATIONS, fit_order=2)
-            K, _, mu, _, _ = it.synthesize(prob.P, 1, 1, prob.grid[::DKPY_STRIDE],
-                                           [list(b) for b in prob.blk_complex])
-            if K is None:
-                raise RuntimeError("no controller")
-            K = ct.ss(K)
-            out[prob.name] = {"seconds": time.perf_counter() - t0, "mu": float(np.max(mu)),
-                              "K": [np.asarray(m, float).tolist() for m in (K.A, K.B, K.C, K.D)]}
-        except Exception as exc:                  # report dkpy's failure in the table
-            out[prob.name] = {"seconds": time.perf_counter() - t0,
-                              "error": f"failed: {type(exc).__name__}"}
-    from piezolib.problem import design
-    P, _, blk_complex = paper_plant()
     t0 = time.perf_counter()
     try:
         it = dkpy.DkIterFixedOrder(controller_synthesis=dkpy.HinfSynSlicot(),
                                    structured_singular_value=dkpy.SsvLmiBisection(),
                                    d_scale_fit=dkpy.DScaleFitSlicot(),
                                    n_iterations=DKPY_ITERATIONS, fit_order=2)
-        K, _, mu, _, _ = it.synthesize(P, 1, 1, design.MIXED_GRID[::DKPY_STRIDE],
+        K, _, mu, _, _ = it.synthesize(P, 1, 1, grid[::DKPY_STRIDE],
                                        [list(b) for b in blk_complex])
+        if K is None:
+            raise RuntimeError("no controller")
         K = ct.ss(K)
-        out[PAPER] = {"seconds": time.perf_counter() - t0, "mu": float(np.max(mu)),
-                      "K": [np.asarray(m, float).tolist() for m in (K.A, K.B, K.C, K.D)]}
+        return {"seconds": time.perf_counter() - t0, "mu": float(np.max(mu)),
+                "K": [np.asarray(m, float).tolist() for m in (K.A, K.B, K.C, K.D)]}
     except Exception as exc:                      # report dkpy's failure in the table
-        out[PAPER] = {"seconds": time.perf_counter() - t0,
-                      "error": f"failed: {type(exc).__name__}"}
+        return {"seconds": time.perf_counter() - t0, "error": f"failed: {type(exc).__name__}"}
+
+
+def dkpy_designs():
+    """problem name -> :func:`dkpy_design` of it, the paper's problem under ``PAPER``."""
+    from piezolib.problem import design
+    out = {prob.name: dkpy_design(prob.P, prob.grid, prob.blk_complex) for prob in problems()}
+    P, _, blk_complex = paper_plant()
+    out[PAPER] = dkpy_design(P, design.MIXED_GRID, blk_complex)
     return out
 
 
