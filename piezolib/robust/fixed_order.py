@@ -42,7 +42,7 @@ __all__ = ["ModalController", "FixedOrderResult", "modal_controller", "fixed_ord
 
 logger = logging.getLogger(__name__)
 
-_HISTORY_COLUMNS = ("iteration", "mu_upper", "fixed_d_peak", "omega_peak", "grid_size",
+_HISTORY_COLUMNS = ("iteration", "mu_upper", "mu_lower", "fixed_d_peak", "omega_peak", "grid_size",
                     "trust_radius", "accepted", "seconds")
 
 
@@ -232,7 +232,9 @@ class FixedOrderResult:
         Poles of F_l(P, K) [rad/s]; all in the open left half-plane.
     records : tuple of dict
         One dict per D-K step (keys ``iteration``, ``mu_upper`` (best so
-        far), ``fixed_d_peak`` (K-step optimum with the scalings fixed),
+        far; with real blocks also bounded between the grid points), ``mu_lower``
+        (peak of the lower bound for the best controller so far), ``fixed_d_peak``
+        (K-step optimum with the scalings fixed),
         ``omega_peak``, ``grid_size``, ``trust_radius``, ``accepted``,
         ``seconds``); :attr:`history` is the same as a DataFrame.
     stop_reason : str
@@ -422,7 +424,7 @@ def _refine(omega, fine, upper):
 def _iterate(P, blk, modal, omega, ws, opts, rows, bar):
     """D-K steps on one grid (advancing ``bar`` per step); return (modal, stop reason)."""
     loop = _Loop(P, omega, ws)
-    mu_res = mussv(loop.M(modal.response(omega)), blk, omega, lower=False)
+    mu_res = mussv(loop.M(modal.response(omega)), blk, omega)
     # with real blocks mu has narrow peaks that a K-step would push between the
     # grid points: the K-step and the acceptance also bound mu on a grid four
     # times as dense, with the scalings interpolated (a valid upper bound there)
@@ -457,13 +459,14 @@ def _iterate(P, blk, modal, omega, ws, opts, rows, bar):
         cand = ModalController.from_theta(theta, modal.order)
         accepted, improvement = False, 0.0
         if np.all(loop.closed_loop_poles(cand).real < 0):
-            cand_mu = mussv(loop.M(cand.response(omega)), blk, omega, lower=False)
+            cand_mu = mussv(loop.M(cand.response(omega)), blk, omega)
             peak = certified(cand, cand_mu)
             if peak < best:
                 accepted, improvement = True, (best - peak) / best
                 modal, mu_res, best = cand, cand_mu, peak
         k = int(np.argmax(mu_res.upper))
-        rows.append({"iteration": len(rows), "mu_upper": best, "fixed_d_peak": fixed_peak,
+        rows.append({"iteration": len(rows), "mu_upper": best,
+                     "mu_lower": float(mu_res.lower.max()), "fixed_d_peak": fixed_peak,
                      "omega_peak": float(omega[k]), "grid_size": omega.size,
                      "trust_radius": radius, "accepted": accepted,
                      "seconds": time.perf_counter() - t_it})

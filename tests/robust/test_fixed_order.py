@@ -183,5 +183,8 @@ def test_fixed_order_with_a_real_block_lowers_mixed_mu_below_the_complex_design(
     assert real_peak(mixed.K, fine) < real_peak(result.K, fine)
     assert np.all(ct.poles(robust.lower_lft(P, mixed.K)).real < 0)
     assert mixed.mu.g is not None                                  # mixed bounds reported
+    # each step reports both bounds of the best controller so far
+    hist = mixed.history
+    assert np.all(hist["mu_lower"] > 0) and np.all(hist["mu_lower"] <= hist["mu_upper"] * (1 + 1e-9))
     assert np.all(mixed.mu.lower <= mixed.mu.upper * (1 + 1e-9))
 
