@@ -34,7 +34,8 @@ from piezolib.robust.margins import delay_tolerance, loop_margins
 
 __all__ = ["RobustnessAnalysis", "analyze", "table3", "table3_peaks", "robust_performance_peak",
            "ANALYSIS_GRID",
-           "margins_table", "achievable_mu_lower_bound", "MARGIN_DELAYS", "box_stability_table"]
+           "margins_table", "achievable_mu_lower_bound", "MARGIN_DELAYS", "box_stability_table",
+           "exact_margins_with_delay"]
 
 #: Computation delays [samples] of the sampled-loop check in :func:`margins_table`.
 MARGIN_DELAYS = (0, 1, 2, 3)
@@ -356,9 +357,7 @@ def box_stability_table(controllers, G, spread, fs, *, delays=MARGIN_DELAYS, lev
 
     spread = check_positive("spread", spread)
     fs = check_positive("fs", fs)
-    if isinstance(delays, str) or not hasattr(delays, "__len__") or len(delays) == 0:
-        raise TypeError(f"delays must be a non-empty sequence of integers, got {delays!r}")
-    delays = [check_integer("delays", d, minimum=0) for d in delays]
+    delays = _check_delays(delays)
     grid = unc.model_set(G, spread, levels=levels)
     if not isinstance(controllers, dict) or not controllers:
         raise TypeError("controllers must be a non-empty dict {name: (K, Kd)}, got "
@@ -374,9 +373,8 @@ def box_stability_table(controllers, G, spread, fs, *, delays=MARGIN_DELAYS, lev
     first = next((d for d in delays if d > 0), max(delays))
     data = {}
     for name, (K, Kd) in controllers.items():
-        col = {f"exact margin, delay {d} [%]":
-               100 * unc.parametric_stability_margin(G, K, delay=effective_delay(fs, d)).spread
-               for d in delays}
+        col = {f"exact margin, delay {d} [%]": 100 * m
+               for d, m in exact_margins_with_delay(G, K, fs, delays).items()}
         col[f"unstable of {grid.size}, continuous, no delay"] = int(
             unc.unstable_members(grid, K).size)
         for d in delays:
@@ -386,3 +384,38 @@ def box_stability_table(controllers, G, spread, fs, *, delays=MARGIN_DELAYS, lev
             G, Kd, 1.0 / fs, first)
         data[name] = col
     return pd.DataFrame(data)
+
+
+def exact_margins_with_delay(G, K, fs, delays=MARGIN_DELAYS):
+    """{d: exact parametric margin [-] of the loop with the delay (d + 1/2) / fs} for each d.
+
+    Zero exclusion on G's coefficient box with the effective delay of a sampled
+    loop with d samples of computation delay
+    (:func:`piezolib.uncertainty.parametric_stability_margin`); 0 where the
+    nominal loop is unstable.
+
+    Parameters
+    ----------
+    G, K : control.LTI
+        Plant u_c [V] -> v_y [V] and continuous controller v_e [V] -> u_b [V].
+    fs : float
+        Loop rate [Hz].
+    delays : sequence of int
+        Computation delays [samples].
+
+    Returns
+    -------
+    dict
+    """
+    from piezolib.uncertainty import parametric_stability_margin
+
+    fs = check_positive("fs", fs)
+    return {d: parametric_stability_margin(G, K, delay=effective_delay(fs, d)).spread
+            for d in _check_delays(delays)}
+
+
+def _check_delays(delays):
+    """A non-empty sequence of computation delays [samples] as ints >= 0."""
+    if isinstance(delays, str) or not hasattr(delays, "__len__") or len(delays) == 0:
+        raise TypeError(f"delays must be a non-empty sequence of integers, got {delays!r}")
+    return [check_integer("delays", d, minimum=0) for d in delays]

@@ -14,11 +14,11 @@ import numpy as np
 
 from piezolib.problem import paper
 from piezolib._checks import check_integer, check_model, check_positive
+from piezolib.problem.analysis import exact_margins_with_delay
 from piezolib.problem.genplant import (DESIGN_BLOCK_STRUCTURE, DESIGN_DELAY_SAMPLES,
                                        DESIGN_EFFORT_WEIGHT, DESIGN_PADE_ORDER, DESIGN_ROLLOFF,
                                        check_models, delay_aware_plant, design_plant,
-                                       effective_delay, parametric_block_structure,
-                                       parametric_design_plant)
+                                       parametric_block_structure, parametric_design_plant)
 from piezolib.robust.discrete import DiscreteController, discretize
 from piezolib.robust.dk import MusynResult, musyn
 from piezolib.robust.fixed_order import FixedOrderResult, fixed_order_musyn
@@ -26,8 +26,8 @@ from piezolib.robust.lti import loop_functions, with_signals
 from piezolib.robust.reduction import ReducedController, reduce_controller
 
 __all__ = ["ControllerDesign", "design_controller", "DESIGN_GRID", "DESIGN_D_ORDER",
-           "MIXED_GRID", "MIXED_PERFORMANCE_SCALES", "MIXED_CHECK_DELAYS", "MixedDesign",
-           "exact_margins_with_delay", "design_mixed_controller", "mixed_tradeoff",
+           "MIXED_GRID", "MIXED_PERFORMANCE_SCALES", "MixedDesign", "design_mixed_controller",
+           "mixed_tradeoff", "tradeoff_table",
            "choose_mixed_design"]
 
 logger = logging.getLogger(__name__)
@@ -186,8 +186,6 @@ def design_controller(G, H_m, H_e, H_y, *, order=6, d_order=DESIGN_D_ORDER, max_
 MIXED_GRID = np.union1d(np.logspace(-2, 7, 60), np.logspace(3, 5, 160))
 #: Performance levels of the trade-off designs: H_e and H_y times this factor.
 MIXED_PERFORMANCE_SCALES = (0.1, 0.2, 0.3, 0.5, 0.7, 1.0, 1.2, 1.5, 2.0)
-#: Computation delays [samples] every mixed design is checked with.
-MIXED_CHECK_DELAYS = (0, 1, 2, 3)
 
 
 @dataclass(frozen=True)
@@ -208,7 +206,10 @@ class MixedDesign:
         The same for the starting controller.
     margins : dict
         {delay in samples: exact parametric margin of the continuous loop with the
-        effective delay (d + 1/2) / fs}; 0 when the nominal loop is unstable.
+        effective delay (d + 1/2) / fs} for the delays of
+        :data:`~piezolib.problem.analysis.MARGIN_DELAYS`
+        (:func:`~piezolib.problem.analysis.exact_margins_with_delay`); 0 when the
+        nominal loop is unstable.
     steps : FixedOrderResult
         The D,G-K steps.
     """
@@ -221,22 +222,6 @@ class MixedDesign:
     start_mu_peak: float
     margins: dict
     steps: FixedOrderResult = field(repr=False)
-
-
-def exact_margins_with_delay(G, K, fs, delays=MIXED_CHECK_DELAYS):
-    """{d: exact parametric margin with the loop delay (d + 1/2) / fs} for each d in ``delays``."""
-    from piezolib.uncertainty import parametric_stability_margin
-
-    delays = _check_delays(delays)
-    return {d: parametric_stability_margin(G, K, delay=effective_delay(fs, d)).spread
-            for d in delays}
-
-
-def _check_delays(delays):
-    """A non-empty sequence of computation delays [samples] as ints >= 0."""
-    if isinstance(delays, str) or not hasattr(delays, "__len__") or len(delays) == 0:
-        raise TypeError(f"delays must be a non-empty sequence of integers, got {delays!r}")
-    return [check_integer("delays", d, minimum=0) for d in delays]
 
 
 def design_mixed_controller(G, H_e, H_y, K0, *, performance_scale=1.0, spread=None,
@@ -321,9 +306,59 @@ def choose_mixed_design(designs, spread=None, design_delay=DESIGN_DELAY_SAMPLES)
     design qualifies.
     """
     spread = paper.UNCERTAINTY_SPREAD if spread is None else check_positive("spread", spread)
-    if isinstance(designs, str) or not hasattr(designs, "__iter__") \
-            or not all(isinstance(d, MixedDesign) for d in designs):
-        raise TypeError(f"designs must be a sequence of MixedDesign, got {designs!r}"[:200])
+    designs = _check_designs(designs)
     ok = [d for d in designs
           if d.margins.get(design_delay, 0.0) >= spread and min(d.margins.values()) > 0]
     return max(ok, key=lambda d: d.performance_scale, default=None)
+
+
+def tradeoff_table(designs, G, H_e, H_y, fs=paper.SAMPLING_FREQUENCY_HZ):
+    """The trade-off of the mixed designs, recomputed from their controllers where it can be.
+
+    One row per design (index: performance scale): mu_RP upper and lower bound
+    and the start's mu_RP as the design reported them; the bound no
+    controller can cross at that scale (the H-infinity optimum of the
+    performance block, :func:`piezolib.robust.achievable.performance_lower_bound`);
+    the exact margins [%] with the delays of
+    :data:`~piezolib.problem.analysis.MARGIN_DELAYS`, recomputed from K.
+
+    Parameters
+    ----------
+    designs : sequence of MixedDesign
+    G, H_e, H_y : control.LTI
+        The problem the designs were made for.
+    fs : float
+        Loop rate [Hz].
+
+    Returns
+    -------
+    pandas.DataFrame
+    """
+    import pandas as pd
+
+    from piezolib.robust.achievable import performance_lower_bound
+
+    designs = _check_designs(designs)
+    G, _, H_e, H_y = check_models(G, ct.tf([1.0], [1.0]), H_e, H_y)
+    fs = check_positive("fs", fs)
+    rows = []
+    for d in designs:
+        P = parametric_design_plant(G, d.performance_scale * H_e, d.performance_scale * H_y,
+                                    d.spread, fs=fs)
+        bound = performance_lower_bound(P, 1, 1, ["y1", "y2", "y_u"], ["v_r"])
+        rows.append({"performance scale": d.performance_scale, "mu_RP upper": d.mu_peak,
+                     "mu_RP lower": d.mu_lower_peak, "no controller below": bound.value,
+                     "start: our deployed K": d.start_mu_peak,
+                     **{f"exact margin, delay {k} [%]": 100 * m
+                        for k, m in exact_margins_with_delay(G, d.K, fs).items()}})
+    return pd.DataFrame(rows).set_index("performance scale")
+
+
+def _check_designs(designs):
+    """``designs`` as a list, checked to hold MixedDesign objects only."""
+    if isinstance(designs, str) or not hasattr(designs, "__iter__"):
+        raise TypeError(f"designs must be a sequence of MixedDesign, got {designs!r}"[:200])
+    designs = list(designs)
+    if not all(isinstance(d, MixedDesign) for d in designs):
+        raise TypeError(f"designs must be a sequence of MixedDesign, got {designs!r}"[:200])
+    return designs

@@ -440,9 +440,15 @@ def delayed_closed_loop_response(K, G, H_m, H_e, H_y, omega, *, fs, delay_sample
         extra = np.zeros((omega.size, 1, 3), complex)
         extra[:, 0, 2] = w_u
         R = np.concatenate([R[:, :3], extra, R[:, 3:]], axis=1)
+    return _closed_loop_response(R, K, omega)
+
+
+def _closed_loop_response(R, K, omega):
+    """F_l(R, K) frequency by frequency: R (nf, p, q) with the measurement last among the
+    outputs and the control last among the inputs, K SISO."""
     k = np.ravel(K(1j * omega))
-    f = k / (1 - R[:, -1, 2] * k)
-    return R[:, :-1, :2] + f[:, None, None] * R[:, :-1, 2][:, :, None] * R[:, -1, :2][:, None, :]
+    f = k / (1 - R[:, -1, -1] * k)
+    return R[:, :-1, :-1] + f[:, None, None] * R[:, :-1, -1][:, :, None] * R[:, -1, :-1][:, None, :]
 
 
 
@@ -553,6 +559,4 @@ def delayed_parametric_loop_response(K, G, H_e, H_y, spread, omega, *, fs, delay
     y_u = P.output_labels.index("y_u")
     rows = [i for i in range(P.noutputs) if i != y_u]
     R[:, rows, -1] *= (np.exp(-1j * omega * tau) / pade)[:, None]
-    k = np.ravel(K(1j * omega))
-    f = k / (1 - R[:, -1, -1] * k)
-    return R[:, :-1, :-1] + f[:, None, None] * R[:, :-1, -1][:, :, None] * R[:, -1, :-1][:, None, :]
+    return _closed_loop_response(R, K, omega)

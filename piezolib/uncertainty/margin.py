@@ -283,15 +283,16 @@ def _gauge(polys, w, tau=0.0):
     if tau > 0:
         h = _delayed_h(polys, w, tau)
         R, I = rectangle_half_widths(polys.a[:-1], w)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            f_re = np.where(R > 0, np.abs(h.real) / R, np.where(h.real != 0, np.inf, 0.0))
-            f_im = np.where(I > 0, np.abs(h.imag) / I, np.where(h.imag != 0, np.inf, 0.0))
-        return np.maximum(f_re, f_im)
+        return np.maximum(_ratio(h.real, R), _ratio(h.imag, I))
     U, V, rho, iota = (npoly.polyval(w, p) for p in _gauge_polynomials(polys))
+    return np.maximum(_ratio(U, rho), _ratio(V, iota))
+
+
+def _ratio(value, width):
+    """|value| / width, inf where the width is 0 and the value not, 0 where both are."""
     with np.errstate(divide="ignore", invalid="ignore"):
-        f_re = np.where(rho > 0, np.abs(U) / rho, np.where(np.abs(U) > 0, np.inf, 0.0))
-        f_im = np.where(iota > 0, np.abs(V) / iota, np.where(np.abs(V) > 0, np.inf, 0.0))
-    return np.maximum(f_re, f_im)
+        return np.where(width > 0, np.abs(value) / width,
+                        np.where(np.abs(value) > 0, np.inf, 0.0))
 
 
 def _critical_frequencies(polys):

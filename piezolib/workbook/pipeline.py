@@ -36,7 +36,8 @@ import numpy as np
 
 from piezolib._checks import check_path, check_type
 from piezolib.problem import paper
-from piezolib.problem.design import choose_mixed_design, design_controller, mixed_tradeoff
+from piezolib.problem.design import (MixedDesign, choose_mixed_design, design_controller,
+                                     mixed_tradeoff)
 from piezolib.problem.hysteresis_fits import write_workbook_dahl
 from piezolib.files import CONTENT_KEY, atomic_write, seal, seal_problem
 from piezolib.robust import export, frequency_grid
@@ -575,35 +576,43 @@ def read_controllers(path):
         fails its checksum (edited or corrupted).
     """
     path = check_path("path", path)
+    doc = _read_artifact(path, "controller")
     try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-        if not isinstance(doc, dict):
-            raise TypeError(f"a JSON {type(doc).__name__}, not an object")
-        if doc.get("format") != ARTIFACT_FORMAT:
-            raise ArtifactError(f"{path}: format {doc.get('format')!r}, expected "
-                                f"{ARTIFACT_FORMAT}")
-        _check_seal(doc, path)
         systems = {name: _ss_from_dict(doc["controllers"][name]) for name in _CONTROLLERS}
         return StudyControllers(study=doc["study"], digest=doc["digest"], source=str(path),
                                 mu={k: float(v) for k, v in doc["mu"].items()}, **systems)
-    except ArtifactError:
-        raise
     except (KeyError, TypeError, ValueError) as exc:
         raise ArtifactError(f"{path}: not a controller artifact ({exc})") from None
 
 
-def _check_seal(doc, path):
-    """Raise :class:`ArtifactError` when a controller file's content fails its checksum."""
+def _read_artifact(path, kind):
+    """The JSON object of a sealed artifact file of this format, its checksum checked.
+
+    Raises
+    ------
+    ArtifactError
+        Naming the file and the ``kind`` of artifact expected.
+    """
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except ValueError as exc:
+        raise ArtifactError(f"{path}: not a {kind} artifact ({exc})") from None
+    if not isinstance(doc, dict):
+        raise ArtifactError(f"{path}: not a {kind} artifact (a JSON {type(doc).__name__}, "
+                            "not an object)")
+    if doc.get("format") != ARTIFACT_FORMAT:
+        raise ArtifactError(f"{path}: format {doc.get('format')!r}, expected {ARTIFACT_FORMAT}")
     problem = seal_problem(doc)
     if problem is None:
-        return
+        return doc
     name = doc.get("study") if isinstance(doc.get("study"), str) else "<study>"
-    is_reference = Path(path).resolve() == reference_design_path().resolve()
-    regenerate = (f"`{_WRITE_REFERENCE}`" if is_reference
+    committed = Path(path).resolve() in (reference_design_path().resolve(),
+                                         mixed_design_path().resolve())
+    regenerate = (f"`{_WRITE_REFERENCE}`" if committed
                   else f"`python -m piezolib reproduce --study {name}`")
     if CONTENT_KEY in doc:
         raise ArtifactError(f"{path}: {problem}; write it anew with {regenerate}")
-    raise ArtifactError(f"{path}: not a controller artifact written by this version of "
+    raise ArtifactError(f"{path}: not a {kind} artifact written by this version of "
                         f"piezolib ({problem}); write it anew with {regenerate}")
 
 
@@ -637,27 +646,22 @@ class MixedDesigns:
     Attributes
     ----------
     study : str
-    records : tuple of dict
-        One per design, in the order of the performance scales: ``scale``,
-        ``spread``, ``mu``, ``mu_lower``, ``start_mu`` (as the design
-        reported them), ``margins`` ({delay [samples]: exact margin}) and ``K``
-        (control.StateSpace, v_e [V] -> u_b [V]).
-    chosen : float or None
-        Performance scale of the design to deploy
-        (:func:`~piezolib.problem.design.choose_mixed_design`).
+    designs : tuple of MixedDesign
+        In the order of the performance scales (``steps`` is None when read
+        from a file: only the results are stored).
     source : str
         Where the designs came from.
     """
 
     study: str
-    records: tuple
-    chosen: float | None
+    designs: tuple
     source: str
 
     @property
-    def K(self):
-        """The chosen controller (None when no design is certified for the box)."""
-        return next((r["K"] for r in self.records if r["scale"] == self.chosen), None)
+    def chosen(self):
+        """The design to deploy (:func:`~piezolib.problem.design.choose_mixed_design`),
+        or None when no design is certified for the box."""
+        return choose_mixed_design(self.designs)
 
 
 def mixed_design_path():
@@ -677,13 +681,11 @@ def derive_mixed_designs(study, controllers=None, n_jobs=2):
     found = study_controllers(study) if controllers is None else _check_controllers(controllers)
     G, _, H_e, H_y, _ = study_problem(study)
     designs = mixed_tradeoff(G, H_e, H_y, found.K_deployed, fs=study.loop.fs_Hz, n_jobs=n_jobs)
-    chosen = choose_mixed_design(designs)
-    records = tuple({"scale": d.performance_scale, "spread": d.spread, "mu": d.mu_peak,
-                     "mu_lower": d.mu_lower_peak, "start_mu": d.start_mu_peak,
-                     "margins": dict(d.margins), "K": d.K} for d in designs)
-    return MixedDesigns(study=study.name, records=records,
-                        chosen=None if chosen is None else chosen.performance_scale,
-                        source="designed now")
+    return MixedDesigns(study=study.name, designs=tuple(designs), source="designed now")
+
+
+#: The results of a MixedDesign that a file of :func:`write_mixed_designs` holds besides K.
+_MIXED_FIELDS = ("performance_scale", "spread", "mu_peak", "mu_lower_peak", "start_mu_peak")
 
 
 def write_mixed_designs(designs, path, study):
@@ -692,10 +694,9 @@ def write_mixed_designs(designs, path, study):
     path = check_path("path", path)
     study = studies.load(study)
     doc = {"format": ARTIFACT_FORMAT, "study": study.name, "library": library_fingerprint(),
-           "chosen": designs.chosen,
-           "designs": [{**{k: v for k, v in r.items() if k != "K"},
-                        "margins": {str(d): m for d, m in r["margins"].items()},
-                        "K": _ss_to_dict(r["K"])} for r in designs.records]}
+           "designs": [{**{f: getattr(d, f) for f in _MIXED_FIELDS},
+                        "margins": {str(k): m for k, m in d.margins.items()},
+                        "K": _ss_to_dict(d.K)} for d in designs.designs]}
     path.parent.mkdir(parents=True, exist_ok=True)
     return atomic_write(path, json.dumps(seal(doc), indent=1) + "\n")
 
@@ -709,20 +710,15 @@ def read_mixed_designs(path):
         Naming the file: not such a file, or its content fails its checksum.
     """
     path = check_path("path", path)
+    doc = _read_artifact(path, "mixed-design")
     try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-        if not isinstance(doc, dict) or doc.get("format") != ARTIFACT_FORMAT:
-            raise ArtifactError(f"{path}: not a mixed-design file of format {ARTIFACT_FORMAT}")
-        _check_seal(doc, path)
-        records = tuple({**{k: v for k, v in r.items() if k not in ("K", "margins")},
-                         "margins": {int(d): float(m) for d, m in r["margins"].items()},
-                         "K": _ss_from_dict(r["K"])} for r in doc["designs"])
-        return MixedDesigns(study=doc["study"], records=records, chosen=doc["chosen"],
-                            source=str(path))
-    except ArtifactError:
-        raise
+        designs = tuple(MixedDesign(K=_ss_from_dict(r["K"]), steps=None,
+                                    margins={int(k): float(m) for k, m in r["margins"].items()},
+                                    **{f: float(r[f]) for f in _MIXED_FIELDS})
+                        for r in doc["designs"])
     except (KeyError, TypeError, ValueError) as exc:
         raise ArtifactError(f"{path}: not a mixed-design artifact ({exc})") from None
+    return MixedDesigns(study=doc["study"], designs=designs, source=str(path))
 
 
 def study_mixed_designs(study):
@@ -744,13 +740,14 @@ def study_mixed_designs(study):
 
 def _export_mixed_sections(study, designs):
     """Export the chosen mixed controller, Tustin at the loop rate, as sections."""
-    if designs.K is None:
+    chosen = designs.chosen
+    if chosen is None:
         return None
-    d = discretize(designs.K, study.loop.fs_Hz, G=study_problem(study).G)
+    d = discretize(chosen.K, study.loop.fs_Hz, G=study_problem(study).G)
     return export.export_controller(
         d.K, outputs.study_controllers_dir(study.name), MIXED_SECTIONS_FILE,
-        meta={"controller": f"mixed mu, {designs.K.nstates}th order, performance scale "
-                            f"{designs.chosen:g}", "states": d.K.nstates,
+        meta={"controller": f"mixed mu, {chosen.K.nstates}th order, performance scale "
+                            f"{chosen.performance_scale:g}", "states": d.K.nstates,
               "discretisation": "Tustin", "prewarp_rad_s": d.prewarp_frequency})
 
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from piezolib import paper, robust
-from piezolib.problem import design, genplant
+from piezolib.problem import analysis, design, genplant
 
 FS = paper.SAMPLING_FREQUENCY_HZ
 FINE = np.logspace(-2, 7, 2000)
@@ -153,6 +153,6 @@ def test_a_short_mixed_design_keeps_the_order_and_reports_exact_margins(models):
                                          omega=np.logspace(2, 6, 40), dg_steps=2)
     assert res.K.nstates == K0.nstates and res.K.input_labels == ["v_e"]
     assert res.mu_peak <= res.start_mu_peak and res.mu_lower_peak <= res.mu_peak * (1 + 1e-9)
-    assert set(res.margins) == set(design.MIXED_CHECK_DELAYS)
-    margins = design.exact_margins_with_delay(G, res.K, FS, delays=(1,))
+    assert set(res.margins) == set(analysis.MARGIN_DELAYS)
+    margins = analysis.exact_margins_with_delay(G, res.K, FS, delays=(1,))
     assert margins[1] == res.margins[1]

@@ -291,23 +291,25 @@ def test_an_edited_controller_artifact_is_refused(tmp_path, monkeypatch):
 def _fake_mixed():
     K1 = ct.ss([[-1.0]], [[1.0]], [[0.5]], [[0.1]], inputs=["v_e"], outputs=["u_b"], name="K1")
     K2 = ct.ss([[-2.0]], [[1.0]], [[1 / 3]], [[0.0]], inputs=["v_e"], outputs=["u_b"], name="K2")
-    records = tuple({"scale": s, "spread": 0.05, "mu": 0.9, "mu_lower": 0.8, "start_mu": 1.5,
-                     "margins": {0: 0.06, 1: 0.051}, "K": K} for s, K in ((0.1, K1), (0.2, K2)))
-    return pipeline.MixedDesigns(study="reference", records=records, chosen=0.2,
-                                 source="test")
+    from piezolib.problem.design import MixedDesign
+    designs = tuple(MixedDesign(K=K, performance_scale=s, spread=0.05, mu_peak=0.9,
+                                mu_lower_peak=0.8, start_mu_peak=1.5,
+                                margins={0: 0.06, 1: 0.051}, steps=None)
+                    for s, K in ((0.1, K1), (0.2, K2)))
+    return pipeline.MixedDesigns(study="reference", designs=designs, source="test")
 
 
 def test_mixed_designs_round_trip_bit_exact_and_refuse_an_edit(tmp_path):
     designs = _fake_mixed()
     path = pipeline.write_mixed_designs(designs, tmp_path / "mixed.json", "reference")
     back = pipeline.read_mixed_designs(path)
-    assert back.chosen == 0.2 and back.K.name == "K2"
-    for a, b in zip(designs.records, back.records):
-        assert a["margins"] == b["margins"] and a["scale"] == b["scale"]
+    assert back.chosen.performance_scale == 0.2 and back.chosen.K.name == "K2"
+    for a, b in zip(designs.designs, back.designs):
+        assert a.margins == b.margins and a.performance_scale == b.performance_scale
         for m in "ABCD":
-            np.testing.assert_array_equal(getattr(a["K"], m), getattr(b["K"], m))
+            np.testing.assert_array_equal(getattr(a.K, m), getattr(b.K, m))
     doc = json.loads(path.read_text())
-    doc["designs"][0]["mu"] = 0.5
+    doc["designs"][0]["mu_peak"] = 0.5
     path.write_text(json.dumps(doc))
     with pytest.raises(pipeline.ArtifactError, match="mixed.json"):
         pipeline.read_mixed_designs(path)
@@ -315,9 +317,10 @@ def test_mixed_designs_round_trip_bit_exact_and_refuse_an_edit(tmp_path):
 
 def test_the_committed_mixed_designs_and_sections_are_readable():
     designs = pipeline.study_mixed_designs("reference")
-    assert designs.chosen in [r["scale"] for r in designs.records]
-    assert designs.K.nstates == pipeline.study_controllers("reference").K_deployed.nstates
+    chosen = designs.chosen
+    assert chosen in designs.designs
+    assert chosen.K.nstates == pipeline.study_controllers("reference").K_deployed.nstates
     sections = pipeline.study_mixed_sections("reference")
     # the sections are the chosen controller, discretised: same DC gain to float32 rounding
-    k_dc = float(np.real(designs.K(0.0 + 1e-9j)))
+    k_dc = float(np.real(chosen.K(0.0 + 1e-9j)))
     assert sections.to_statespace("float32").dcgain() == pytest.approx(k_dc, rel=1e-4)
