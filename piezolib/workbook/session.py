@@ -6,7 +6,11 @@
 
     nb = session.start(study, claims="tracking")
     fig = nb.save(figures.fig15_tracking_error(...))   # figures/fig15_tracking_error.png
-    nb.claims.add("Table 5", ...)
+    nb.check("Table 5", "mean error, Case III, 1 Hz", 0.43, value, rtol=0.3,
+             expect="agrees")                           # recorded, and asserted
+    nb.require(checks)                                  # named checks of the library, asserted
+    nb.show(table)                                      # every number in the one format
+    nb.summary()                                        # the closing summary, from the claims
     nb.claims.save()                                    # data/results/tracking.csv
 
 Everything a notebook writes goes through its session, to the folders of the
@@ -20,14 +24,19 @@ appear in a collapsed log under its progress bar, not as stderr blocks.
 """
 
 import time
+from collections.abc import Mapping
 
 import pandas as pd
 
 from piezolib import notebook_display, progress
-from piezolib.workbook import plotting, report, style
+from piezolib.workbook import plotting, report, style, tables
 from piezolib.workbook import study as studies
 
-__all__ = ["Session", "start", "DISPLAY_OPTIONS"]
+__all__ = ["Session", "start", "DISPLAY_OPTIONS", "CheckFailed", "claim_lines"]
+
+class CheckFailed(AssertionError):
+    """A notebook's check does not hold (an ``AssertionError``, so nbval reports the cell)."""
+
 
 #: pandas display options every notebook starts with (tables of claims and numbers).
 DISPLAY_OPTIONS = {"display.precision": 4, "display.max_colwidth": 90,
@@ -90,6 +99,151 @@ class Session:
         """Seconds since the session started."""
         return time.perf_counter() - self.started
 
+    def _asserts(self, every_study):
+        """True when a check of this session is asserted (the reference asserts all)."""
+        return self.reference or every_study
+
+    def check(self, section, quantity, paper, ours, *, expect=None, holds=None,
+              every_study=False, **claim):
+        """Record one claim in the claim table and assert what the notebook states of it.
+
+        Parameters
+        ----------
+        section, quantity, paper, ours
+            As :meth:`piezolib.workbook.report.ClaimTable.add`.
+        expect : {"agrees", "differs"}, optional
+            The verdict the notebook states (asserted): a published number that
+            the workbook reproduces, or one it shows to differ.
+        holds : bool, optional
+            A condition the notebook states of ``ours`` (asserted), e.g.
+            ``holds=mu < 1`` for a claim without a published number.
+        every_study : bool
+            Assert in every study, not only in the reference (a check that must
+            hold whatever the study's choices).
+        **claim
+            ``unit``, ``rtol``, ``atol``, ``interval``, ``precision``, ``reason``,
+            ``note`` of :meth:`~piezolib.workbook.report.ClaimTable.add`.
+
+        Returns
+        -------
+        dict
+            The recorded row.
+
+        Raises
+        ------
+        CheckFailed
+            When the stated verdict or condition does not hold (in the reference
+            study, or in every study with ``every_study=True``).
+
+        Examples
+        --------
+        >>> nb = Session.__new__(Session)                # a session without a study folder
+        >>> nb.study = studies.Study(); nb.claims = report.ClaimTable("demo", "reference")
+        >>> row = nb.check("IV-C", "||H_e S||_inf", 0.81, 0.808, rtol=0.01, expect="agrees")
+        >>> row["verdict"]
+        'agrees'
+        >>> nb.check("IV-C", "mu_RP", 0.71, 1.45, rtol=0.05, expect="agrees")
+        Traceback (most recent call last):
+        ...
+        piezolib.workbook.session.CheckFailed: IV-C, mu_RP: the verdict is 'differs', the notebook states 'agrees' (ours 1.45, paper 0.71, tolerance +-5%)
+        """
+        if self.claims is None:
+            raise ValueError("this session has no claim table: start it with "
+                             "session.start(study, claims='<name>')")
+        if expect not in (None, "agrees", "differs"):
+            raise ValueError(f"expect must be 'agrees', 'differs' or None, got {expect!r}")
+        if expect is not None and paper is None:
+            raise ValueError(f"expect={expect!r} needs a published value: paper is None "
+                             "(state a condition with holds=... instead)")
+        if holds is not None and not isinstance(holds, bool) and not hasattr(holds, "__bool__"):
+            raise TypeError(f"holds must be a condition (bool), got {type(holds).__name__}")
+        self.claims.add(section, quantity, paper, ours, **claim)
+        row = self.claims.rows[-1]
+        if self._asserts(every_study):
+            where = f"{section}, {quantity}"
+            if expect is not None and row["verdict"] != expect:
+                raise CheckFailed(
+                    f"{where}: the verdict is {row['verdict']!r}, the notebook states "
+                    f"{expect!r} (ours {tables.format_number(row['ours'])}, paper "
+                    f"{tables.format_number(paper)}, tolerance {row['tolerance']})")
+            if holds is not None and not bool(holds):
+                raise CheckFailed(f"{where}: the stated condition does not hold "
+                                  f"(ours {tables.format_number(row['ours'])})"
+                                  + (f"; {row['note']}" if row["note"] else ""))
+        return row
+
+    def require(self, checks, every_study=True):
+        """Assert named checks computed by the library; return them as a table.
+
+        Parameters
+        ----------
+        checks : mapping of str to bool
+            What each check states (its name) and whether it holds, e.g. the
+            ``checks`` of a library result.
+        every_study : bool
+            Assert in every study (default) or only in the reference.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per check (``check``, ``holds``), to show under the cell.
+
+        Raises
+        ------
+        CheckFailed
+            Naming every check that does not hold.
+
+        Examples
+        --------
+        >>> nb = Session.__new__(Session); nb.study = studies.Study()
+        >>> bool(nb.require({"lower <= upper": True, "closed loop stable": True}).holds.all())
+        True
+        >>> nb.require({"closed loop stable": False})
+        Traceback (most recent call last):
+        ...
+        piezolib.workbook.session.CheckFailed: does not hold: closed loop stable
+        """
+        if not isinstance(checks, Mapping) or not checks:
+            raise TypeError(f"checks must be a non-empty mapping of check names to bools, "
+                            f"got {checks!r}")
+        frame = pd.DataFrame({"check": list(checks), "holds": [bool(v) for v in checks.values()]})
+        failed = frame.check[~frame.holds].tolist()
+        if failed and self._asserts(every_study):
+            raise CheckFailed("does not hold: " + "; ".join(failed))
+        return frame
+
+    @staticmethod
+    def show(frame, **options):
+        """``frame`` styled for reading: every number in the one format of the report
+        (:func:`piezolib.workbook.tables.readable`, whose options it takes)."""
+        if isinstance(frame, pd.Series):
+            frame = frame.to_frame()
+            options.setdefault("index", True)
+        return tables.readable(frame, **options)
+
+    def summary(self, title="What holds", lines=()):
+        """The notebook's closing summary (Markdown): its claims, one line each.
+
+        Parameters
+        ----------
+        title : str
+            The heading line.
+        lines : sequence of str, optional
+            Findings computed by the library that are not claims of the table,
+            written first.
+
+        Returns
+        -------
+        IPython.display.Markdown
+            Rendered under the cell (its ``data`` is the Markdown text).
+        """
+        from IPython.display import Markdown
+
+        rows = [] if self.claims is None else self.claims.rows
+        text = [f"**{title}** (study `{self.study.name}`)", ""]
+        text += [f"* {line}" for line in lines] + [f"* {line}" for line in claim_lines(rows)]
+        return Markdown("\n".join(text))
+
 
 def start(study=studies.REFERENCE, claims=None):
     """Start a notebook: load its study, open its claim table, apply the figure style.
@@ -116,3 +270,46 @@ def start(study=studies.REFERENCE, claims=None):
     for option, value in DISPLAY_OPTIONS.items():
         pd.set_option(option, value)
     return session
+
+
+def claim_lines(rows):
+    """One sentence per claim row: the quantity, our value, the paper's and the verdict.
+
+    Parameters
+    ----------
+    rows : sequence of dict or pandas.DataFrame
+        Claim rows (:data:`piezolib.workbook.report.COLUMNS`).
+
+    Returns
+    -------
+    list of str
+        Markdown lines, numbers in the one format of :func:`~piezolib.workbook.tables.format_number`.
+
+    Examples
+    --------
+    >>> claim_lines([dict(section="IV-C", quantity="mu_RP", unit="", paper=0.71, ours=1.448,
+    ...                   low=None, high=None, verdict="differs", reason="typo", note="")])
+    ['**μ_RP** (IV-C): 1.448; paper 0.71, *differs* (typo)']
+    """
+    if isinstance(rows, pd.DataFrame):
+        rows = rows.to_dict("records")
+    out = []
+    for row in rows:
+        value = tables.format_number(row["ours"])
+        unit = row.get("unit") or ""
+        if unit and unit != "-":
+            value += f" {unit}"
+        if str(row.get("low", "") or "") not in ("", "nan"):
+            value += (f" (95 % interval {tables.format_number(row['low'])} … "
+                      f"{tables.format_number(row['high'])})")
+        if row["verdict"] == "not published":
+            tail = ""
+        else:
+            tail = f"; paper {tables.format_number(row['paper'])}, *{row['verdict']}*"
+            if row.get("reason"):
+                tail += f" ({row['reason']})"
+        note = f". {row['note']}" if row.get("note") else ""
+        quantity = style.unit_text(str(row["quantity"]))
+        out.append(f"**{quantity}** ({row['section']}): {value}{tail}{note}")
+    return out
+
