@@ -9,6 +9,8 @@ design           the workbook's mu controller in one call
 analysis         Table 3: NS, NP, RS, RP of any controller
 hysteresis_fits  the paper's Dahl model and the workbook's Dahl fit to the Case I loops
 fsm_benchmark    the CubeSpec fine steering mirror benchmark: data, metric, baselines
+fsm_models       the benchmark's models step by step (BLAs, linear, nonlinear, scores), with checks
+fsm_control      a mu controller for one mirror axis: nominal, design, verification, coupling
 paths            where the checkout and its ``data/`` folder are
 
 :func:`piezolib.problem.paper.problem` returns the models G, H_m, H_e, H_y, K
@@ -17,4 +19,5 @@ that the other modules here take explicitly (plant first, then the weights);
 """
 
 __all__ = ["paper", "genplant", "stage", "stage_hysteresis", "stage_data", "design",
-           "analysis", "hysteresis_fits", "fsm_benchmark", "paths"]
+           "analysis", "hysteresis_fits", "fsm_benchmark", "paths",
+           "fsm_models", "fsm_control"]

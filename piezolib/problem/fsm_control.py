@@ -1,0 +1,530 @@
+"""A μ controller for one axis of the fine steering mirror (notebook 10), designed and checked.
+
+Four steps, each a function returning a result with the ``checks`` it states:
+
+* :func:`axis_nominal`: the nominal model of one input-output pair, the entry
+  of the all-levels MIMO model (discrete, um/V) reduced by balanced truncation
+  in the w-plane (the exact inverse of Tustin's map), with the table of
+  reduction errors against the BLA and the levels' spread;
+* :func:`design_axis`: the uncertainty weight of the levels' spread around the
+  reduced nominal, the performance and roll-off weights, the synthesis plant
+  with output-multiplicative uncertainty
+  (:func:`piezolib.problem.fsm_benchmark.axis_design_plant`) of z^-1 G(z) in
+  the w-plane, DK-iteration, and the controller mapped back with Tustin;
+* :func:`verify_axis`: μ bounds on a fine grid, the w-plane closed loop, the
+  sampled loop with 0-3 samples of delay, and for each level's own model the
+  sampled loop's largest pole and its margins;
+* :func:`axis_coupling`: what one SISO loop leaves of the mirror: the BLA's
+  coupling in the loop's band and how far the other displacements move.
+
+In the w-plane of the sampled loop, a continuous design mapped back with Tustin
+(no pre-warping) *is* the sampled loop: stability, margins and μ are those of
+the sampled loop on the warped axis nu = (2/T) tan(omega T / 2).
+"""
+
+from dataclasses import dataclass
+
+import control as ct
+import numpy as np
+import pandas as pd
+
+from piezolib import identification as ident
+from piezolib import robust
+from piezolib import uncertainty as unc
+from piezolib._checks import check_integer, check_type
+from piezolib.problem import fsm_benchmark as fsm
+from piezolib.problem import genplant
+
+__all__ = ["UM_PER_M", "REDUCTION_ORDERS", "BLOCKS", "axis_entry", "AxisNominal", "axis_nominal",
+           "AxisDesign", "design_axis", "AxisVerification", "verify_axis", "AxisCoupling",
+           "axis_coupling", "hz_of_w_plane", "significant"]
+
+#: Micrometres per metre (the axis is designed in um/V).
+UM_PER_M = 1e6
+#: The orders of the reduction table (below the full entry's).
+REDUCTION_ORDERS = (6, 8, 10, 16)
+#: Block structure of the axis' robust-performance problem: Delta, then performance.
+BLOCKS = ((1, 1), (1, 3))
+#: Lines of the resonances where the reduced model must keep the levels' spread [Hz].
+RESONANCES_HZ = (500, 1100)
+#: The w-plane grid of the verification [rad/s].
+FINE_W_PLANE = np.logspace(-1, 7, 1500)
+#: The w-plane grid of DK-iteration [rad/s].
+DK_W_PLANE = np.logspace(0, 5.5, 200)
+
+
+def significant(x, digits=3):
+    """``x`` rounded to ``digits`` significant digits (the precision a claim states).
+
+    Examples
+    --------
+    >>> significant(0.76218)
+    0.762
+    """
+    return float(f"{x:.{digits}g}")
+
+
+def hz_of_w_plane(nu_rad_s, fs=fsm.SAMPLING_FREQUENCY_HZ):
+    """Ordinary frequency [Hz] of a w-plane frequency nu [rad/s] at the rate ``fs`` [Hz].
+
+    Examples
+    --------
+    >>> round(hz_of_w_plane(2 * 6400 * np.tan(np.pi * 100 / 6400)), 6)
+    100.0
+    """
+    T_s = 1 / fs
+    return float(np.arctan(nu_rad_s * T_s / 2) * 2 / T_s / (2 * np.pi))
+
+
+def axis_entry(model, pair):
+    """One SISO entry of a discrete MIMO model in um/V.
+
+    Parameters
+    ----------
+    model : control.StateSpace
+        Discrete, inputs [V] -> outputs [m].
+    pair : (int, int)
+        (output, input) indices.
+
+    Returns
+    -------
+    control.StateSpace
+        The entry, input [V] -> output [um], with the model's states.
+
+    Examples
+    --------
+    >>> g = axis_entry(ct.ss([[0.5]], [[1e-6, 2e-6]], [[1.0], [3.0]], [[0, 0], [0, 1e-6]], 1.0),
+    ...                (1, 1))
+    >>> float(g.B[0, 0]), float(g.C[0, 0]), float(g.D[0, 0])
+    (2.0, 3.0, 1.0)
+    """
+    o, i = pair
+    return ct.ss(model.A, model.B[:, [i]] * UM_PER_M, model.C[[o]],
+                 model.D[[o]][:, [i]] * UM_PER_M, model.dt)
+
+
+def _response(g, zl):
+    return np.ravel(g(zl))
+
+
+def _levels_spread(g_level, g, zl):
+    """The levels' relative error around ``g`` on every line (max over levels)."""
+    return np.max([np.abs(_response(gl, zl) / _response(g, zl) - 1) for gl in g_level.values()],
+                  axis=0)
+
+
+@dataclass(frozen=True)
+class AxisNominal:
+    """The nominal model of one axis and the reduction that made it (:func:`axis_nominal`).
+
+    Attributes
+    ----------
+    pair : (int, int)
+    g_full : control.StateSpace
+        The entry of the all-levels model [um/V], discrete.
+    g_level : dict {int: control.StateSpace}
+        The entry of each level's own model [um/V].
+    g_nominal : control.StateSpace
+        The reduced entry (feedthrough zero), discrete.
+    reduction : pandas.DataFrame
+        Per order: relative FRF errors against the BLA [%] and the levels' spread.
+    hankel_relative : ndarray
+        Hankel singular values of the full entry in the w-plane over the largest.
+    frequency_Hz : ndarray
+        The excited lines.
+    nominal_order : int
+    """
+
+    pair: tuple
+    g_full: object
+    g_level: dict
+    g_nominal: object
+    reduction: pd.DataFrame
+    hankel_relative: np.ndarray
+    frequency_Hz: np.ndarray
+    nominal_order: int
+
+    @property
+    def zl(self):
+        """z on the unit circle at the excited lines."""
+        return np.exp(2j * np.pi * self.frequency_Hz / fsm.SAMPLING_FREQUENCY_HZ)
+
+    def spread(self, g):
+        """The levels' relative error around ``g`` on every line (max over levels)."""
+        return _levels_spread(self.g_level, g, self.zl)
+
+    def description(self):
+        """The pair, the full and nominal orders and the leading Hankel singular values."""
+        return (f"pair {fsm.INPUT_LABELS[self.pair[1]]} -> {fsm.OUTPUT_LABELS[self.pair[0]]}: "
+                f"full entry {self.g_full.nstates} states, nominal {self.g_nominal.nstates}; "
+                f"Hankel singular values (relative) "
+                + ", ".join(f"{x:.3f}" for x in self.hankel_relative[:self.nominal_order + 2]))
+
+    def rms_error_below_100Hz(self, order=None):
+        """RMS relative FRF error to the BLA below 100 Hz [%] at ``order`` (default nominal)."""
+        return float(self.reduction.loc[self.nominal_order if order is None else order,
+                                        "rms error < 100 Hz [%]"])
+
+    @property
+    def checks(self):
+        """The nominal model is within 10 % of the BLA below 100 Hz."""
+        return {f"the {self.nominal_order}-state nominal is within 10 % (rms) of the BLA "
+                "below 100 Hz": bool(self.rms_error_below_100Hz() < 10)}
+
+
+def axis_nominal(linear, frequency_Hz, nominal_order, pair=(2, 2),
+                 orders=REDUCTION_ORDERS):
+    """The nominal model of one axis: its entry of the all-levels model, balanced-truncated.
+
+    The discrete entry is mapped to the w-plane by the exact inverse of
+    Tustin's map (which keeps the Hankel singular values), truncated there
+    (``control.balred``, DC matched) and mapped back; its feedthrough is set to
+    zero.  The table gives, for each order of ``orders``, ``nominal_order`` and
+    the full entry, the relative FRF error against the BLA (the levels' mean)
+    and the levels' spread at 500-1100 Hz.
+
+    Parameters
+    ----------
+    linear : piezolib.problem.fsm_models.LinearModels
+        The all-levels model, the per-level models and the mean BLA.
+    frequency_Hz : array_like
+        The excited lines [Hz].
+    nominal_order : int
+        States of the nominal model.
+    pair : (int, int)
+        (output, input) indices.
+    orders : sequence of int
+        Further orders of the reduction table.
+
+    Returns
+    -------
+    AxisNominal
+    """
+    nominal_order = check_integer("nominal_order", nominal_order, minimum=1)
+    f = np.asarray(frequency_Hz, dtype=float)
+    T_s = 1 / fsm.SAMPLING_FREQUENCY_HZ
+    zl = np.exp(2j * np.pi * f / fsm.SAMPLING_FREQUENCY_HZ)
+    g_full = axis_entry(linear.model(linear.all_name), pair)
+    g_level = {lv: axis_entry(linear.model(linear.chosen(lv)), pair) for lv in fsm.LEVELS_MV}
+    bla_pair = UM_PER_M * linear.G_all[tuple(pair)]
+    g_w_full = ident.d2c(g_full, method="tustin")                      # exact, w-plane
+
+    def truncated(order):
+        r = ct.c2d(ct.balred(g_w_full, order, method="matchdc"), T_s, "tustin")
+        return ct.ss(r.A, r.B, r.C, np.zeros((1, 1)), T_s)
+
+    def frf_error(g, f_max):
+        m = f <= f_max
+        r = _response(g, zl)[m] - bla_pair[m]
+        return (100 * np.sqrt(np.mean(np.abs(r) ** 2) / np.mean(np.abs(bla_pair[m]) ** 2)),
+                100 * np.max(np.abs(r) / np.abs(bla_pair[m])))
+
+    resonances = (f >= RESONANCES_HZ[0]) & (f <= RESONANCES_HZ[1])
+    rows, reduced = {}, {}
+    table_orders = sorted({*orders, nominal_order}) + [g_full.nstates]
+    for order in table_orders:
+        g = g_full if order == g_full.nstates else truncated(order)
+        reduced[order] = g
+        below_100 = frf_error(g, 100)
+        rows[order] = {
+            "rms error < 100 Hz [%]": below_100[0],
+            "max error < 100 Hz [%]": below_100[1],
+            "rms error < 300 Hz [%]": frf_error(g, 300)[0],
+            "rms error < 1100 Hz [%]": frf_error(g, 1100)[0],
+            "levels' spread, peak 500-1100 Hz":
+                float(_levels_spread(g_level, g, zl)[resonances].max())}
+    hankel = ct.hankel_singular_values(g_w_full)
+    return AxisNominal(pair=tuple(pair), g_full=g_full, g_level=g_level,
+                       g_nominal=reduced[nominal_order],
+                       reduction=pd.DataFrame(rows).T.rename_axis("order"),
+                       hankel_relative=hankel / hankel[0], frequency_Hz=f,
+                       nominal_order=nominal_order)
+
+
+@dataclass(frozen=True)
+class AxisDesign:
+    """The μ design of one axis in the w-plane of the sampled loop (:func:`design_axis`).
+
+    Attributes
+    ----------
+    G_w : control.StateSpace
+        z^-1 G_nominal(z) mapped to the w-plane (exact inverse of Tustin).
+    spread, hull : ndarray
+        The levels' spread around the nominal on each line and its running maximum.
+    W_m : control.StateSpace
+        First-order weight covering ``hull`` on the w-plane frequencies.
+    coverage : uncertainty.Coverage
+        Of ``W_m`` over the raw spread.
+    plant : control.StateSpace
+        The synthesis plant (:func:`fsm_benchmark.axis_design_plant`, no Pade delay).
+    dk : robust.MusynResult
+    K_w, K_d : control.StateSpace
+        The w-plane controller and the discrete one to implement (Tustin).
+    zinv : control.StateSpace
+        One sample of delay.
+    bandwidth_Hz : float
+        Where the template on |S| crosses 1 [Hz].
+    """
+
+    G_w: object
+    spread: np.ndarray
+    hull: np.ndarray
+    W_m: object
+    coverage: object
+    plant: object
+    dk: object
+    K_w: object
+    K_d: object
+    zinv: object
+    bandwidth_Hz: float
+
+    def weight_at(self, f_Hz):
+        """|W_m| at the ordinary frequency ``f_Hz`` [Hz] (through the w-plane)."""
+        T_s = 1 / fsm.SAMPLING_FREQUENCY_HZ
+        return float(np.abs(np.ravel(self.W_m(1j * 2 / T_s * np.tan(np.pi * f_Hz * T_s))))[0])
+
+    def description(self):
+        """The weight at 10 Hz, 923 Hz and 3 kHz, its coverage, the plant and the DK result."""
+        dk = self.dk
+        return (f"weight: |W_m| {self.weight_at(10):.3f} at 10 Hz, {self.weight_at(923):.2f} "
+                f"at 923 Hz, {self.weight_at(3000):.2f} at 3 kHz; covers the raw spread: "
+                f"{self.coverage.covers}; synthesis plant {self.plant.nstates} states; DK: mu "
+                f"{dk.mu_peak:.3f} (lower {dk.mu_lower_peak:.3f}), {self.K_w.nstates} states, "
+                f"{dk.stop_reason}")
+
+    @property
+    def checks(self):
+        """The uncertainty weight covers the spread and is stable."""
+        return {"the axis' uncertainty weight covers the levels' spread around the nominal":
+                    bool(self.coverage.covers),
+                "the axis' uncertainty weight is stable": bool(
+                    np.all(np.real(self.W_m.poles()) < 0))}
+
+
+def design_axis(nominal, *, bandwidth_Hz, error_weight, output_weight, output_corner, rolloff,
+                dk_iterations):
+    """DK-iteration on the w-plane plant of the sampled loop with one sample of delay.
+
+    Uncertainty: the relative error of each level's entry against the reduced
+    nominal, made non-decreasing in frequency (its running maximum), covered by
+    a first-order weight on every excited line (w-plane frequencies).
+    Performance: templates on S (crossing 1 near ``bandwidth_Hz``) and on T
+    (roll-off above ``output_corner`` x the bandwidth), a roll-off weight on the
+    controller output.
+
+    Parameters
+    ----------
+    nominal : AxisNominal
+    bandwidth_Hz : float
+        Where the template on |S| crosses 1 [Hz].
+    error_weight, output_weight : dict
+        Keyword arguments of :func:`piezolib.robust.sensitivity_weight` and
+        :func:`piezolib.robust.complementary_sensitivity_weight` (bounds).
+    output_corner : float
+        The T template's corner over the bandwidth [-].
+    rolloff : dict
+        Fields of :class:`piezolib.problem.genplant.RolloffWeight`.
+    dk_iterations : int
+        At most this many DK iterations.
+
+    Returns
+    -------
+    AxisDesign
+    """
+    check_type("nominal", nominal, AxisNominal, "an AxisNominal (axis_nominal)")
+    fs = fsm.SAMPLING_FREQUENCY_HZ
+    T_s = 1 / fs
+    omega_rad_s = 2 * np.pi * nominal.frequency_Hz
+    zinv = ct.ss([[0.0]], [[1.0]], [[1.0]], [[0.0]], T_s)                # one sample of delay
+    nu = 2 / T_s * np.tan(omega_rad_s * T_s / 2)                        # w-plane frequency
+    G_w = ident.d2c(ct.series(zinv, nominal.g_nominal), method="tustin")
+    spread = nominal.spread(nominal.g_nominal)
+    hull = np.maximum.accumulate(spread)                                # non-decreasing
+    W_m = unc.fit_covering_weight(nu, hull, order=1, starts=1, inputs="u", outputs="y_Delta",
+                                  name="W_m")
+    cover = unc.coverage(W_m, nu, spread)
+    omega_b = 2 * np.pi * bandwidth_Hz
+    H_e = robust.sensitivity_weight(**error_weight, bandwidth_rad_s=omega_b, inputs="v_e",
+                                    outputs="y1", name="H_e")
+    H_y = robust.complementary_sensitivity_weight(**output_weight,
+                                                  bandwidth_rad_s=output_corner * omega_b,
+                                                  inputs="v_y", outputs="y2", name="H_y")
+    W_u = genplant.rolloff_weight(genplant.RolloffWeight(**rolloff))
+    plant = fsm.axis_design_plant(G_w, W_m, H_e, H_y, W_u, fs=fs, delay_samples=None)
+    dk = robust.musyn(plant, BLOCKS, 1, 1, DK_W_PLANE, d_order="auto", max_iter=dk_iterations)
+    return AxisDesign(G_w=G_w, spread=spread, hull=hull, W_m=W_m, coverage=cover, plant=plant,
+                      dk=dk, K_w=dk.K, K_d=ct.c2d(dk.K, T_s, "tustin"), zinv=zinv,
+                      bandwidth_Hz=float(bandwidth_Hz))
+
+
+@dataclass(frozen=True)
+class AxisVerification:
+    """Checks of the axis controller independent of the synthesis (:func:`verify_axis`).
+
+    Attributes
+    ----------
+    mu : robust.MuResult
+        μ bounds of the loop on :data:`FINE_W_PLANE`.
+    mu_upper, mu_lower : float
+        Their peaks.
+    peak_Hz : float
+        Where the upper bound peaks [Hz].
+    wplane_max_real : float
+        Largest real part of the w-plane closed-loop poles [rad/s].
+    delay_radius : ndarray
+        Spectral radius of the sampled loop (ZOH of the nominal) with 0-3
+        samples of delay.
+    loops : pandas.DataFrame
+        Per model (nominal, each level's): states, the sampled loop's largest
+        |pole|, stability, gain, phase and disk margins, crossover [Hz].
+    """
+
+    mu: object
+    mu_upper: float
+    mu_lower: float
+    peak_Hz: float
+    wplane_max_real: float
+    delay_radius: np.ndarray
+    loops: pd.DataFrame
+
+    def description(self, design):
+        """The μ bounds, the closed-loop poles and the delay tolerance, one paragraph."""
+        return (f"mu_RP of the {design.K_w.nstates}-state controller on {FINE_W_PLANE.size} "
+                f"frequencies: upper {self.mu_upper:.3f}, lower {self.mu_lower:.3f} (largest at "
+                f"{self.peak_Hz:.2g} Hz: flat below the bandwidth: the 1 % template on S and the "
+                f"{100 * design.weight_at(1):.0f} % spread); w-plane closed loop: largest real "
+                f"part {self.wplane_max_real:.1f} rad/s; sampled loop (ZOH of the nominal, "
+                f"toolkit) with 0-3 samples of delay: largest |pole| "
+                + ", ".join(f"{r:.5f}" for r in self.delay_radius))
+
+    @property
+    def checks(self):
+        """Bounds ordered, RP met, every loop stable with positive margins."""
+        loops = self.loops
+        return {
+            "mu lower bound <= upper bound on every frequency": bool(
+                np.all(self.mu.lower <= self.mu.upper * (1 + 1e-6))),
+            "robust performance: mu_RP upper bound < 1": bool(self.mu_upper < 1),
+            "the w-plane closed loop is stable": bool(self.wplane_max_real < 0),
+            "the sampled loop is stable with 0-3 samples of delay": bool(
+                np.all(self.delay_radius < 1)),
+            "the sampled loop is stable with the nominal and each level's model": bool(
+                loops["stable"].all()),
+            "gain margins > 1 and phase margins > 0 with every model": bool(
+                (loops["gain margin [x]"] > 1).all() and (loops["phase margin [deg]"] > 0).all()),
+            "disk margins > 0 with every model": bool((loops["disk margin"] > 0).all()),
+        }
+
+
+def verify_axis(nominal, design):
+    """μ bounds, closed-loop poles, delay tolerance and each level's sampled loop.
+
+    Parameters
+    ----------
+    nominal : AxisNominal
+    design : AxisDesign
+
+    Returns
+    -------
+    AxisVerification
+    """
+    check_type("nominal", nominal, AxisNominal, "an AxisNominal (axis_nominal)")
+    check_type("design", design, AxisDesign, "an AxisDesign (design_axis)")
+    fine = FINE_W_PLANE
+    K_w, K_d = design.K_w, design.K_d
+    mu = robust.mussv(robust.lft_response(design.plant, K_w, fine), BLOCKS, fine)
+    tol = robust.delay_tolerance(ident.d2c(nominal.g_nominal), K_d, delays=(0, 1, 2, 3))
+    rows = {}
+    models = {"nominal (reduced)": nominal.g_nominal,
+              **{f"{lv} mV model": g for lv, g in nominal.g_level.items()}}
+    for name, g in models.items():
+        L_d = ct.series(design.zinv, g)
+        radius = float(np.abs(ct.poles(ct.feedback(ct.series(K_d, L_d), 1))).max())
+        m = robust.loop_margins(ident.d2c(L_d, method="tustin"), K_w)
+        rows[name] = {"states": g.nstates, "sampled loop: largest |pole|": radius,
+                      "stable": radius < 1, "gain margin [x]": m.gain_margin,
+                      "phase margin [deg]": m.phase_margin_deg, "disk margin": m.disk_margin,
+                      "disk gain margin [x]": m.disk_gain_margin,
+                      "disk phase margin [deg]": m.disk_phase_margin_deg,
+                      "crossover [Hz]": hz_of_w_plane(m.omega_crossover)}
+    return AxisVerification(
+        mu=mu, mu_upper=float(mu.upper.max()), mu_lower=float(mu.lower.max()),
+        peak_Hz=hz_of_w_plane(fine[np.argmax(mu.upper)]),
+        wplane_max_real=float(robust.closed_loop_poles(design.G_w, K_w).real.max()),
+        delay_radius=np.asarray(tol.spectral_radius), loops=pd.DataFrame(rows).T)
+
+
+@dataclass(frozen=True)
+class AxisCoupling:
+    """What one SISO loop leaves of the mirror (:func:`axis_coupling`).
+
+    Attributes
+    ----------
+    band : pandas.DataFrame
+        RMS gain of the 200 mV BLA at 5-50 Hz relative to the diagonal entry
+        of the same output.
+    moves : pandas.DataFrame
+        |d_i / r| at 10 Hz and its largest value at 5-50 Hz, with the loop
+        closed on the axis' actuator and the other actuators open.
+    """
+
+    band: pd.DataFrame
+    moves: pd.DataFrame
+    pair: tuple
+
+    @property
+    def off_diagonal(self):
+        """The off-diagonal entries of :attr:`band`."""
+        return self.band.values[~np.eye(3, dtype=bool)]
+
+    def description(self):
+        """The band's off-diagonal range and the axis actuator's column."""
+        off = self.off_diagonal
+        return (f"coupling in the band 5-50 Hz (rms gain relative to the output's diagonal "
+                f"entry): off-diagonal {off.min():.2f}-{off.max():.2f}; column "
+                f"{fsm.INPUT_LABELS[self.pair[1]]}: "
+                + ", ".join(f"{self.band.iloc[i, self.pair[1]]:.2f}" for i in range(3)))
+
+
+def axis_coupling(blas, linear, design, pair=(2, 2), band_Hz=(5, 50)):
+    """The mirror's coupling in the loop's band and the displacements one loop drags along.
+
+    With the loop z^-1 G_ii K closed on the axis' actuator (G from the mean
+    BLA) and the other actuators open, |G_ji K S| is how far displacement j
+    moves per um of reference on the axis.
+
+    Parameters
+    ----------
+    blas : piezolib.problem.fsm_models.LevelBLAs
+        The 200 mV BLA gives the coupling table.
+    linear : piezolib.problem.fsm_models.LinearModels
+        The mean BLA ``G_all`` closes the loop.
+    design : AxisDesign
+        The discrete controller.
+    pair : (int, int)
+    band_Hz : (float, float)
+
+    Returns
+    -------
+    AxisCoupling
+    """
+    check_type("design", design, AxisDesign, "an AxisDesign (design_axis)")
+    f = blas.frequency_Hz
+    o, i = pair
+    band = (f >= band_Hz[0]) & (f <= band_Hz[1])
+    G200 = blas.blas[200].G
+    rms = np.sqrt(np.mean(np.abs(G200[..., band]) ** 2, axis=2))
+    coupling = pd.DataFrame(rms / rms.diagonal()[:, None], index=fsm.OUTPUT_LABELS,
+                            columns=fsm.INPUT_LABELS)
+    zl = np.exp(2j * np.pi * f / fsm.SAMPLING_FREQUENCY_HZ)
+    G_all = linear.G_all
+    k_lines = np.ravel(design.K_d(zl))
+    S_lines = 1 / (1 + zl ** -1 * UM_PER_M * G_all[o, i] * k_lines)      # the loop on the BLA
+    moves = {fsm.OUTPUT_LABELS[j]: np.abs(UM_PER_M * G_all[j, i] * k_lines * S_lines)
+             for j in range(3)}
+    at10 = int(np.argmin(np.abs(f - 10)))
+    table = pd.DataFrame({name: {f"|d_i / r_{o + 1}| at 10 Hz": float(v[at10]),
+                                 f"largest |d_i / r_{o + 1}| ({band_Hz[0]}-{band_Hz[1]} Hz)":
+                                     float(v[band].max())}
+                          for name, v in moves.items()}).T
+    return AxisCoupling(band=coupling, moves=table, pair=tuple(pair))
