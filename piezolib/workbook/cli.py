@@ -59,6 +59,8 @@ def parser():
     doc.add_argument("--pdf", action="store_true",
                      help="also print it to PDF beside the HTML file (needs Chromium on the "
                           "PATH; Debian: apt-get install chromium)")
+    doc.add_argument("--paper", choices=("A4", "letter"), default="A4",
+                     help="paper size of the PDF (default A4)")
     doc.add_argument("--timeout", type=_positive_seconds, default=600,
                      help="per-cell time limit in seconds (default 600)")
     swp = sub.add_parser(
@@ -203,7 +205,7 @@ def _report(args, stream):
         if args.study is not None:
             studies.load(args.study)                 # a bad study is a usage error
         written = document.build(args.study, executed=args.executed, output=args.output,
-                                 pdf=args.pdf, timeout=args.timeout)
+                                 pdf=args.pdf, timeout=args.timeout, paper=args.paper)
     except (ValueError, FileNotFoundError, studies.StudyError) as exc:
         print(f"python -m piezolib report: {exc}", file=sys.stderr)
         return 2

@@ -26,9 +26,9 @@ from piezolib.workbook import reproduce
 from piezolib.workbook import study as studies
 from piezolib.workbook.outputs import project_root, report_dir
 
-__all__ = ["REPORT_NOTEBOOK", "INLINE_BACKEND", "CHROMIUM_NAMES", "report_notebook",
-           "default_output", "execute_report", "read_executed", "export_html", "find_chromium",
-           "print_pdf", "build"]
+__all__ = ["REPORT_NOTEBOOK", "INLINE_BACKEND", "CHROMIUM_NAMES", "PAPER_SIZES", "print_css",
+           "report_notebook", "default_output", "execute_report", "read_executed", "export_html",
+           "find_chromium", "print_pdf", "build"]
 
 #: Name prefix of the reproduction report among the numbered notebooks.
 REPORT_NOTEBOOK = "07_"
@@ -39,6 +39,61 @@ INLINE_BACKEND = "module://matplotlib_inline.backend_inline"
 
 #: Programs tried, in order, by :func:`find_chromium` (Debian: ``apt-get install chromium``).
 CHROMIUM_NAMES = ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable")
+
+
+#: Paper sizes of the printed document (CSS ``@page size``): A4 by default, US Letter on request.
+PAPER_SIZES = {"A4": "210mm 297mm", "letter": "8.5in 11in"}
+
+
+def print_css(paper="A4"):
+    """The style sheet that makes the exported page print as a document.
+
+    Tables take the page's width and wrap their text (no column is cut at the
+    margin), their header repeats on each page and a row is never split;
+    headings stay with what follows; figures scale to the page.
+
+    Parameters
+    ----------
+    paper : {"A4", "letter"}
+        The paper size (:data:`PAPER_SIZES`).
+
+    Returns
+    -------
+    str
+        A ``<style>`` element.
+
+    Examples
+    --------
+    >>> "210mm 297mm" in print_css("A4") and "8.5in 11in" in print_css("letter")
+    True
+    """
+    if paper not in PAPER_SIZES:
+        raise ValueError(f"paper must be one of {sorted(PAPER_SIZES)}, got {paper!r}")
+    return f"""<style>
+@page {{ size: {PAPER_SIZES[paper]}; margin: 14mm 12mm 14mm 12mm; }}
+@media print {{
+  html, body {{ height: auto !important; min-height: 0 !important; font-size: 10pt; }}
+  .jp-Notebook, .jp-Cell, .jp-OutputArea, .jp-OutputArea-child, .jp-OutputArea-output,
+  .jp-RenderedHTMLCommon {{ overflow: visible !important; max-width: 100% !important;
+    padding-left: 0 !important; margin-left: 0 !important; }}
+  .jp-OutputPrompt, .jp-InputPrompt {{ display: none !important; }}
+  table {{ width: 100% !important; max-width: 100% !important; table-layout: auto !important;
+    border-collapse: collapse; font-size: 7.5pt !important; }}
+  thead {{ display: table-header-group; }}
+  tr, img, svg {{ break-inside: avoid; page-break-inside: avoid; }}
+  th, td {{ padding: 1px 3px !important; vertical-align: top; }}
+  td {{ overflow-wrap: anywhere; }}
+  th {{ white-space: normal !important; }}
+  h1, h2, h3, h4 {{ break-after: avoid; page-break-after: avoid; }}
+  /* a heading's cell stays with the output that follows it: no heading ends a page */
+  .jp-MarkdownCell {{ break-inside: avoid; break-after: avoid; page-break-after: avoid; }}
+  .jp-CodeCell {{ break-before: auto; }}
+  img {{ max-width: 100% !important; height: auto !important; }}
+  .jp-Cell:last-child, .jp-Notebook > :last-child {{ margin-bottom: 0 !important;
+    padding-bottom: 0 !important; }}
+}}
+</style>
+"""
 
 
 def report_notebook():
@@ -104,7 +159,7 @@ def read_executed(path):
     return nb
 
 
-def export_html(nb, path, title=None):
+def export_html(nb, path, title=None, paper="A4"):
     """Write ``nb`` as one self-contained HTML page without code; return the path.
 
     Input cells and their ``In [ ]`` / ``Out [ ]`` prompts are left out
@@ -120,6 +175,8 @@ def export_html(nb, path, title=None):
         The HTML file (its folder is created).
     title : str, optional
         The page title; default the notebook's first heading.
+    paper : {"A4", "letter"}
+        The paper size the page prints on (:func:`print_css`).
     """
     import nbformat
     from nbconvert import HTMLExporter
@@ -130,7 +187,9 @@ def export_html(nb, path, title=None):
     exporter = HTMLExporter(template_name="lab", exclude_input=True,
                             exclude_input_prompt=True, exclude_output_prompt=True)
     title = _first_heading(nb) if title is None else str(title)
+    css = print_css(paper)
     body, _ = exporter.from_notebook_node(nb, resources={"metadata": {"name": title}})
+    body = body.replace("</head>", css + "</head>", 1) if "</head>" in body else css + body
     path.parent.mkdir(parents=True, exist_ok=True)
     return atomic_write(path, body)
 
@@ -195,7 +254,7 @@ def print_pdf(html_path, pdf_path, chromium=None, timeout=120):
     return pdf_path
 
 
-def build(study=None, executed=None, output=None, pdf=False, timeout=600):
+def build(study=None, executed=None, output=None, pdf=False, timeout=600, paper="A4"):
     """The report document of ``study``: execute notebook 07 (or take an executed copy), export.
 
     Parameters
@@ -212,19 +271,22 @@ def build(study=None, executed=None, output=None, pdf=False, timeout=600):
         Also print the page to a PDF beside it (:func:`print_pdf`).
     timeout : float
         Per-cell time limit [s] of the execution.
+    paper : {"A4", "letter"}
+        The paper size of the printed page (:data:`PAPER_SIZES`).
 
     Returns
     -------
     list of pathlib.Path
         The HTML file, then the PDF when asked for.
     """
+    print_css(paper)                      # a bad paper size fails before the execution
     chosen = studies.load(studies.REFERENCE if study is None else study)
     output = default_output(chosen) if output is None else check_path("output", output)
     nb = (read_executed(check_path("executed", executed)) if executed is not None
           else execute_report(study, timeout))
     heading = _first_heading(nb)
     title = heading if chosen.is_reference else f"{heading} (study {chosen.name})"
-    written = [export_html(nb, output, title=title)]
+    written = [export_html(nb, output, title=title, paper=paper)]
     if pdf:
         written.append(print_pdf(output, output.with_suffix(".pdf")))
     return written

@@ -33,7 +33,7 @@ from piezolib.workbook.outputs import REFERENCE_STUDY
 __all__ = ["COLUMNS", "REASONS", "NOTEBOOK_TABLES", "OTHER_TABLES", "SIGNIFICANT_DIGITS",
            "verdict", "goal_verdict", "side_by_side", "ClaimTable", "save_results", "load_claims", "compare_studies",
            "same_result", "reproduction_table", "inconsistent_verdicts", "verdict_counts",
-           "summary"]
+           "summary", "FINDINGS", "findings", "figure_path"]
 
 COLUMNS = ["section", "quantity", "unit", "paper", "ours", "low", "high", "precision",
            "tolerance", "verdict", "reason", "note"]
@@ -341,6 +341,75 @@ OTHER_TABLES = {
     "real_benchmark": "10_real_piezo_benchmark",
     "tracking_over_set": "12_tracking_over_the_set",
 }
+
+
+#: The workbook's findings beyond the paper, in notebook order: the result table of each
+#: section of the report, the notebook that writes it, the one figure the report shows and
+#: (optionally) the words a row's quantity must contain to belong to the section.
+FINDINGS = {
+    "own_stage": ("08_your_own_stage", "extra_own_stage_mu.png", ""),
+    "mixed_mu": ("09_mixed_mu", "extra_mixed_tradeoff.png", ""),
+    "real_benchmark": ("10_real_piezo_benchmark", "extra_fsm_scores.png", ""),
+    "tracking_over_set": ("12_tracking_over_the_set", "extra_tracking_over_set.png", ""),
+    "case_iv": ("12_tracking_over_the_set", "fig15_tracking_error.png", "Case IV"),
+}
+
+#: The columns of a findings table the report shows (most rows publish no number).
+_FINDING_COLUMNS = ["quantity", "unit", "paper", "ours", "note"]
+
+
+def findings(name, study=REFERENCE_STUDY):
+    """The rows of one section of the report's "beyond the paper" part.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`FINDINGS` (``"own_stage"``, ``"mixed_mu"``,
+        ``"real_benchmark"``, ``"tracking_over_set"``, ``"case_iv"``).
+    study : str
+        The study whose table is read (the reference's when the study has not
+        written it, as :func:`load_claims`).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``quantity``, ``unit``, ``paper``, ``ours``, ``note`` (text
+        cells as the result file holds them); ``paper`` is empty where the paper
+        publishes no number.
+
+    Examples
+    --------
+    >>> rows = findings("real_benchmark")                  # the committed table
+    >>> list(rows.columns)
+    ['quantity', 'unit', 'paper', 'ours', 'note']
+    """
+    if name not in FINDINGS:
+        raise ValueError(f"name must be one of {list(FINDINGS)}, got {name!r}")
+    table = "tracking_over_set" if name == "case_iv" else name
+    rows = load_claims([table], study=study)
+    words = FINDINGS[name][2]
+    if words:
+        rows = rows[rows["quantity"].str.contains(words, regex=False)]
+    return rows[_FINDING_COLUMNS].reset_index(drop=True)
+
+
+def figure_path(name, study=REFERENCE_STUDY):
+    """Path of the figure file ``name`` of ``study`` (the reference's when the study has none).
+
+    Raises
+    ------
+    FileNotFoundError
+        Naming the notebook to run when neither exists.
+    """
+    check_type("name", name, str, "a figure file name such as 'fig12_mu_bounds.png'")
+    _check_study_exists(study)
+    own = outputs.study_figures_dir(study) / name
+    if own.is_file():
+        return own
+    reference = outputs.study_figures_dir(REFERENCE_STUDY) / name
+    if not reference.is_file():
+        raise FileNotFoundError(f"{reference} is missing: run python -m piezolib reproduce")
+    return reference
 
 
 def load_claims(names=None, study=REFERENCE_STUDY):

@@ -99,6 +99,30 @@ class Session:
         """Seconds since the session started."""
         return time.perf_counter() - self.started
 
+    @staticmethod
+    def markdown(text):
+        """Render Markdown text computed by the library (e.g. a report's summary) under the cell."""
+        from IPython.display import Markdown
+
+        if not isinstance(text, str):
+            raise TypeError(f"text must be a str of Markdown, got {type(text).__name__}")
+        return Markdown(text)
+
+    def figure(self, name, width=None):
+        """Show a figure file the workbook wrote (``figures/`` of the study, else the
+        reference's): an IPython image, e.g. for the report's sections.
+
+        Parameters
+        ----------
+        name : str
+            File name, e.g. ``"extra_fsm_scores.png"``.
+        width : int, optional
+            Display width [px].
+        """
+        from IPython.display import Image
+
+        return Image(filename=str(report.figure_path(name, self.study.name)), width=width)
+
     def _asserts(self, every_study):
         """True when a check of this session is asserted (the reference asserts all)."""
         return self.reference or every_study

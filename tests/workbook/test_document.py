@@ -5,6 +5,7 @@ import html
 import io
 import re
 import shutil
+import subprocess
 from html.parser import HTMLParser
 from pathlib import Path
 
@@ -63,6 +64,7 @@ def checkout(tmp_path_factory):
     for path in ROOT.glob("notebooks/07_*.ipynb"):
         shutil.copy(path, root / "notebooks")
     shutil.copytree(ROOT / "data" / "results", root / "data" / "results")
+    shutil.copytree(ROOT / "figures", root / "figures")           # the sections' figures
     shutil.copytree(ROOT / "studies", root / "studies")
     return root
 
@@ -98,16 +100,31 @@ def test_the_document_shows_no_code(built):
                     assert html.escape(line.strip(), quote=False) not in page, line
 
 
-def test_the_document_ends_on_the_summary(checkout, built):
+def test_the_document_opens_on_the_summary(checkout, built):
     _, page, parsed = built
     table = pd.read_csv(checkout / "data" / "results" / "reproduction.csv", dtype=str,
                         keep_default_na=False)
+    text = " ".join("".join(parsed.text).split())
     last_line = report.summary(table).splitlines()[-1].lstrip("- ")
-    assert " ".join("".join(parsed.text).split()).endswith(last_line)
-    summary = page.rindex(">Summary<")
-    assert page.rfind("<table", summary) == -1 and page.rfind("<img", summary) == -1
-    assert "published numbers recomputed" in page[summary:]
-    assert "Every difference has a reason" in page[summary:]
+    summary = text.index("Summary")
+    assert text.index(last_line) > summary
+    assert text.index(last_line) < text.index("Where the reproduction differs")
+    assert "published numbers recomputed" in text[summary:summary + 300]
+    assert "Every difference has a reason" in text[summary:]
+
+
+def test_the_document_sums_up_the_findings_beyond_the_paper(built):
+    _, page, parsed = built
+    text = " ".join("".join(parsed.text).split())
+    for notebook in ("notebook 08", "notebook 09", "notebook 10", "notebook 11", "notebook 12"):
+        assert notebook in text, notebook
+    for name in report.FINDINGS:                 # each section's table, row for row
+        rows = report.findings(name)
+        assert len(rows) > 0
+        quantities = {cell for t in parsed.tables for row in t for cell in row}
+        assert {unit_text(q) for q in rows.quantity} <= quantities, name
+    assert page.count("data:image/png;base64,") >= 1 + len(
+        {figure for _, figure, words in report.FINDINGS.values() if not words})
 
 
 def test_notes_are_whole(checkout, built):
@@ -182,3 +199,63 @@ def test_pdf_is_printed_with_chromium(tmp_path):
     page.write_text("<html><body><h1>A report</h1></body></html>")
     pdf = document.print_pdf(page, tmp_path / "out" / "a.pdf")
     assert pdf == tmp_path / "out" / "a.pdf" and pdf.read_bytes().startswith(b"%PDF")
+
+
+@pytest.mark.skipif(document.find_chromium() is None or shutil.which("pdftotext") is None,
+                    reason="needs Chromium and poppler-utils (pdftotext, pdfimages)")
+@pytest.mark.parametrize("paper, width_pt", [("A4", 595), ("letter", 612)])
+def test_the_pdf_holds_every_note_on_pages_that_are_not_blank(checkout, built, tmp_path,
+                                                              paper, width_pt):
+    _, page, _ = built
+    html_path = tmp_path / "report.html"
+    html_path.write_text(page.replace(document.print_css("A4"), document.print_css(paper)),
+                         encoding="utf-8")
+    pdf = document.print_pdf(html_path, tmp_path / "report.pdf")
+    info = subprocess.run(["pdfinfo", str(pdf)], capture_output=True, text=True).stdout
+    width = float(re.search(r"Page size:\s+([\d.]+) x", info).group(1))
+    assert abs(width - width_pt) < 1.5, info            # A4 595 pt, Letter 612 pt wide
+    pages = int(re.search(r"Pages:\s+(\d+)", info).group(1))
+    text = subprocess.run(["pdftotext", "-layout", str(pdf), "-"], capture_output=True,
+                          text=True).stdout
+    words = text.split()
+    table = pd.read_csv(checkout / "data" / "results" / "reproduction.csv", dtype=str,
+                        keep_default_na=False)
+    notes = [unit_text(n) for n in table.loc[table.verdict == "differs", "note"] if n]
+    lost = [n for n in notes if not _printed(n.split(), words)]
+    assert not lost, f"{len(lost)} notes of the differs table are not in the PDF: {lost[:3]}"
+    # a page holds text or a figure: none is blank
+    per_page = text.split("\f")[:pages]
+    images = subprocess.run(["pdfimages", "-list", str(pdf)], capture_output=True,
+                            text=True).stdout.splitlines()[2:]
+    with_image = {int(line.split()[0]) for line in images if line.strip()}
+    blank = [i + 1 for i, t in enumerate(per_page) if not t.strip() and i + 1 not in with_image]
+    assert not blank, f"blank pages: {blank}"
+
+
+def _printed(note, words, spread=12):
+    """True when the words of ``note`` stand in ``words`` (a page's text) in order, each
+    within ``spread`` words of the one before: a table cell's lines are interleaved with
+    the lines of the cells beside it, and a long word may be broken across two lines."""
+    def match(i, word):
+        """Index after ``word`` read at position i (whole, or split in two lines of its
+        cell), or None."""
+        if words[i] == word:
+            return i + 1
+        if words[i] and word.startswith(words[i]):
+            rest = word[len(words[i]):]
+            return next((k + 1 for k in range(i + 1, min(i + spread, len(words)))
+                         if words[k] == rest), None)
+        return None
+
+    for start in (i for i, w in enumerate(words) if match(i, note[0])):
+        at, ok = match(start, note[0]), True
+        for word in note[1:]:
+            hit = next((match(j, word) for j in range(at, min(at + spread, len(words)))
+                        if match(j, word)), None)
+            if hit is None:
+                ok = False
+                break
+            at = hit
+        if ok:
+            return True
+    return False
