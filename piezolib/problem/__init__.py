@@ -7,6 +7,7 @@ stage_hysteresis the virtual stage's hysteresis truth (play operators)
 stage_data       its experiment files (chirps, Table 4 Case I loops): definitions, CSV I/O
 design           the workbook's mu controller in one call
 analysis         Table 3: NS, NP, RS, RP of any controller
+verification     independent checks of the mu designs (notebook 05), with ``checks`` dicts
 hysteresis_fits  the paper's Dahl model and the workbook's Dahl fit to the Case I loops
 fsm_benchmark    the CubeSpec fine steering mirror benchmark: data, metric, baselines
 fsm_models       the benchmark's models step by step (BLAs, linear, nonlinear, scores), with checks
@@ -19,5 +20,5 @@ that the other modules here take explicitly (plant first, then the weights);
 """
 
 __all__ = ["paper", "genplant", "stage", "stage_hysteresis", "stage_data", "design",
-           "analysis", "hysteresis_fits", "fsm_benchmark", "paths",
+           "analysis", "verification", "hysteresis_fits", "fsm_benchmark", "paths",
            "fsm_models", "fsm_control"]
