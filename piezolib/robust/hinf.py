@@ -719,6 +719,22 @@ def _hinfsyn_once(P, nmeas, ncon, *, gamma_max, rtol, max_iter, effort_weight, n
     """:func:`hinfsyn` with the given regularisation weights (no escalation), and whether
     the Riccati conditions' bracket closed with no controller verified within it."""
     t0 = time.perf_counter()
+    P, nmeas, ncon = _checked_plant(P, nmeas, ncon)
+    gamma_max = check_positive("gamma_max", gamma_max)
+    rtol = check_positive("rtol", rtol)
+    max_iter = check_integer("max_iter", max_iter, minimum=2)
+    verify_rtol = check_positive("verify_rtol", verify_rtol)
+    ws = time_scale_of(P) if time_scale is None else check_positive("time_scale", time_scale)
+    search = _GammaSearch(P, nmeas, ncon, ws, effort_weight, noise_weight, max_iter,
+                          verify_rtol)
+    search.bracket(gamma_max)
+    search.bisect(rtol)
+    found = search.near_optimum(rtol)
+    return search.result(found, rtol, t0)
+
+
+def _checked_plant(P, nmeas, ncon):
+    """(P as a StateSpace, nmeas, ncon) of a continuous, proper, finite, dynamic plant."""
     check_lti("P", P)
     if P.isdtime(strict=True):
         raise ValueError(f"P must be a continuous-time system, got a discrete one (dt={P.dt}); "
@@ -733,108 +749,136 @@ def _hinfsyn_once(P, nmeas, ncon, *, gamma_max, rtol, max_iter, effort_weight, n
     nmeas, ncon = check_channels(P, nmeas, ncon)
     for name, mat in (("A", P.A), ("B", P.B), ("C", P.C), ("D", P.D)):
         check_finite_array(f"P.{name}", mat)
-    gamma_max = check_positive("gamma_max", gamma_max)
-    rtol = check_positive("rtol", rtol)
-    max_iter = check_integer("max_iter", max_iter, minimum=2)
-    verify_rtol = check_positive("verify_rtol", verify_rtol)
-    ws = time_scale_of(P) if time_scale is None else check_positive("time_scale", time_scale)
+    return P, nmeas, ncon
 
-    Ps = to_scaled(P, ws)
-    pl = _balance_states(_Plant.split(Ps, nmeas, ncon))
-    _check_stabilisable(pl, ws)
-    grid = _check_grid(pl.A, 200)
-    regularization, rho_u, rho_n = _regularize(pl, effort_weight, noise_weight, grid)
-    nz = _normalize(pl)
-    _check_axis_zeros(nz.plant, ws)
-    gamma_d = _d11_bound(nz.plant)
-    attempts = []
-    cache, tried, candidates = {}, {}, {}
 
-    def check(K, gamma):
+class _GammaSearch:
+    """One gamma-iteration on a scaled, balanced, regularised and normalised plant: the
+    trials' Riccati verdicts, their central controllers and the final checks.
+
+    Only a failed Riccati condition proves a gamma infeasible: where the conditions hold
+    but the central controller fails its closed-loop check (ill-conditioned near the
+    optimum), the optimum is still below, so ``lo`` never moves there.
+    """
+
+    def __init__(self, P, nmeas, ncon, ws, effort_weight, noise_weight, max_iter,
+                 verify_rtol):
+        self.P, self.nmeas, self.ncon, self.ws = P, nmeas, ncon, ws
+        self.max_iter, self.verify_rtol = max_iter, verify_rtol
+        self.Ps = to_scaled(P, ws)
+        self.pl = _balance_states(_Plant.split(self.Ps, nmeas, ncon))
+        _check_stabilisable(self.pl, ws)
+        grid = _check_grid(self.pl.A, 200)
+        self.regularization, self.rho_u, self.rho_n = _regularize(
+            self.pl, effort_weight, noise_weight, grid)
+        self.nz = _normalize(self.pl)
+        _check_axis_zeros(self.nz.plant, ws)
+        self.gamma_d = _d11_bound(self.nz.plant)
+        self.attempts = []
+        # verified controllers by gamma, verdicts by gamma, failed ones by closed-loop peak
+        self.cache, self.tried, self.candidates = {}, {}, {}
+        self.rejected, self.n_checks = set(), 0
+
+    # -- one trial ------------------------------------------------------------------------
+
+    def check(self, K, gamma):
         """(verdict, status) of a central controller closed around the normalised plant."""
-        A, B, C, D = _close_loop(nz.plant, K)
+        A, B, C, D = _close_loop(self.nz.plant, K)
         if np.any(_marginal(*_eig_errors(A))):
             return "numerical", "closed loop unstable (numerical failure)"
         peak = _peak_gain(A, B, C, D, _check_grid(A, 150))
-        if peak > gamma * (1 + verify_rtol):
-            candidates[peak] = K
+        if peak > gamma * (1 + self.verify_rtol):
+            self.candidates[peak] = K
             return "numerical", f"closed-loop peak {peak:.4g} > gamma (numerical failure)"
         return "verified", "ok"
 
-    def outcome(gamma):
+    def outcome(self, gamma):
         """'verified', 'numerical' (the Riccati conditions hold but the central
         controller fails the closed-loop check) or 'infeasible'."""
-        if gamma in tried:
-            return tried[gamma]
-        K, status = _central(nz.plant, gamma)
+        if gamma in self.tried:
+            return self.tried[gamma]
+        K, status = _central(self.nz.plant, gamma)
         verdict = "infeasible" if K is None else "verified"
         if K is not None:
-            verdict, status = check(K, gamma)
+            verdict, status = self.check(K, gamma)
         if verdict == "numerical":
             # the same conditions solved the other way round (scipy's Riccati solver
             # first): on the Lundstrom K-step at effort weight 1e-6 the pencil's X, Y
             # gave a controller 72 % above gamma = 1.0 and scipy's one 0.06 % below it
-            K2, _ = _central(nz.plant, gamma, scipy_first=True)
-            if K2 is not None and check(K2, gamma)[0] == "verified":
+            K2, _ = _central(self.nz.plant, gamma, scipy_first=True)
+            if K2 is not None and self.check(K2, gamma)[0] == "verified":
                 K, verdict, status = K2, "verified", "ok (scipy's Riccati solutions)"
-        attempts.append((float(gamma), status))
+        self.attempts.append((float(gamma), status))
         if verdict == "verified":
-            cache[gamma] = K
-        tried[gamma] = verdict
+            self.cache[gamma] = K
+        self.tried[gamma] = verdict
         return verdict
 
-    def feasible(gamma):
-        return outcome(gamma) == "verified"
+    def feasible(self, gamma):
+        return self.outcome(gamma) == "verified"
 
-    def out_of_trials():
-        return len(attempts) >= max_iter
+    def out_of_trials(self):
+        return len(self.attempts) >= self.max_iter
 
-    # bracket: find a verified gamma (upwards), then an infeasible one (downwards).
-    # Only a failed Riccati condition proves a gamma infeasible: where the
-    # conditions hold but the central controller fails its check (ill-conditioned
-    # near the optimum), the optimum is still below, so ``lo`` never moves there.
-    hi = max(2.0 * gamma_d, 1.0)
-    while not feasible(hi):
-        if hi >= gamma_max or out_of_trials():
-            held = [g for g, v in tried.items() if v == "numerical"]
-            if held:
-                raise _ControllersFailed(
-                    f"the Riccati conditions hold at gamma = {min(held):.4g} ... {max(held):.4g}, "
-                    f"but no central controller there passed the closed-loop check (last: "
-                    f"{attempts[-1][1]}): the synthesis is ill-conditioned at these gammas "
-                    f"({len(attempts)} trials, gamma_max={gamma_max:.3g})."
-                    + (f"  A larger effort_weight / noise_weight than the {max(rho_u, rho_n):g} "
-                       "added may help." if rho_u or rho_n else _spread_hint(pl.A, ws)),
-                    rho_u, rho_n)
-            raise HinfSynthesisError(
-                f"no gamma <= {min(hi, gamma_max):.3g} is feasible within gamma_max="
-                f"{gamma_max:.3g} and max_iter={max_iter} ({len(attempts)} trials); last outcome: "
-                f"{attempts[-1][1]}.{_spread_hint(pl.A, ws)}")
-        hi = min(4.0 * hi, gamma_max)
-    lo = floor = max(gamma_d, 1e-9 * hi)
-    hi_cond = hi                      # smallest gamma where the Riccati conditions hold
-    trial = hi / 4.0
-    while trial > floor and not out_of_trials():
-        verdict = outcome(trial)
-        if verdict == "infeasible":
-            lo = trial
-            break
-        hi_cond = trial
-        if verdict == "verified":
-            hi = trial
-        trial = hi_cond / 4.0
-    while hi_cond > lo * (1 + rtol) and not out_of_trials():
-        mid = np.sqrt(lo * hi_cond) if lo > 0 else hi_cond / 2
-        verdict = outcome(mid)
-        if verdict == "infeasible":
-            lo = mid
-        else:
-            hi_cond = mid
+    # -- the bracket ----------------------------------------------------------------------
+
+    def bracket(self, gamma_max):
+        """Find a verified gamma (upwards), then an infeasible one (downwards): sets
+        ``hi`` (best verified), ``hi_cond`` (smallest gamma where the conditions hold),
+        ``lo`` (largest proven infeasible) and ``floor``."""
+        hi = max(2.0 * self.gamma_d, 1.0)
+        while not self.feasible(hi):
+            if hi >= gamma_max or self.out_of_trials():
+                self._raise_no_feasible(hi, gamma_max)
+            hi = min(4.0 * hi, gamma_max)
+        self.lo = self.floor = max(self.gamma_d, 1e-9 * hi)
+        self.hi = self.hi_cond = hi
+        trial = hi / 4.0
+        while trial > self.floor and not self.out_of_trials():
+            verdict = self.outcome(trial)
+            if verdict == "infeasible":
+                self.lo = trial
+                break
+            self.hi_cond = trial
             if verdict == "verified":
-                hi = mid
+                self.hi = trial
+            trial = self.hi_cond / 4.0
 
-    def given_loop(K):
+    def _raise_no_feasible(self, hi, gamma_max):
+        """The bracket found no verified gamma: say whether the conditions ever held."""
+        held = [g for g, v in self.tried.items() if v == "numerical"]
+        rho_u, rho_n, attempts = self.rho_u, self.rho_n, self.attempts
+        if held:
+            raise _ControllersFailed(
+                f"the Riccati conditions hold at gamma = {min(held):.4g} ... {max(held):.4g}, "
+                f"but no central controller there passed the closed-loop check (last: "
+                f"{attempts[-1][1]}): the synthesis is ill-conditioned at these gammas "
+                f"({len(attempts)} trials, gamma_max={gamma_max:.3g})."
+                + (f"  A larger effort_weight / noise_weight than the {max(rho_u, rho_n):g} "
+                   "added may help." if rho_u or rho_n else _spread_hint(self.pl.A, self.ws)),
+                rho_u, rho_n)
+        raise HinfSynthesisError(
+            f"no gamma <= {min(hi, gamma_max):.3g} is feasible within gamma_max="
+            f"{gamma_max:.3g} and max_iter={self.max_iter} ({len(attempts)} trials); last "
+            f"outcome: {attempts[-1][1]}.{_spread_hint(self.pl.A, self.ws)}")
+
+    def bisect(self, rtol):
+        """Bisect (geometrically) between ``lo`` and ``hi_cond`` to width ``rtol``."""
+        while self.hi_cond > self.lo * (1 + rtol) and not self.out_of_trials():
+            mid = np.sqrt(self.lo * self.hi_cond) if self.lo > 0 else self.hi_cond / 2
+            verdict = self.outcome(mid)
+            if verdict == "infeasible":
+                self.lo = mid
+            else:
+                self.hi_cond = mid
+                if verdict == "verified":
+                    self.hi = mid
+
+    # -- the final checks -----------------------------------------------------------------
+
+    def given_loop(self, K):
         """(Ks, CLs, poles_s, err): K for the given plant and the loop it closes there."""
+        nz = self.nz
         Ak, Bk, Ck, Dk = K
         Ks = ct.ss(Ak, Bk @ nz.Ty, nz.Tu @ Ck, nz.Tu @ Dk @ nz.Ty)
         if np.any(nz.D22):
@@ -842,10 +886,10 @@ def _hinfsyn_once(P, nmeas, ncon, *, gamma_max, rtol, max_iter, effort_weight, n
             p2, m2 = nz.D22.shape
             static = ct.ss(np.zeros((0, 0)), np.zeros((0, m2)), np.zeros((p2, 0)), nz.D22)
             Ks = ct.feedback(Ks, static, sign=-1)
-        CLs = balance(Ps.lft(balance(Ks), nu=ncon, ny=nmeas))
+        CLs = balance(self.Ps.lft(balance(Ks), nu=self.ncon, ny=self.nmeas))
         return (Ks, CLs, *_eig_errors(np.asarray(CLs.A, float)))
 
-    def final_check(K, level):
+    def final_check(self, K, level):
         """(peak, K, CLs, poles_s, norm, w_peak), K in ordinary time, when the normalised
         plant's controller K passes every check at ``level``, else
         None (the reason is appended to ``attempts``).  The ground truth is the loop
@@ -853,123 +897,150 @@ def _hinfsyn_once(P, nmeas, ncon, *, gamma_max, rtol, max_iter, effort_weight, n
         (near the optimum a controller can be so ill-conditioned that the same loop,
         realised from the given plant, has a pole at or across the axis) and its norm
         recomputed pointwise on the given plant."""
-        A, B, C, D = _close_loop(nz.plant, K)
+        P, ws, verify_rtol = self.P, self.ws, self.verify_rtol
+        A, B, C, D = _close_loop(self.nz.plant, K)
         peak, _ = hinf_norm(ct.ss(A, B, C, D), omega=_check_grid(A, 2000))
         if peak > level * (1 + verify_rtol):
-            attempts.append((float(level), f"dense-grid peak {peak:.4g} > gamma"))
+            self.attempts.append((float(level), f"dense-grid peak {peak:.4g} > gamma"))
             return None
-        Ks, CLs, poles_s, err = given_loop(K)
+        Ks, CLs, poles_s, err = self.given_loop(K)
         # and closed once more as a user would, in ordinary time: near an ill-conditioned
         # optimum one realisation of the same loop can be stable and another not
-        K_out = from_scaled(balance(Ks), ws, P.output_labels[-nmeas:], P.input_labels[-ncon:],
-                            name="K")
-        lam, lam_err = _eig_errors(np.asarray(P.lft(K_out, nu=ncon, ny=nmeas).A, float))
+        K_out = from_scaled(balance(Ks), ws, P.output_labels[-self.nmeas:],
+                            P.input_labels[-self.ncon:], name="K")
+        lam, lam_err = _eig_errors(np.asarray(P.lft(K_out, nu=self.ncon, ny=self.nmeas).A,
+                                              float))
         for poles, errs in ((poles_s, err), (lam / ws, lam_err / ws)):
             if np.any(_marginal(poles, errs)):
                 worst = poles[np.argmax(poles.real)] * ws
-                attempts.append((float(level), f"given plant's loop: pole at {worst:.4g} rad/s"))
+                self.attempts.append((float(level),
+                                      f"given plant's loop: pole at {worst:.4g} rad/s"))
                 return None
         # the norm from the pointwise loop, not from CLs: near pole-zero cancellations the
         # closed loop's realisation is evaluated badly (1.7e5 instead of 1.38 seen at DC)
-        norm, w_peak = lft_hinf_norm(Ps, balance(Ks), _check_grid(CLs.A, 2000), omega_s=1.0) \
+        norm, w_peak = lft_hinf_norm(self.Ps, balance(Ks), _check_grid(CLs.A, 2000),
+                                     omega_s=1.0) \
             if CLs.nstates else (float(np.linalg.norm(CLs.D, 2)), 0.0)
         if not np.isfinite(norm) or norm > level * (1 + verify_rtol):
-            attempts.append((float(level), f"recomputed norm {norm:.4g} on the given plant "
-                                           "> gamma"))
+            self.attempts.append((float(level), f"recomputed norm {norm:.4g} on the given "
+                                                "plant > gamma"))
             return None
         return peak, K_out, CLs, poles_s, norm, w_peak
 
-    # A controller within rtol of the conditions' optimum.  Near an ill-conditioned
-    # optimum whether a central controller passes its checks is decided by rounding (the
-    # Lundstrom K-step: peaks from gamma to 14 gamma within 0.1 % above the optimum, in a
-    # different pattern under every BLAS kernel), so neither a bisection on "verified" nor
-    # the first controller to pass is reproducible.  Every trial's controller counts at its
-    # own closed-loop peak, the best ones go through the final checks, and gammas spread
-    # over (lo, lo (1 + rtol)] by a golden-ratio sequence are tried until one passes.
-    rejected, checks = set(), [0]
+    # -- a controller near the optimum ------------------------------------------------------
+    #
+    # Near an ill-conditioned optimum whether a central controller passes its checks is
+    # decided by rounding (the Lundstrom K-step: peaks from gamma to 14 gamma within 0.1 %
+    # above the optimum, in a different pattern under every BLAS kernel), so neither a
+    # bisection on "verified" nor the first controller to pass is reproducible.  Every
+    # trial's controller counts at its own closed-loop peak, the best ones go through the
+    # final checks, and gammas spread over (lo, lo (1 + rtol)] by a golden-ratio sequence
+    # are tried until one passes.
 
-    def pool():
+    def pool(self):
         """(level, K, at_peak) of the controllers not rejected by the final checks, best
         first: verified ones at their gamma, the others at their closed-loop peak."""
-        items = [(g, K, False) for g, K in cache.items()] + \
-            [(c, K, True) for c, K in candidates.items()]
-        return sorted((item for item in items if item[0] not in rejected), key=lambda x: x[0])
+        items = [(g, K, False) for g, K in self.cache.items()] + \
+            [(c, K, True) for c, K in self.candidates.items()]
+        return sorted((item for item in items if item[0] not in self.rejected),
+                      key=lambda x: x[0])
 
-    def first_passing(limit):
+    def first_passing(self, limit):
         """(level, K, at_peak, checked) of the best pooled controller at a level <= limit
-        that passes :func:`final_check`, or None; the ones that fail are rejected."""
-        for level, K, at_peak in pool():
-            if level > limit or checks[0] >= _MAX_CHECKS:
+        that passes :meth:`final_check`, or None; the ones that fail are rejected."""
+        for level, K, at_peak in self.pool():
+            if level > limit or self.n_checks >= _MAX_CHECKS:
                 return None
-            checks[0] += 1
-            checked = final_check(K, level)
+            self.n_checks += 1
+            checked = self.final_check(K, level)
             if checked is not None:
                 return level, K, at_peak, checked
-            rejected.add(level)
+            self.rejected.add(level)
         return None
 
-    found, samples = None, 0
-    while hi_cond <= lo * (1 + rtol):
-        found = first_passing(lo * (1 + rtol))
-        if found or samples >= _MAX_SAMPLES or checks[0] >= _MAX_CHECKS or out_of_trials():
-            break
-        samples += 1
-        gamma = lo * (1 + rtol) ** ((samples * _GOLDEN) % 1.0)
-        verdict = outcome(gamma)
-        if verdict == "infeasible" and gamma < hi_cond:
-            lo = gamma
-        elif verdict != "infeasible":
-            # an "infeasible" above a gamma where the conditions hold is a flipped verdict
-            hi_cond = min(hi_cond, gamma)
-    if found is None:
-        # nothing in the window: bisect between the conditions' optimum and the best
-        # verified gamma, as long as the verdicts there keep improving it
-        hi = min([g for g in cache if g not in rejected] + [hi])
-        v_lo = hi_cond
-        while hi > lo * (1 + rtol) and hi > v_lo * (1 + rtol / 8) and not out_of_trials():
-            mid = np.sqrt(v_lo * hi)
-            if feasible(mid):
-                hi = mid
-            else:
-                v_lo = mid
-        found = first_passing(np.inf)
+    def near_optimum(self, rtol):
+        """:meth:`first_passing` within ``rtol`` of the optimum, sampling the window; if
+        nothing passes there, bisection towards the best verified gamma.  None when no
+        pooled controller passes."""
+        found, samples = None, 0
+        while self.hi_cond <= self.lo * (1 + rtol):
+            found = self.first_passing(self.lo * (1 + rtol))
+            if (found or samples >= _MAX_SAMPLES or self.n_checks >= _MAX_CHECKS
+                    or self.out_of_trials()):
+                break
+            samples += 1
+            gamma = self.lo * (1 + rtol) ** ((samples * _GOLDEN) % 1.0)
+            verdict = self.outcome(gamma)
+            if verdict == "infeasible" and gamma < self.hi_cond:
+                self.lo = gamma
+            elif verdict != "infeasible":
+                # an "infeasible" above a gamma where the conditions hold is a flipped verdict
+                self.hi_cond = min(self.hi_cond, gamma)
+        if found is None:
+            # nothing in the window: bisect between the conditions' optimum and the best
+            # verified gamma, as long as the verdicts there keep improving it
+            hi = min([g for g in self.cache if g not in self.rejected] + [self.hi])
+            v_lo = self.hi_cond
+            while (hi > self.lo * (1 + rtol) and hi > v_lo * (1 + rtol / 8)
+                   and not self.out_of_trials()):
+                mid = np.sqrt(v_lo * hi)
+                if self.feasible(mid):
+                    hi = mid
+                else:
+                    v_lo = mid
+            self.hi = hi
+            found = self.first_passing(np.inf)
+        return found
 
-    if found is not None:
-        gamma, K, at_peak, result = found
-        if at_peak:
-            attempts.append((float(gamma), "a trial's central controller, verified at its peak"))
-    else:
-        # back off from the best controller by growing steps (1 %, 2 %, 4 %, ...)
-        gamma, result = (pool() or [(hi,)])[0][0], None
+    def backed_off(self, rtol):
+        """(gamma, checked) backing off from the best controller by growing steps (1 %,
+        2 %, 4 %, ...); ``checked`` None when none passes."""
+        gamma, result = (self.pool() or [(self.hi,)])[0][0], None
         for k in range(_MAX_BACKOFFS):
             gamma *= 1 + max(10 * rtol, 0.01) * 2 ** k
-            if feasible(gamma):
-                result = final_check(cache[gamma], gamma)
+            if self.feasible(gamma):
+                result = self.final_check(self.cache[gamma], gamma)
                 if result is not None:
                     break
-    if result is None:
-        raise HinfSynthesisError(f"no controller passed verification (last: {attempts[-1][1]}; "
-                                 f"{len(attempts)} trials)")
-    peak, K, CLs, poles_s, norm, w_peak = result
-    converged = gamma <= lo * (1 + rtol) or lo <= floor
-    unverified = not converged and hi_cond <= lo * (1 + rtol)
-    if tried.get(lo) == "infeasible" and peak < lo:
-        # the controller itself does better than gammas judged infeasible: those
-        # verdicts were rounding in ill-conditioned Riccati equations (seen on the
-        # distillation K-step: gamma 2.378 "infeasible", this controller 1.457)
-        lo = max([g for g, v in tried.items() if v == "infeasible" and g < peak] + [floor])
-        converged = False
-        attempts.append((float(peak), "controller beats gammas judged infeasible: those "
-                                       "verdicts were numerical"))
-    CL = from_scaled(CLs, ws, P.input_labels[:-ncon], P.output_labels[:-nmeas],
-                     name="closed_loop")
-    if tried.get(lo) != "infeasible":
-        # the search reached its floor (1e-9 gamma) without an infeasible gamma: only the
-        # D11 bound is proven (0 without D11), e.g. for square D12 and D21, where gamma -> 0
-        lo = gamma_d
-    return HinfResult(K=K, gamma=float(gamma), gamma_infeasible=float(lo), norm=float(norm),
-                      omega_peak=float(w_peak * ws), closed_loop=CL,
-                      closed_loop_poles=np.sort_complex(poles_s * ws),
-                      regularization=regularization, effort_weight=rho_u, noise_weight=rho_n,
-                      time_scale=ws, iterations=len(attempts), elapsed=time.perf_counter() - t0,
-                      converged=bool(converged), attempts=tuple(attempts)), unverified
+        return gamma, result
+
+    # -- the result -------------------------------------------------------------------------
+
+    def result(self, found, rtol, t0):
+        """(HinfResult, unverified) of the search, from :meth:`near_optimum`'s find."""
+        if found is not None:
+            gamma, K, at_peak, result = found
+            if at_peak:
+                self.attempts.append((float(gamma),
+                                      "a trial's central controller, verified at its peak"))
+        else:
+            gamma, result = self.backed_off(rtol)
+        attempts, tried, lo, floor = self.attempts, self.tried, self.lo, self.floor
+        if result is None:
+            raise HinfSynthesisError(f"no controller passed verification (last: "
+                                     f"{attempts[-1][1]}; {len(attempts)} trials)")
+        peak, K, CLs, poles_s, norm, w_peak = result
+        converged = gamma <= lo * (1 + rtol) or lo <= floor
+        unverified = not converged and self.hi_cond <= lo * (1 + rtol)
+        if tried.get(lo) == "infeasible" and peak < lo:
+            # the controller itself does better than gammas judged infeasible: those
+            # verdicts were rounding in ill-conditioned Riccati equations (seen on the
+            # distillation K-step: gamma 2.378 "infeasible", this controller 1.457)
+            lo = max([g for g, v in tried.items() if v == "infeasible" and g < peak] + [floor])
+            converged = False
+            attempts.append((float(peak), "controller beats gammas judged infeasible: those "
+                                           "verdicts were numerical"))
+        ws, P = self.ws, self.P
+        CL = from_scaled(CLs, ws, P.input_labels[:-self.ncon], P.output_labels[:-self.nmeas],
+                         name="closed_loop")
+        if tried.get(lo) != "infeasible":
+            # the search reached its floor (1e-9 gamma) without an infeasible gamma: only the
+            # D11 bound is proven (0 without D11), e.g. for square D12 and D21, where gamma -> 0
+            lo = self.gamma_d
+        return HinfResult(K=K, gamma=float(gamma), gamma_infeasible=float(lo),
+                          norm=float(norm), omega_peak=float(w_peak * ws), closed_loop=CL,
+                          closed_loop_poles=np.sort_complex(poles_s * ws),
+                          regularization=self.regularization, effort_weight=self.rho_u,
+                          noise_weight=self.rho_n, time_scale=ws, iterations=len(attempts),
+                          elapsed=time.perf_counter() - t0, converged=bool(converged),
+                          attempts=tuple(attempts)), unverified
