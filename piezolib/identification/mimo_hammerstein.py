@@ -38,6 +38,7 @@ import control as ct
 import numpy as np
 
 from piezolib._checks import check_finite_array, check_positive, check_type
+from piezolib.hysteresis.pi import play_outputs
 from piezolib.identification.freqfit import simulate_discrete
 
 __all__ = ["play_operators", "MIMOHammerstein", "fit_play_weights"]
@@ -76,15 +77,10 @@ def play_operators(u, thresholds):
     """
     u = _records("u", u)
     r = _thresholds(thresholds)
-    rr = r.reshape((1, -1) + (1,) * (u.ndim - 2))
-    out = np.empty((u.shape[0], u.shape[1], r.size) + u.shape[2:])
-    y = np.clip(np.zeros((u.shape[1], r.size) + u.shape[2:]), u[0][:, None] - rr,
-                u[0][:, None] + rr)
-    for t in range(u.shape[0]):
-        v = u[t][:, None]
-        y = np.minimum(np.maximum(y, v - rr), v + rr)
-        out[t] = y
-    return out
+    flat = u.reshape(u.shape[0], -1)                  # (N, n_u x records)
+    plays = play_outputs(flat, r, np.zeros(r.size))    # from rest: y[-1] = 0, clipped
+    plays = plays.reshape(u.shape + (r.size,))         # (N, n_u, ..., K)
+    return np.moveaxis(plays, -1, 2)
 
 
 @dataclass(frozen=True)
