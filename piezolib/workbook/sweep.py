@@ -45,10 +45,12 @@ the Pareto figure (``extra_sweep_pareto.png``) are written under
 ``runs/sweeps/<name>/``, never to ``figures/`` or ``data/results/``.
 """
 
+import functools
 import itertools
 import json
 import math
 import os
+import shutil
 import socket
 import sys
 import time
@@ -169,6 +171,14 @@ class SweepSpec:
         """``runs/sweeps/<name>/``: the sweep's table, figure and point records."""
         return outputs.sweep_output_dir(self.name)
 
+    def clear_records(self):
+        """Remove the stored point records (``points/`` of :attr:`directory`), so that the
+        next :func:`run_sweep` evaluates every point again (a design may still come from
+        the pipeline's disk cache); return how many were removed."""
+        records = sorted((self.directory / "points").glob("*.json"))
+        shutil.rmtree(self.directory / "points", ignore_errors=True)
+        return len(records)
+
     def points(self):
         """The sweep's points (a random sample's repeats are dropped), as :class:`SweepPoint`.
 
@@ -216,6 +226,8 @@ class SweepResult:
         Wall time of the run [s].
     paths : dict
         ``{"table": csv path, "parquet": path or None, "figure": png path or None}``.
+    backend : str
+        Where the points ran (``"1 local worker(s)"``, a scheduler's address).
     """
 
     spec: SweepSpec
@@ -225,6 +237,122 @@ class SweepResult:
     failed: int
     seconds: float
     paths: dict
+    backend: str = ""
+
+    def overview(self):
+        """The table as a reader wants it: each point's parameters, μ_RP, the controller's
+        states, margins, the 10 and 50 Hz tracking errors [%] and whether it is on the front
+        (the columns the table has)."""
+        columns = ["point", *self.spec.parameters, *_OVERVIEW_COLUMNS]
+        return self.table[[c for c in columns if c in self.table.columns]]
+
+    @property
+    def checks(self):
+        """What holds for every sweep, {what it states: bool}: every point ran, its numbers
+        are consistent, and the Pareto front is the set of undominated points.
+
+        Examples
+        --------
+        >>> spec = spec_from_dict({"name": "demo", "grid": {"design.order": [4, 6]}})
+        >>> table = pd.DataFrame({"point": [1, 2], "design.order": [4, 6], "mu_RP": [1.2, 0.9],
+        ...                       "controller_states": [4, 6],
+        ...                       "tracking_error_50Hz_percent": [3.0, 4.0],
+        ...                       "pareto": [True, True], "error": ["", ""]})
+        >>> result = SweepResult(spec, table, 2, 0, 0, 1.0, {})
+        >>> all(result.checks.values())
+        True
+        >>> result = SweepResult(spec, table.assign(pareto=[True, False]), 2, 0, 0, 1.0, {})
+        >>> result.checks["the front holds every undominated point"]
+        False
+        """
+        t = self.table
+        column = functools.partial(_column, t)
+        checks = {"every point ran": self.failed == 0 and len(t) == len(self.spec.points())}
+        if "design.order" in self.spec.parameters:
+            fixed = (t[_CONTROLLER] == "fixed_order" if _CONTROLLER in t
+                     else pd.Series(True, index=t.index))
+            checks["the deployed controller has the swept order"] = bool(
+                (column("controller_states") == column("design.order"))[fixed].all())
+        checks["mu_RP > 0 at every point"] = bool((column("mu_RP") > 0).all())
+        if "stable_with_loop_delay" in t:
+            checks["every sampled loop is stable with the loop's delay"] = bool(
+                t["stable_with_loop_delay"].astype(bool).all())
+        if {"tracking_error_50Hz_low_percent", "tracking_error_50Hz_high_percent"} <= set(t):
+            y = column("tracking_error_50Hz_percent")
+            checks["the 95 % interval of the 50 Hz error holds its mean"] = bool(
+                ((t["tracking_error_50Hz_low_percent"] <= y)
+                 & (y <= t["tracking_error_50Hz_high_percent"])).all())
+        values = t[["mu_RP", "tracking_error_50Hz_percent"]].to_numpy(float)
+        dominated = [bool(np.any(np.all(values <= v, axis=1) & np.any(values < v, axis=1)))
+                     for v in values]
+        on_front = (t["pareto"].astype(bool).to_numpy() if "pareto" in t
+                    else np.zeros(len(t), dtype=bool))
+        finite = np.isfinite(values).all(axis=1)
+        checks["no point of the Pareto front is beaten in both numbers"] = \
+            not any(np.asarray(dominated)[on_front])
+        checks["the front holds every undominated point"] = bool(
+            on_front[finite & ~np.asarray(dominated, dtype=bool)].all())
+        checks["the front has a point"] = bool(on_front.any())
+        return checks
+
+    def resumed_checks(self, first):
+        """{what it states: bool} of this run as a rerun of ``first`` (a SweepResult of
+        the same spec): nothing computed again, every point read from its record, the
+        same table."""
+        check_type("first", first, SweepResult, "the SweepResult of the first run")
+        try:
+            pd.testing.assert_frame_equal(self.table, first.table)
+            same = True
+        except AssertionError:
+            same = False
+        return {"nothing computed again": self.evaluated == 0,
+                "every point read from its record": self.reused == len(first.table),
+                "the same table as the first run": same}
+
+    def findings(self):
+        """Markdown lines of what the sweep found: its designs, the lowest μ_RP, the lowest
+        50 Hz tracking error and the Pareto front."""
+        from piezolib.workbook.style import unit_text
+
+        t, spec = self.table, self.spec
+        names = {p: unit_text(n) for p, n in _short_names(spec.parameters).items()}
+        over = " × ".join(
+            f"{names[p]} ∈ {{{', '.join(_format(v) for v in dict.fromkeys(t[p]))}}}"
+            for p in spec.parameters)
+        iterations = ("" if "design.max_iter" in spec.parameters else
+                      f" ({spec.base.design.max_iter} DK iteration(s) each)")
+        lines = [f"**{len(t)} designs** over {over}{iterations} in {self.seconds:.1f} s on "
+                 f"{self.backend or 'the workers'}; {self.reused} reused, {self.failed} failed."]
+        where = functools.partial(_where, names)
+        ok = t.dropna(subset=["mu_RP", "tracking_error_50Hz_percent"])
+        if len(ok):
+            best_mu = ok.loc[ok.mu_RP.idxmin()]
+            best_e = ok.loc[ok.tracking_error_50Hz_percent.idxmin()]
+            lines += [f"**Lowest μ_RP:** {best_mu.mu_RP:.3f} at {where(best_mu)} "
+                      f"(50 Hz error {best_mu.tracking_error_50Hz_percent:.2f} %).",
+                      f"**Lowest 50 Hz error:** {best_e.tracking_error_50Hz_percent:.2f} % at "
+                      f"{where(best_e)} (μ_RP {best_e.mu_RP:.3f})."]
+        if "pareto" in t:
+            front = ", ".join(map(str, t.point[t.pareto.astype(bool)]))
+            lines.append(f"**Pareto front:** points {front} of {len(t)}; table and figure in "
+                         f"`{spec.directory}`.")
+        return lines
+
+
+#: The columns of :meth:`SweepResult.overview` after the point and its parameters.
+_OVERVIEW_COLUMNS = ("mu_RP", "controller_states", "gain_margin_dB", "phase_margin_deg",
+                     "delay_margin_samples", "tracking_error_10Hz_percent",
+                     "tracking_error_50Hz_percent", "pareto")
+
+
+def _column(table, name):
+    """Column ``name`` of ``table``, or NaN throughout when it has none."""
+    return table[name] if name in table else pd.Series(np.nan, index=table.index)
+
+
+def _where(names, row):
+    """``omega_e = 1000, order = 4``: the parameters of a table row."""
+    return ", ".join(f"{names[p]} = {_format(row[p])}" for p in names)
 
 
 # --------------------------------------------------------------------------- specs
@@ -695,10 +823,10 @@ def run_sweep(spec, jobs=None, scheduler=None, evaluate=evaluate_point, dry_run=
     start = time.perf_counter()
     todo = [p for p in points if stored[p.index] is None]
     reused = len(points) - len(todo)
+    backend = (f"{scheduler if isinstance(scheduler, str) else 'the dask cluster'}"
+               if scheduler is not None else f"{jobs} local worker(s)")
     _say(stream, f"sweep {spec.name}: {len(points)} points, {reused} stored "
-         f"(reused), {len(todo)} to run "
-         + (f"on {scheduler if isinstance(scheduler, str) else 'the dask cluster'}"
-            if scheduler is not None else f"on {jobs} local worker(s)"))
+         f"(reused), {len(todo)} to run on {backend}")
     _warn_other_library(stored, stream)
     rows = {p.index: _row(p, stored[p.index]["metrics"], None, keys[p.index])
             for p in points if stored[p.index] is not None}
@@ -718,7 +846,7 @@ def run_sweep(spec, jobs=None, scheduler=None, evaluate=evaluate_point, dry_run=
     _say(stream, f"sweep {spec.name}: {len(todo) - failed} evaluated, {reused} reused, "
          f"{failed} failed in {seconds:.1f} s; table {paths['table']}"
          + (f", figure {paths['figure']}" if paths["figure"] else ""))
-    return SweepResult(spec, table, len(todo) - failed, reused, failed, seconds, paths)
+    return SweepResult(spec, table, len(todo) - failed, reused, failed, seconds, paths, backend)
 
 
 def _jobs(jobs):

@@ -4,14 +4,17 @@ import warnings
 
 import control as ct
 import numpy as np
+import pandas as pd
 import pytest
 
 from piezolib.hysteresis import PIModel
 from piezolib.problem import paper
 from piezolib.problem.stage import VirtualStage
+from piezolib.robust import controller_sos
 from piezolib.uncertainty import model_set, random_model_set, unstable_members
 from piezolib.uncertainty.modelset import ModelSet
-from piezolib.workbook import experiments
+from piezolib.workbook import experiments, set_tracking
+from piezolib.workbook import study as studies
 from piezolib.workbook.figures.tracking import tracking_over_set as figure
 from piezolib.workbook.set_tracking import tracking_over_set
 from piezolib.workbook.two_dof import two_dof_feedforward
@@ -98,3 +101,89 @@ def test_overview_and_goal_shares_count_the_stable_members():
                               "peak_to_peak_error_pct_at_50Hz": 0.0})
     assert shares["meets < 100 % up to 10 Hz [%]"] == 100.0
     assert shares["meets < 0 % at 50 Hz [%]"] == 0.0 == shares["meets both [%]"]
+
+
+# --------------------------------------------------------------------------- a study's set
+LABELS = list(set_tracking.CONTROLLER_LABELS.values())
+
+
+def small_set(offsets=((0,) * 6, (1,) * 6, (-1,) * 6)):
+    """A SetTrackingStudy of three grid members and two draws, a PI-type K in its place."""
+    Kd = ct.sample_system(K, 1 / STAGE.fs, "tustin")
+    sections = {LABELS[0]: controller_sos(Kd, name="ours"),
+                LABELS[1]: controller_sos(2 * Kd, name="other")}
+    study = studies.Study().replace(name="small", experiments={"frequencies_Hz": (10.0, 50.0)})
+    return set_tracking.SetTrackingStudy(
+        study, STAGE, paper.plant(), MODEL, MODEL, sections, {LABELS[0]: K, LABELS[1]: 2 * K},
+        members_with(offsets), random_model_set(STAGE.settings.plant, 0.05, 2, seed=1), 0)
+
+
+def test_the_boundary_check_recomputes_the_batched_poles_by_feedback():
+    check = small_set().boundary_check(members=2)
+    assert all(len(m) == 2 for m in check.members.values())
+    assert all(check.checks.values()) and len(check.checks) == 4
+    assert max(check.differences().values()) < 1e-9          # the same poles, two ways
+    bad = set_tracking.BoundaryCheck(check.members, check.batched,
+                                     {k: v + 2.0 for k, v in check.by_feedback.items()})
+    assert not any(bad.checks.values())                       # a check that can fail
+    assert "nearest the boundary" in str(check)
+
+
+@pytest.fixture(scope="module")
+def runs():
+    """The runs of notebook 12 on the small set (one Case III result stands for every run)."""
+    over = small_set()
+    iii = iv = tracking_over_set(STAGE, over.grid, MODEL, K, frequencies_Hz=[10.0, 50.0])
+    draws = tracking_over_set(STAGE, over.draws, MODEL, K, frequencies_Hz=[10.0, 50.0])
+    grid = {set_tracking.CASE_II: iii, f"Case III, {LABELS[0]}": iii,
+            f"Case III, {LABELS[1]}": iii, f"Case IV (Dahl), {LABELS[0]}": iv,
+            f"Case IV (PI), {LABELS[0]}": iv}
+    return set_tracking.SetTrackingRuns(over, grid, {f"Case III, {LABELS[0]}": draws}, 1.0)
+
+
+STABILITY = pd.DataFrame({label: {"exact parametric margin, continuous loop [%]": 4.5,
+                                  "unstable of 3, continuous loop": 0,
+                                  "unstable of 3, sampled, no delay": 0,
+                                  "unstable of 3, sampled, delay 1": 1,
+                                  "unstable of 2 random, sampled, delay 1": 0,
+                                  "grid spread, sampled, delay 1 [%]": 3.0} for label in LABELS})
+
+
+def test_the_runs_tables_count_the_members(runs):
+    overview = runs.overview()
+    assert list(overview.index.levels[0]) == ["grid (3)", "random (2)"] and len(overview) == 6
+    assert (overview["members run"] == 3).iloc[:5].all()
+    worst = runs.worst_members(count=2)
+    assert len(worst) == 2 and worst["error [%]"].is_monotonic_decreasing
+    assert list(worst.columns[-6:]) == [f"q{i}" for i in range(6)]
+    assert runs.by_damping()["members"].sum() == 3
+    assert runs.goal_shares().shape[0] == 6
+    assert set(runs.nominal_errors()) == set(runs.over_grid) and runs.worst_frequency == 50.0
+    assert "0 unstable members ()" in runs.unstable_lines()
+    assert runs.samples == sum(r.samples for r in runs.over_grid.values()) + \
+        runs.over_draws[f"Case III, {LABELS[0]}"].samples
+
+
+def test_the_claims_follow_the_notebooks_order(runs):
+    claims = runs.claims(STABILITY)
+    assert len(claims) == 2 * 2 + 5 * 2 * 2 + 5
+    assert claims[0]["quantity"] == ("our deployed K: members of the 3 set with an unstable "
+                                     "sampled loop (delay 1)")
+    assert (claims[0]["ours"], claims[0]["expect"]) == (1, "differs")
+    assert claims[-1]["quantity"].endswith("stable members meeting both goals")
+    assert [c["quantity"] for c in claims[4:6]] == [
+        f"{set_tracking.CASE_II}: median tracking error at 10 Hz",
+        f"{set_tracking.CASE_II}: worst tracking error at 10 Hz"]
+
+
+def test_the_reference_checks_can_fail(runs):
+    checks = runs.checks(STABILITY)
+    assert all(isinstance(v, bool) for v in checks.values()) and len(checks) == 8
+    assert all(checks[f"{label}: the sampled loop with delay 1 loses members the continuous "
+                      "loop keeps"] for label in LABELS)
+    kept = STABILITY.copy()
+    kept.loc["unstable of 3, sampled, delay 1"] = 0
+    assert not any(v for k, v in runs.checks(kept).items() if "loses members" in k)
+    lines = runs.findings(STABILITY)
+    assert lines[0].startswith(f"{LABELS[0]}: exact parametric margin of the continuous loop ±4.5 %")
+    assert any("stricter goal" in line for line in lines)

@@ -315,3 +315,42 @@ def test_a_real_point_gives_its_design_margins_and_tracking(checkout, monkeypatc
             <= metrics["tracking_error_50Hz_high_percent"])
     full = sweep.evaluate_point(point, controller="full_order")
     assert full["mu_RP"] == metrics["mu_RP_full_order"] and full["controller_states"] > 4
+
+
+# --------------------------------------------------------------------------- what a run shows
+def test_a_runs_checks_findings_and_its_rerun(checkout):
+    spec = grid_spec()
+    result, _ = run(spec, jobs=1)
+    assert result.checks and all(result.checks.values())
+    assert "the deployed controller has the swept order" in result.checks
+    assert list(result.overview().columns) == [
+        "point", "weights.omega_e", "design.order", "mu_RP", "controller_states",
+        "tracking_error_50Hz_percent", "pareto"]
+    lines = result.findings()
+    assert lines[0].startswith("**6 designs** over ω_e ∈ {1000, 1260, 1600} × order ∈ {4, 6} "
+                               "(2 DK iteration(s) each)")
+    assert "1 local worker(s); 0 reused, 0 failed." in lines[0]
+    assert lines[1] == "**Lowest μ_RP:** 1.040 at ω_e = 1000, order = 4 (50 Hz error 5.00 %)."
+    assert lines[-1].startswith("**Pareto front:** points 1, 3, 5 of 6")
+    again, _ = run(spec, jobs=1)
+    assert all(again.resumed_checks(result).values())
+    assert not all(result.resumed_checks(result).values())    # it computed its points
+    assert spec.clear_records() == 6 and spec.clear_records() == 0
+    fresh, _ = run(spec, jobs=1)
+    assert fresh.evaluated == 6
+
+
+def test_the_checks_of_a_run_can_fail(checkout):
+    result, _ = run(grid_spec(), jobs=1)
+    table = result.table
+    broken = {
+        "the front holds every undominated point": table.assign(pareto=False),
+        "no point of the Pareto front is beaten in both numbers": table.assign(pareto=True),
+        "the deployed controller has the swept order": table.assign(controller_states=20),
+        "the 95 % interval of the 50 Hz error holds its mean":
+            table.assign(tracking_error_50Hz_low_percent=99.0),
+        "mu_RP > 0 at every point": table.assign(mu_RP=-1.0),
+    }
+    for name, bad in broken.items():
+        assert not sweep.SweepResult(result.spec, bad, 6, 0, 0, 1.0, {}).checks[name], name
+    assert not sweep.SweepResult(result.spec, table, 5, 0, 1, 1.0, {}).checks["every point ran"]
