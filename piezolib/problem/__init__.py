@@ -13,6 +13,8 @@ fsm_benchmark    the CubeSpec fine steering mirror benchmark: data, metric, base
 fsm_models       the benchmark's models step by step (BLAs, linear, nonlinear, scores), with checks
 fsm_control      a mu controller for one mirror axis: nominal, design, verification, coupling
 paths            where the checkout and its ``data/`` folder are
+coefficient_box  notebook 09: the coefficient box as real blocks, margins per controller, the
+                 chosen mixed-mu design checked, claims and summary lines
 published_audit  notebook 00: the published design audited (units, poles, nominal loop, Tables 4-5)
 stage_identification  notebook 01: the virtual stage's calibration and identification (Sec. III-A)
 coefficient_set  notebook 02: the 729-model set, E_m, H_m's coverage, the exact margin of a loop
@@ -25,4 +27,5 @@ that the other modules here take explicitly (plant first, then the weights);
 __all__ = ["paper", "genplant", "stage", "stage_hysteresis", "stage_data", "design",
            "analysis", "verification", "hysteresis_fits", "fsm_benchmark", "paths",
            "fsm_models", "fsm_control",
-           "published_audit", "stage_identification", "coefficient_set"]
+           "published_audit", "stage_identification", "coefficient_set",
+           "coefficient_box"]

@@ -13,10 +13,12 @@ cli          the command line (``python -m piezolib {reproduce,data}``)
 outputs      where each study's outputs go
 session      the one call that starts a notebook: study, claim table, figure style
 interactive  the notebooks' interactive controls (one module per control) and their callbacks
+case_comparison  Cases I-III with several Case III controllers side by side (notebook 09)
 tracking_study  notebook 06: Sec. V on one study, its checks, claims and findings
 fsm_findings notebook 10: the FSM benchmark's claim rows and closing findings
 """
 
 __all__ = ["study", "pipeline", "loop", "experiments", "report", "style", "plotting", "figures",
            "reproduce", "cli", "outputs", "session", "interactive", "fsm_findings",
-           "tracking_study"]
+           "tracking_study",
+           "case_comparison"]

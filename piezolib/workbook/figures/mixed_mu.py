@@ -1,13 +1,16 @@
 """Figures of notebook 09 (mixed mu): mu for robust stability against the coefficient box,
 with the coefficients as real blocks and as complex ones, and the trade-off of the mixed-mu
-designs between robust performance and the box they keep stable."""
+designs between robust performance and the box they keep stable.
+
+``extra_mixed_mu_of`` and ``extra_mixed_tradeoff_of`` draw the same figures from the
+results of :mod:`piezolib.problem.coefficient_box`."""
 
 import numpy as np
 
 from piezolib.workbook import plotting
 from piezolib.workbook.style import new_figure
 
-__all__ = ["extra_mixed_mu", "extra_mixed_tradeoff"]
+__all__ = ["extra_mixed_mu", "extra_mixed_tradeoff", "extra_mixed_mu_of", "extra_mixed_tradeoff_of"]
 
 
 def extra_mixed_mu(omega, real_upper, real_lower, complex_upper, complex_lower, spread,
@@ -155,3 +158,26 @@ def extra_mixed_tradeoff(scales, mu_upper, mu_lower, mu_bound, margins, spread, 
         ax.set_xscale("log")
     plotting.name_figure(fig, None, "mixed_tradeoff")
     return fig
+
+
+def extra_mixed_mu_of(bounds, zoom=None):
+    """:func:`extra_mixed_mu` of a :class:`piezolib.problem.coefficient_box.SpreadBounds`
+    (its bounds, spread and exact real mu)."""
+    if not all(hasattr(bounds, a) for a in ("omega", "real", "complex", "exact_real", "spread")):
+        raise TypeError(f"bounds must be a SpreadBounds, got {type(bounds).__name__}")
+    return extra_mixed_mu(bounds.omega, bounds.real.upper, bounds.real.lower,
+                          bounds.complex.upper, bounds.complex.lower, bounds.spread,
+                          exact=bounds.exact_real, zoom=zoom)
+
+
+def extra_mixed_tradeoff_of(tradeoff, spread):
+    """:func:`extra_mixed_tradeoff` of a :class:`piezolib.problem.coefficient_box.MixedTradeoff`
+    (its table, the margins per delay and the chosen design, if any), for the box
+    ``spread`` [-]."""
+    if not all(hasattr(tradeoff, a) for a in ("table", "chosen", "margins")):
+        raise TypeError(f"tradeoff must be a MixedTradeoff, got {type(tradeoff).__name__}")
+    table = tradeoff.table
+    return extra_mixed_tradeoff(
+        table.index.to_numpy(), table["mu_RP upper"], table["mu_RP lower"],
+        table["no controller below"], tradeoff.margins(), spread,
+        chosen=None if tradeoff.chosen is None else tradeoff.chosen.performance_scale)

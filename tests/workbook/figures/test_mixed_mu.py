@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from figure_checks import text_overlaps
+from piezolib.workbook import plotting
 from piezolib.workbook.figures import mixed_mu as F
 
 
@@ -54,3 +55,23 @@ def test_bad_input_names_the_argument(figures_dir, which, bad, word):
         F.extra_mixed_mu(*args, 0.05)
     with pytest.raises(ValueError, match="spread"):
         F.extra_mixed_mu(*_curves(), -1.0)
+
+
+def test_the_figures_of_the_coefficient_box_results(figures_dir):
+    import pandas as pd
+    from types import SimpleNamespace as Result
+
+    omega, ru, rl, cu, cl = _curves()
+    bounds = Result(omega=omega, real=Result(upper=ru, lower=rl), complex=Result(upper=cu, lower=cl),
+                    exact_real=rl, spread=0.05)
+    assert len(F.extra_mixed_mu_of(bounds).axes[0].get_lines()) == 6
+    table = pd.DataFrame({"mu_RP upper": [0.8, 1.4], "mu_RP lower": [0.7, 1.3],
+                          "no controller below": [0.2, 0.9]}, index=[0.5, 1.0])
+    tradeoff = Result(table=table, chosen=None,
+                      margins=lambda: {"delay 1": pd.Series([0.06, 0.05], index=table.index)})
+    fig = F.extra_mixed_tradeoff_of(tradeoff, 0.05)
+    assert plotting.save_figure(fig, figures_dir) == figures_dir / "extra_mixed_tradeoff.png"
+    with pytest.raises(TypeError, match="tradeoff"):
+        F.extra_mixed_tradeoff_of(table, 0.05)
+    with pytest.raises(TypeError, match="bounds"):
+        F.extra_mixed_mu_of(table)
