@@ -16,9 +16,10 @@ interactive  the notebooks' interactive controls (one module per control) and th
 case_comparison  Cases I-III with several Case III controllers side by side (notebook 09)
 tracking_study  notebook 06: Sec. V on one study, its checks, claims and findings
 fsm_findings notebook 10: the FSM benchmark's claim rows and closing findings
+your_stage   notebook 08: the pipeline on a user's own records, one call per stage with its checks
 """
 
 __all__ = ["study", "pipeline", "loop", "experiments", "report", "style", "plotting", "figures",
            "reproduce", "cli", "outputs", "session", "interactive", "fsm_findings",
            "tracking_study",
-           "case_comparison"]
+           "case_comparison", "your_stage"]

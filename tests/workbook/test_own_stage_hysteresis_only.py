@@ -1,4 +1,4 @@
-"""Notebook 08 on a folder that holds one raw hysteresis record only (issue 36).
+"""Notebook 08 on a folder that holds one raw hysteresis record only (no identification run).
 
 The record starts at rest and steps (``raw_hysteresis_record``); there is no chirp.  The
 notebook must skip identification and the plant's steps with a note, drop the record's

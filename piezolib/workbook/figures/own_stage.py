@@ -1,22 +1,30 @@
 """Figures of notebook 08 (your own stage): records, identification, weight, hysteresis,
 mu verification and the Tables 4-5-style experiment.
 
-Every function takes the computed results with their units spelled out by
-the caller (nothing here assumes the paper's 3 um/V or x10 amplifier), draws
-one figure, names it ``extra_own_stage_<what>`` and returns it.
+Every ``extra_own_stage_<what>`` function takes the computed arrays and models
+with their units spelled out by the caller (nothing here assumes the paper's
+3 um/V or x10 amplifier), draws one figure, names it ``extra_own_stage_<what>``
+and returns it.  Each ``own_stage_<what>`` function draws the same figure from
+the result of a stage of :mod:`piezolib.workbook.your_stage` (what the notebook
+calls); for a stage that did not run (:class:`~piezolib.workbook.your_stage.Skipped`,
+no identification record) it draws a figure of the same name that says why.
 """
 
 import numpy as np
 
 from piezolib._checks import check_finite_array, check_signals, check_positive
 from piezolib.records import Record
+from piezolib import robust
 from piezolib.workbook import plotting
+from piezolib.workbook.your_stage import ran
 from piezolib.workbook.style import PALETTE, db, new_figure
 from piezolib.workbook.figures.identification import bode_overlay
 
 __all__ = ["extra_own_stage_records", "extra_own_stage_identification",
            "extra_own_stage_uncertainty", "extra_own_stage_hysteresis",
-           "extra_own_stage_mu", "extra_own_stage_experiments"]
+           "extra_own_stage_mu", "extra_own_stage_experiments",
+           "own_stage_records", "own_stage_identification", "own_stage_uncertainty",
+           "own_stage_hysteresis", "own_stage_mu", "own_stage_experiments"]
 
 def extra_own_stage_records(records, marks=None):
     """The raw records as loaded: input and output against time, one panel per record.
@@ -302,3 +310,111 @@ def extra_own_stage_experiments(table4, table5, extra4=None, feedforward="feedfo
                ncol=min(4, len(ax.get_lines())), fontsize=7)
     plotting.name_figure(fig, None, "own_stage_experiments")
     return fig
+
+
+# -- the same figures from the stages' results (notebook 08 calls these) ----------------------
+
+def _skipped(what, stage):
+    """A figure named ``extra_own_stage_<what>`` that says why its stage did not run."""
+    fig, ax = new_figure(figsize=(7.5, 1.2))
+    ax.set_axis_off()
+    ax.text(0.5, 0.5, stage.reason, ha="center", va="center", wrap=True, fontsize=9)
+    plotting.name_figure(fig, None, f"own_stage_{what}")
+    return fig
+
+
+def own_stage_records(records, data):
+    """:func:`extra_own_stage_records` of the loaded records, the identification run marked.
+
+    Parameters
+    ----------
+    records : piezolib.workbook.your_stage.OwnRecords
+    data : IdentificationData or Skipped
+        Marks the operating window and the start of the held-out part on the
+        identification run (Skipped: the loops alone).
+    """
+    if not ran(data):
+        return extra_own_stage_records(records.loops)
+    lo, hi = data.window_s
+    return extra_own_stage_records(
+        {"identification": records.chirp, **records.loops},
+        marks={"identification": [(lo, "operating window"), (hi, ""),
+                                  (data.held_out.t0, "held out")]})
+
+
+def own_stage_identification(identification, omega, truth=None, zoom_s=0.02):
+    """:func:`extra_own_stage_identification` of an identification (and the true plant).
+
+    Parameters
+    ----------
+    identification : Identification or Skipped
+    omega : array_like
+        Bode grid [rad/s], drawn below the records' Nyquist frequency.
+    truth : KnownTruth, optional
+    zoom_s : float
+        Length of the zoom on the start of the held-out part [s].
+    """
+    if not ran(identification):
+        return _skipped("identification", identification)
+    d, n_est = identification.data, identification.n_estimation
+    omega = np.asarray(omega, dtype=float)
+    models = {"identified": identification.model,
+              **({"true G (known here)": truth.plant} if ran(truth) else {})}
+    h, rec = d.held_out, d.record
+    return extra_own_stage_identification(
+        h.time, h.output, identification.y_sim[n_est:], models, omega[omega < np.pi * rec.fs],
+        measured=identification.measured,
+        y_truth=truth.y_true[n_est:] if ran(truth) else None,
+        output_label=f"{rec.output_name} [{rec.output_unit}]", zoom_s=(h.t0, h.t0 + zoom_s))
+
+
+def own_stage_uncertainty(weight, truth=None):
+    """:func:`extra_own_stage_uncertainty` of an uncertainty weight (and the true error)."""
+    if not ran(weight):
+        return _skipped("uncertainty", weight)
+    return extra_own_stage_uncertainty(weight.omega, weight.envelope, weight.weight,
+                                       weight.spread,
+                                       true_error=truth.error if ran(truth) else None)
+
+
+def own_stage_hysteresis(choice, input_scale=1.0, output_scale=1.0, input_label="v",
+                         output_label="x"):
+    """:func:`extra_own_stage_hysteresis` of the first validation record of a hysteresis choice.
+
+    Parameters
+    ----------
+    choice : piezolib.workbook.your_stage.HysteresisChoice
+    input_scale, output_scale, input_label, output_label
+        As :func:`extra_own_stage_hysteresis`.
+    """
+    label = choice.validation_names[0]
+    return extra_own_stage_hysteresis(
+        *choice.validation_data[0][:2], choice.models, choice.scores.xs(label, level="record"),
+        input_scale=input_scale, output_scale=output_scale, input_label=input_label,
+        output_label=output_label)
+
+
+def own_stage_mu(verification, omega):
+    """:func:`extra_own_stage_mu` of a verification: mu bounds, S and T per plant.
+
+    Parameters
+    ----------
+    verification : Verification or Skipped
+    omega : array_like
+        Grid of the S and T panel [rad/s].
+    """
+    if not ran(verification):
+        return _skipped("mu", verification)
+    v, K = verification, verification.loop.K
+    return extra_own_stage_mu(
+        v.omega, {"Pade delay": v.mu_pade, "exact delay": v.mu_exact},
+        {name: robust.loop_functions(G, K) for name, G in v.plants.items()}, omega,
+        v.loop.H_e, v.loop.H_y)
+
+
+def own_stage_experiments(experiments, feedforward="Dahl feedforward"):
+    """:func:`extra_own_stage_experiments` of the Tables 4-5-style runs."""
+    if not ran(experiments):
+        return _skipped("experiments", experiments)
+    return extra_own_stage_experiments(experiments.table4.table, experiments.table5.table,
+                                       experiments.extra4, feedforward=feedforward)

@@ -1,0 +1,226 @@
+"""The stages of notebook 08 (piezolib.workbook.your_stage) on small records of known plants.
+
+The full-size pipeline (the example records, the Dahl fit, the DK design, the experiments)
+is run by the notebook itself; here each stage's own logic: what it computes from a record
+whose plant is known, what it checks, what it refuses, and how a stage that needs the
+plant passes on when there is no identification record.
+"""
+
+import control as ct
+import numpy as np
+import pandas as pd
+import pytest
+
+from piezolib import hysteresis as hy
+from piezolib import identification as ident
+from piezolib.records import Record
+from piezolib.workbook import your_stage as own
+from piezolib.workbook.report import ClaimTable
+
+FS = 5000.0
+PLANT = ct.tf([800.0], [1.0, 1000.0])           # first order, DC gain 0.8, 159 Hz
+
+
+def chirp_record(n=1500, seed=0):
+    """A run from rest: rest, a step to 1 V, then broadband excitation; output in um (3 um/V)."""
+    rng = np.random.default_rng(seed)
+    u = np.concatenate([np.zeros(200), np.ones(300), 1 + 0.3 * rng.standard_normal(n - 500)])
+    y = ident.zoh_simulate(PLANT, u, FS)
+    return Record(u, 3.0 * y, FS, "V", "um", "u_c", "x")
+
+
+def loop_pair(freq=1.0, amplitude=1.5, n=400):
+    t = np.arange(n) / 100.0
+    v = amplitude - amplitude * np.cos(2 * np.pi * freq * t)
+    return v, PI_TRUTH.simulate(v)
+
+
+PI_TRUTH = hy.PIModel((0.0, 0.3, 0.6, 0.9), (0.8, 0.2, 0.15, 0.1), x0=0.1)
+
+
+def write_csv(path, rec):
+    np.savetxt(path, np.column_stack([rec.time, rec.input, rec.output]), delimiter=",",
+               fmt="%.9g")
+
+
+# -- records -----------------------------------------------------------------------------------
+
+def test_load_records_reads_each_file_with_one_mapping(tmp_path):
+    rec = chirp_record()
+    write_csv(tmp_path / "chirp.csv", rec)
+    write_csv(tmp_path / "loop.csv", rec)
+    loaded = own.load_records(tmp_path, "chirp.csv", {"loop": "loop.csv"},
+                              columns={"time": 0, "input": 1, "output": 2}, fs=FS,
+                              input=("u_c", "V", 1.0), output=("x", "um", 2.0))
+    assert loaded.have_plant and list(loaded.all) == ["chirp", "loop"]
+    np.testing.assert_allclose(loaded.loops["loop"].output, 2.0 * rec.output, rtol=1e-8)
+    assert loaded.checks == {"every record is sampled at the stated rate (0.1 %)": True}
+    assert str(loaded).splitlines()[0].startswith("chirp ")
+
+
+def test_load_records_without_a_chirp_says_what_is_skipped(tmp_path):
+    write_csv(tmp_path / "loop.csv", chirp_record())
+    loaded = own.load_records(tmp_path, None, {"loop": "loop.csv"},
+                              columns={"time": 0, "input": 1, "output": 2}, fs=FS)
+    assert not loaded.have_plant
+    assert "identification is skipped" in str(loaded)
+    data = own.prepare_identification(loaded, (0.05, 0.09), 3.0, 0.2, (5.0, 2000.0))
+    assert isinstance(data, own.Skipped) and data.checks == {}
+    assert own.identify(data, 1, 0, nb=1, nk=1, floor_percent=70.0) is data
+
+
+@pytest.mark.parametrize("argument, value, error", [
+    ("loop_files", {}, ValueError), ("loop_files", ["a.csv"], TypeError),
+    ("columns", {"time": 0, "input": 1}, ValueError), ("input", ("u", "V"), TypeError),
+    ("fs", -1.0, ValueError)])
+def test_load_records_refuses_bad_arguments(tmp_path, argument, value, error):
+    kwargs = dict(folder=tmp_path, chirp_file=None, loop_files={"loop": "loop.csv"},
+                  columns={"time": 0, "input": 1, "output": 2}, fs=FS)
+    kwargs[argument] = value
+    with pytest.raises(error, match=argument):
+        own.load_records(**kwargs)
+
+
+# -- operating point, identification, known truth --------------------------------------------
+
+def prepared(rec=None, hold_out=0.2):
+    records = own.OwnRecords(chirp_record() if rec is None else rec, {}, FS, "chirp.csv")
+    return own.prepare_identification(records, (0.05, 0.09), 3.0, hold_out, (5.0, 2000.0))
+
+
+def test_prepare_identification_finds_the_operating_point_and_holds_out_the_end():
+    data = prepared()
+    assert data.u_op == pytest.approx(1.0) and data.x_op == pytest.approx(3.0 * 0.8, rel=1e-4)
+    assert data.input_wobble == 0.0 and all(data.checks.values())
+    assert data.record.output_unit == "V" and data.record.output_name == "v_y"
+    assert len(data.estimation) + len(data.held_out) == len(data.record)
+    assert len(data.held_out) == pytest.approx(0.2 * len(data.record), abs=1)
+
+
+def test_prepare_identification_refuses_a_record_without_broadband_excitation():
+    t = np.arange(1500) / FS
+    slow = Record(1 + np.sin(2 * np.pi * 2 * t), np.sin(2 * np.pi * 2 * t), FS)
+    with pytest.raises(ValueError, match="chirp.csv: 99 % of the input's power"):
+        prepared(slow)
+    with pytest.raises(ValueError, match="hold_out"):
+        prepared(hold_out=1.5)
+
+
+def test_identify_recovers_a_noise_free_first_order_plant():
+    model = own.identify(prepared(), 1, 0, nb=1, nk=1, floor_percent=70.0, nperseg=256)
+    assert model.fit_held_out > 99.9
+    assert ct.dcgain(model.model) == pytest.approx(0.8, rel=1e-4)
+    assert model.pole_pairs.empty                       # a first-order model has no pair
+    assert model.checks == {"held-out fit above 70 %": True, "identified model stable": True}
+
+
+def an_identification(model):
+    """An Identification whose model is given (no estimation run)."""
+    data = prepared()
+    y = ident.zoh_simulate(model, data.record.input, FS)
+    return own.Identification(data, None, model, y, 100.0, 100.0, 70.0, 0.0,
+                              (np.array([1.0]), np.array([1.0 + 0j])))
+
+
+def test_known_truth_of_the_true_plant_itself_has_no_error():
+    from piezolib.problem.stage import VirtualStage
+    G = VirtualStage().small_signal_model()
+    omega = own.analysis_grid(1.0, 1e5, 50)
+    model = an_identification(G)
+    truth = own.known_truth(model, omega)
+    assert truth.error_below_top < 1e-9 and truth.dc_identified == truth.dc_true
+    np.testing.assert_array_equal(truth.y_true, model.y_sim)
+    assert truth.fit_truth == ident.fit_percent(model.data.held_out.output,
+                                                model.y_sim[model.n_estimation:])
+
+
+def test_the_uncertainty_weight_covers_its_set_and_the_truth_where_it_can():
+    omega = own.analysis_grid(1.0, 1e5, 100)
+    model = an_identification(ct.tf([0.8e6], [1.0, 600.0, 1e6]))
+    weight = own.uncertainty_weight(model, 0.01, 2, 2, omega)
+    assert weight.model_set.size == 4 and weight.covered_rad_s is None
+    assert all(weight.checks.values())
+    assert "covers E_m: True" in str(weight)
+
+
+# -- hysteresis --------------------------------------------------------------------------------
+
+def test_prepare_loops_starts_each_loop_at_a_minimum_and_scales_to_sensor_volts():
+    v, x = loop_pair(n=600)
+    rec = Record(v[50:], 3.0 * x[50:], FS)            # from a maximum: cut at the next minimum
+    loops = own.prepare_loops(own.OwnRecords(None, {"a": rec}, FS), 3.0, 1,
+                              skip_transient=False)
+    u, y = loops.data["a"]
+    assert u[0] == pytest.approx(v.min(), abs=1e-3) and loops.dropped == {}
+    assert y.max() == pytest.approx(x.max())
+
+
+def quick_fits(monkeypatch):
+    """fit_dahl replaced by a two-play PI fit: the choice logic without the slow Dahl fit."""
+    monkeypatch.setattr(hy, "fit_dahl",
+                        lambda data, gamma_a, **kw: hy.fit_pi(data, n_plays=2, offset=True))
+
+
+def test_fit_hysteresis_holds_out_the_second_half_when_nothing_else_validates(monkeypatch):
+    quick_fits(monkeypatch)
+    loops = own.HysteresisLoops({"raw": loop_pair()}, {})
+    choice = own.fit_hysteresis(loops, ["raw"], [], gamma_a=30.0, plays=4, ceiling_percent=5.0)
+    assert choice.held_out_in_time and choice.validation_names == ["raw (second half)"]
+    assert "validated on the second half (held out in time)" in str(choice)
+    assert choice.chosen_name == "PI"                     # four plays fit the four-play truth
+    assert all(choice.checks.values())
+    skipped = own.Skipped(own.NO_PLANT_NOTE)
+    records = own.OwnRecords(None, {"raw": Record(*loop_pair(), FS)}, FS)
+    claims = own.record_claims(ClaimTable("own_stage", "test"), records, skipped, skipped,
+                               choice, skipped, skipped, skipped)
+    frame = claims.frame()
+    assert frame.quantity.tolist() == ["record sampling rate",
+                                       "Dahl: validation RMS on raw (second half)",
+                                       "PI: validation RMS on raw (second half)",
+                                       "hysteresis model chosen by validation"]
+    assert frame.note.str.contains("held out in time").sum() == 2
+
+
+def test_fit_hysteresis_validates_on_the_records_not_fitted(monkeypatch):
+    quick_fits(monkeypatch)
+    loops = own.HysteresisLoops({"a": loop_pair(), "b": loop_pair(1.3, 1.2)}, {})
+    choice = own.fit_hysteresis(loops, ("a",), ("a", "b"), gamma_a=30.0, plays=4,
+                                ceiling_percent=5.0)
+    assert not choice.held_out_in_time and choice.validation_names == ["b"]
+    assert choice.validation_rms("PI") == choice.scores["pooled RMS %"].min()
+    ff = own.feedforward_cross_check(choice)
+    assert ff.checks == {"the chosen model's feedforward inverts it (RMS below 0.5 %)": True}
+    with pytest.raises(ValueError, match="fit_loops"):
+        own.fit_hysteresis(loops, ("c",), (), gamma_a=30.0, plays=4, ceiling_percent=5.0)
+
+
+# -- the plant's stages without a plant, and the checks ----------------------------------------
+
+def test_the_stages_that_need_the_plant_pass_a_skip_on():
+    skipped = own.Skipped(own.NO_PLANT_NOTE)
+    assert own.known_truth(skipped, np.ones(3)) is skipped
+    assert own.uncertainty_weight(skipped, 0.01, 2, 2, np.ones(3)) is skipped
+    assert own.design_for_loop(skipped, skipped, {}, {}, {}, order=6, d_order=2, iterations=1,
+                               fs=1e4, delay_samples=1) is skipped
+    assert own.verify_design(skipped, skipped, skipped) is skipped
+    assert own.run_experiments(skipped, None, seed=1, noise_rms_V=0.0, amplitudes_V=(1.0,),
+                               periods=2, frequencies_Hz=(1.0,), amplitude_um=1.0,
+                               delay_samples=1, loop_rate_Hz=1e4) is skipped
+    assert own.stage_checks(skipped, None) == {}
+    assert own.summary_lines(own.OwnRecords(None, {}, FS), 1.0)[0] == own.NO_PLANT_NOTE
+
+
+def test_design_for_loop_refuses_a_rolloff_above_the_loops_nyquist_frequency():
+    model = an_identification(PLANT)
+    H_e = dict(low_frequency_bound=0.003, high_frequency_bound=2.0, bandwidth_rad_s=1260.0)
+    H_y = dict(low_frequency_bound=1.5, high_frequency_bound=1e-4, bandwidth_rad_s=7500.0)
+    rolloff = dict(hf_gain=10.0, lf_gain=1e4, frequency=4e4, order=2)     # pi 1e4 = 31416
+    with pytest.raises(ValueError, match="rolloff"):
+        own.design_for_loop(model, None, H_e, H_y, rolloff, order=6, d_order=2, iterations=1,
+                            fs=1e4, delay_samples=1)
+
+
+def test_known_truth_checks_without_a_truth_state_the_hysteresis_choice_only():
+    choice = own.HysteresisChoice({}, pd.DataFrame(), "Dahl", [], [], False, (), (), {}, 5.0)
+    assert own.known_truth_checks(None, None, None, choice, None, None) == {
+        "PI chosen (the stage's hysteresis is made of plays)": False}
