@@ -21,7 +21,8 @@ from piezolib._checks import check_integer, check_signals
 # The functions below the classes (estimates, covariance, parameter_frame, warn_about,
 # check_loops, loop_errors) are the fits' shared plumbing, imported by name by fit.py and
 # pi.py; they take inputs those fits have already checked and are not part of the API.
-__all__ = ["HysteresisModel", "FitScores", "FitWarning", "ParameterEstimate", "Z95"]
+__all__ = ["HysteresisModel", "MODEL_REQUIREMENT", "check_hysteresis_model", "FitScores",
+           "FitWarning", "ParameterEstimate", "Z95"]
 
 #: Two-sided 95 % quantile of the normal distribution.
 Z95 = 1.959963984540054
@@ -39,6 +40,36 @@ class HysteresisModel(Protocol):
     def simulate(self, v): ...
 
     def feedforward(self, x_r): ...
+
+
+#: How an error message names what a model must be (the protocol, not a list of classes).
+MODEL_REQUIREMENT = ("a hysteresis model: an object with simulate(v) and feedforward(x_r) "
+                     "(piezolib.hysteresis.HysteresisModel; DahlModel, PIModel and "
+                     "HammersteinModel are three)")
+
+
+def check_hysteresis_model(name, model):
+    """``model`` when it follows :class:`HysteresisModel`, else a TypeError naming ``name``.
+
+    Any class with ``simulate(v)`` and ``feedforward(x_r)`` qualifies: the
+    experiments, the loop and model selection take a model of one's own
+    without edits elsewhere.
+
+    Examples
+    --------
+    >>> class Linear:
+    ...     def simulate(self, v): return 2.0 * v
+    ...     def feedforward(self, x_r): return x_r / 2.0
+    >>> isinstance(check_hysteresis_model("model", Linear()), Linear)
+    True
+    >>> check_hysteresis_model("model", 2.0)
+    Traceback (most recent call last):
+    ...
+    TypeError: model must be a hysteresis model: an object with simulate(v) and feedforward(x_r) (piezolib.hysteresis.HysteresisModel; DahlModel, PIModel and HammersteinModel are three), got float
+    """
+    if not isinstance(model, HysteresisModel):
+        raise TypeError(f"{name} must be {MODEL_REQUIREMENT}, got {type(model).__name__}")
+    return model
 
 
 class FitScores:

@@ -37,7 +37,7 @@ import pandas as pd
 from piezolib import signals
 from piezolib._checks import (check_finite_array, check_integer, check_positive,
                               check_same_length, check_type)
-from piezolib.hysteresis.common import HysteresisModel
+from piezolib.hysteresis.common import check_hysteresis_model
 from piezolib.hysteresis.measure import hysteresis_measure
 from piezolib.metrics import improvement_percent, mean_interval
 from piezolib.problem import paper
@@ -194,9 +194,7 @@ def run_case(case, stage, v_r, model, controller=None, case_I_gain=None,
     delay_samples = check_integer("delay_samples", delay_samples, minimum=0)
     if model is None:
         model = workbook_dahl_fit().model
-    if not isinstance(model, HysteresisModel):
-        raise TypeError("model must be a hysteresis model with simulate(v) and "
-                        f"feedforward(x_r) (DahlModel, PIModel), got {type(model).__name__}")
+    check_hysteresis_model("model", model)
     if case == "I":
         if case_I_gain is not None:
             return run_loop(stage, v_r, feedforward=check_positive("case_I_gain", case_I_gain))
@@ -509,8 +507,7 @@ def _check_stage_and_model(stage, model):
     """Raise unless ``stage`` is a VirtualStage and ``model`` a hysteresis model (or None)."""
     check_type("stage", stage, VirtualStage, "a VirtualStage")
     if model is not None:
-        check_type("model", model, HysteresisModel, "a hysteresis model with simulate(v) and "
-                   "feedforward(x_r) (DahlModel, PIModel)")
+        check_hysteresis_model("model", model)
 
 
 def _case_III_controller(controller, stage):

@@ -24,7 +24,7 @@ import numpy as np
 
 from piezolib.problem import paper
 from piezolib._checks import check_finite_array, check_integer, check_positive, check_proper, check_siso
-from piezolib.hysteresis.common import HysteresisModel
+from piezolib.hysteresis.common import MODEL_REQUIREMENT, HysteresisModel
 from piezolib.hysteresis.dahl import DahlModel
 from piezolib.metrics import peak_to_peak_error_percent, tracking_error_percent
 from piezolib.robust.discrete import DiscreteController, discretize
@@ -234,8 +234,8 @@ def _feedforward_signal(feedforward, v_r):
             raise ValueError(f"feedforward offset must be finite, got {x0!r}")
         return (v_r - x0) / g, f"static (v_r - {x0:.4g}) / {g:.4g}"
     raise TypeError("feedforward must be None, a positive gain g (u_f = v_r / g), a pair "
-                    "(g, x0) (u_f = (v_r - x0) / g) or a hysteresis model with a "
-                    f"feedforward(x_r) method (DahlModel, PIModel), got {type(feedforward).__name__}")
+                    f"(g, x0) (u_f = (v_r - x0) / g) or {MODEL_REQUIREMENT}, got "
+                    f"{type(feedforward).__name__}")
 
 
 def run_loop(stage, v_r, *, feedforward=None, controller=None,

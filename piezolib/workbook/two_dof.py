@@ -27,7 +27,7 @@ import numpy as np
 import scipy.signal as sg
 
 from piezolib._checks import check_positive, check_siso, check_type
-from piezolib.hysteresis.common import HysteresisModel
+from piezolib.hysteresis.common import check_hysteresis_model
 from piezolib.hysteresis.hammerstein import unit_dc_dynamics
 from piezolib.robust.export import SOSController, controller_sos, sos_filter
 from piezolib.robust.preview import PreviewFeedforward, zpetc
@@ -146,8 +146,7 @@ def two_dof_feedforward(G, model, fs, radius=1.0, sections=None):
     fs = check_positive("fs", fs)
     b, a = _unit_dc_zoh(G, fs)
     dynamics = zpetc(ct.tf(b, a, 1.0 / fs), radius=radius)
-    check_type("model", model, HysteresisModel, "a hysteresis model with simulate(v) and "
-               "feedforward(x_r) (DahlModel, PIModel)")
+    check_hysteresis_model("model", model)
     if sections is None:
         sections = controller_sos(ct.ss(dynamics.F), name="F_zpetc")
     else:
