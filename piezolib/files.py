@@ -92,6 +92,19 @@ def atomic_path(path):
         temporary file or nothing: raised while creating, writing (an error
         without a file name or naming the temporary file) or renaming it.
         An error naming another file is the caller's and passes unchanged.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     target = Path(folder) / "out.txt"
+    ...     with atomic_path(target) as tmp:
+    ...         _ = tmp.write_text("done")            # target does not exist yet
+    ...         print(target.exists(), tmp.suffix)
+    ...     print(target.read_text(), tmp.exists())
+    False .txt
+    done False
     """
     path = Path(path)
     try:
@@ -148,6 +161,15 @@ def atomic_write(path, data):
     OSError
         The system refused the write (full disk, ...): naming ``path``, which
         is left as it was (:func:`atomic_path`).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = atomic_write(Path(folder) / "sub" / "note.txt", "hello")  # makes sub/
+    ...     print(path.name, path.read_text())
+    note.txt hello
     """
     if isinstance(data, str):
         data = data.encode("utf-8")
@@ -182,6 +204,18 @@ def remove_stale_temporaries(directory, older_than_s=STALE_AFTER_S):
     -------
     list of Path
         The files removed.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     left = Path(folder) / ".data.csv.abcd1234.tmp.csv"    # as a killed writer leaves it
+    ...     _ = left.write_text("partial")
+    ...     _ = (Path(folder) / "data.csv").write_text("mine")    # not a temporary: kept
+    ...     removed = remove_stale_temporaries(folder, older_than_s=0)
+    ...     print([p.name for p in removed], sorted(p.name for p in Path(folder).iterdir()))
+    ['.data.csv.abcd1234.tmp.csv'] ['data.csv']
     """
     older_than_s = check_nonnegative("older_than_s", older_than_s)
     now = time.time()
@@ -234,6 +268,16 @@ def manifest_entry(path, rows, fs):
     dict
         ``rows``, ``sample_rate_Hz``, ``lines`` (of the file), ``sha256`` and
         ``block_sha256`` (one per :data:`BLOCK_LINES` lines).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = atomic_write(Path(folder) / "r.csv", "t,v\\n0,1\\n1,2\\n3,4\\n")
+    ...     entry = manifest_entry(path, rows=3, fs=1.0)
+    >>> entry["rows"], entry["lines"], len(entry["sha256"]), len(entry["block_sha256"])
+    (3, 4, 64, 1)
     """
     raw = Path(path).read_bytes()
     lines = raw.splitlines(keepends=True)
@@ -260,6 +304,22 @@ def verify_file(path, entry, rows=None, fs=None):
     RecordError
         Naming the file and the line: where a truncated file ends, or the
         first line of the first block of lines that differ.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> folder = tempfile.TemporaryDirectory()
+    >>> path = atomic_write(Path(folder.name) / "r.csv", "t,v\\n0,1\\n1,2\\n")
+    >>> entry = manifest_entry(path, rows=2, fs=1.0)
+    >>> verify_file(path, entry, rows=2, fs=1.0) is None              # intact
+    True
+    >>> _ = atomic_write(path, "t,v\\n0,1\\n1,3\\n")                  # one value changed
+    >>> verify_file(path, entry)
+    Traceback (most recent call last):
+    ...
+    piezolib.records.RecordError: ...r.csv, line 1: content differs from the manifest (SHA-256) in lines 1-3
+    >>> folder.cleanup()
     """
     path = Path(path)
     raw = path.read_bytes()
@@ -299,6 +359,14 @@ def content_sha256(doc):
 
     The canonical form (sorted keys, no spaces, floats as ``repr``) does not
     depend on how the file was indented, so a writer may format as it likes.
+
+    Examples
+    --------
+    >>> a = content_sha256({"format": 1, "gain": 0.5})
+    >>> a == content_sha256({"gain": 0.5, "format": 1}), len(a)     # key order does not matter
+    (True, 64)
+    >>> a == content_sha256({"format": 1, "gain": 0.5, CONTENT_KEY: "old"})  # key left out
+    True
     """
     body = {key: value for key, value in doc.items() if key != CONTENT_KEY}
     canonical = json.dumps(body, sort_keys=True, separators=(",", ":"))
@@ -316,6 +384,14 @@ def seal(doc):
     -------
     dict
         A new dict; ``doc`` is not changed.
+
+    Examples
+    --------
+    >>> doc = seal({"format": 2, "fs": 10e3})
+    >>> list(doc)
+    ['format', 'content_sha256', 'fs']
+    >>> doc[CONTENT_KEY] == content_sha256({"format": 2, "fs": 10e3})
+    True
     """
     items = [(key, value) for key, value in doc.items() if key != CONTENT_KEY]
     return dict(items[:1] + [(CONTENT_KEY, content_sha256(doc))] + items[1:])

@@ -33,6 +33,11 @@ def tracking_error(x_r, x):
     Returns
     -------
     ndarray
+
+    Examples
+    --------
+    >>> tracking_error([0.0, 1.0, 2.0], [0.0, 0.9, 2.2])
+    array([ 0. ,  0.1, -0.2])
     """
     x_r = check_finite_array("x_r", x_r, ndim=1, min_length=2, real=True)
     x = check_finite_array("x", x, ndim=1, min_length=2, real=True)
@@ -68,6 +73,13 @@ def peak_to_peak_error_percent(x_r, x, range_=None):
     Returns
     -------
     float
+
+    Examples
+    --------
+    >>> x_r = [0.0, 5.0, 10.0, 5.0, 0.0]                 # range 10
+    >>> x = [0.0, 4.8, 10.1, 5.3, 0.0]                   # errors 0, 0.2, -0.1, -0.3, 0
+    >>> round(peak_to_peak_error_percent(x_r, x), 3)     # (0.2 - (-0.3)) / 10 * 100
+    5.0
     """
     e = tracking_error(x_r, x)
     return float(np.ptp(e)) / _range_of(x_r, range_) * 100
@@ -112,6 +124,15 @@ def tracking_error_percent(x_r, x, range_=None):
     Returns
     -------
     float
+
+    Examples
+    --------
+    >>> x_r = [0.0, 5.0, 10.0, 5.0, 0.0]                 # range 10
+    >>> x = [0.0, 4.8, 10.1, 5.3, 0.0]
+    >>> round(tracking_error_percent(x_r, x), 3)         # max |e| = 0.3 of 10
+    3.0
+    >>> round(tracking_error_percent(x_r, x, range_=12.0), 3)
+    2.5
     """
     e = tracking_error(x_r, x)
     return float(np.max(np.abs(e))) / _range_of(x_r, range_) * 100
@@ -133,6 +154,13 @@ def improvement_percent(before, after):
     -------
     float or ndarray
         Positive when ``after`` is smaller.
+
+    Examples
+    --------
+    >>> improvement_percent(4.0, 1.0)
+    75.0
+    >>> improvement_percent([2.0, 5.0], [1.0, 6.0])        # a negative entry is a worsening
+    array([ 50., -20.])
     """
     b = check_finite_array("before", before, real=True)
     a = check_finite_array("after", after, real=True)

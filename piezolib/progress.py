@@ -71,6 +71,17 @@ def progress_enabled():
     ValueError
         ``PIEZOLIB_PROGRESS`` holds something other than 0/1, on/off,
         yes/no, true/false or auto.
+
+    Examples
+    --------
+    >>> import os
+    >>> from unittest import mock
+    >>> with mock.patch.dict(os.environ, {ENV_VARIABLE: "off"}):
+    ...     progress_enabled()
+    False
+    >>> with mock.patch.dict(os.environ, {ENV_VARIABLE: "auto"}):
+    ...     print(progress_enabled())
+    None
     """
     value = os.environ.get(ENV_VARIABLE, "").strip().lower()
     if value in ("", "auto"):
@@ -126,6 +137,17 @@ def progress(iterable=None, *, total=None, desc=None, unit="step", leave=False, 
     ------
     ValueError, TypeError
         ``total`` not a non-negative integer, or a bad ``PIEZOLIB_PROGRESS``.
+
+    Examples
+    --------
+    A bar on a non-terminal stream is disabled (writes nothing) but still iterates:
+
+    >>> import io
+    >>> sum(progress(range(4), desc="demo", file=io.StringIO()))
+    6
+    >>> with progress(total=3, file=io.StringIO()) as bar:    # advanced by hand
+    ...     for k in range(3):
+    ...         bar.update()
     """
     from tqdm import tqdm
 
@@ -160,6 +182,17 @@ def postfix(bar, text=None, *, refresh=False, **values):
         the text appears with the next ``bar.update()``.
     **values
         Named values, in the order given.
+
+    Examples
+    --------
+    >>> import io, os
+    >>> from unittest import mock
+    >>> with mock.patch.dict(os.environ, {ENV_VARIABLE: "1"}):     # force a text bar
+    ...     bar = progress(total=5, desc="DK", file=io.StringIO())
+    >>> postfix(bar, "iter 1", mu=0.94023)
+    >>> bar.postfix
+    'iter 1, mu 0.9402'
+    >>> bar.close()
     """
     parts = [] if text is None else [str(text)]
     for name, value in values.items():
@@ -188,6 +221,18 @@ def finish(bar, reason):
     reason : str
         Why the work stopped, e.g. ``"converged"``, ``"no improvement > 0.005
         in 2 iterations"`` or ``"max_iter reached"``.
+
+    Examples
+    --------
+    >>> import io, os
+    >>> from unittest import mock
+    >>> with mock.patch.dict(os.environ, {ENV_VARIABLE: "1"}):
+    ...     bar = progress(total=8, file=io.StringIO())
+    >>> bar.update(3)
+    >>> finish(bar, "converged")                 # stopped early: 3 of 3, not 3 of 8
+    >>> bar.n, bar.total, bar.postfix
+    (3, 3, 'converged')
+    >>> bar.close()
     """
     if not isinstance(reason, str) or not reason:
         raise TypeError(f"reason must be a non-empty string, got {reason!r}")
@@ -220,6 +265,14 @@ def write(line, file=None):
         Text to print.
     file : file-like, optional
         Destination; default ``sys.stdout``.
+
+    Examples
+    --------
+    >>> import io
+    >>> stream = io.StringIO()
+    >>> write("[1/2] step done", file=stream)
+    >>> print(stream.getvalue(), end="")
+    [1/2] step done
     """
     from tqdm import tqdm
 

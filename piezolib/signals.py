@@ -37,6 +37,12 @@ def time_vector(duration_s, fs):
     ------
     ValueError
         For a non-positive argument or fewer than 2 samples.
+
+    Examples
+    --------
+    >>> t = time_vector(0.01, fs=1e3)            # 10 ms at 1 kHz
+    >>> len(t), float(t[1]), float(t[-1])
+    (10, 0.001, 0.009)
     """
     duration_s = check_positive("duration_s", duration_s)
     fs = check_positive("fs", fs)
@@ -78,6 +84,12 @@ def triangle(peak, frequency_Hz, fs, periods=1, minimum=0.0):
     ------
     ValueError
         For ``peak <= minimum``, a non-positive frequency or too low ``fs``.
+
+    Examples
+    --------
+    >>> t, y = triangle(2.0, 1.0, fs=8.0, minimum=-2.0)   # one period, 8 samples + closure
+    >>> y
+    array([-2., -1.,  0.,  1.,  2.,  1.,  0., -1., -2.])
     """
     frequency_Hz = check_positive("frequency_Hz", frequency_Hz)
     fs = check_positive("fs", fs)
@@ -125,6 +137,12 @@ def chirp(amplitude, f0_Hz, f1_Hz, duration_s, fs, method="logarithmic"):
     ------
     ValueError
         Unless 0 < ``f0_Hz`` < ``f1_Hz`` < ``fs``/2, or for an unknown ``method``.
+
+    Examples
+    --------
+    >>> t, y = chirp(1.0, 1.0, 100.0, duration_s=2.0, fs=1e3)   # 1 -> 100 Hz in 2 s
+    >>> len(y), float(y[0]), bool(abs(y).max() <= 1.0)
+    (2000, 1.0, True)
     """
     amplitude = check_positive("amplitude", amplitude)
     f0_Hz = check_positive("f0_Hz", f0_Hz)
