@@ -73,6 +73,12 @@ class RecordError(ValueError):
         The file (None for in-memory data).
     line : int or None
         1-based line number in the file (None when the problem is not on one line).
+
+    Examples
+    --------
+    >>> err = RecordError("text in a number column", "run1.csv", 12)
+    >>> str(err), err.line
+    ('run1.csv, line 12: text in a number column', 12)
     """
 
     def __init__(self, message, path=None, line=None):
@@ -100,6 +106,15 @@ class Record:
         Time of the first sample [s].
     metadata : dict
         Anything known about the experiment (source file, header lines, ...).
+
+    Examples
+    --------
+    >>> rec = Record(np.array([0.0, 1.0, 2.0, 1.0]), np.array([0.0, 3.1, 6.0, 2.9]), fs=100.0,
+    ...              input_unit="V", output_unit="um")
+    >>> rec, rec.duration
+    (Record(4 samples at 100 Hz, u [V] -> y [um]), 0.04)
+    >>> Record.from_time([0.5, 0.51, 0.52], [1, 2, 3], [2, 4, 6]).t0    # rate from the times
+    0.5
     """
 
     input: np.ndarray
@@ -665,6 +680,16 @@ def read_table(path, columns, header=False, delimiter=",", comment="#", *, encod
     ValueError
         Bad arguments (an unknown encoding, a delimiter equal to the decimal
         mark, names without ``header``).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = Path(folder) / "log.csv"
+    ...     _ = path.write_text("# gain = 2\\ntime,u,y\\n0,1,2\\n0.5,2,4\\n1,3,6\\n")
+    ...     data, meta, lines = read_table(path, {"u": "u", "y": 2}, header=True)
+    >>> data["y"], meta, lines                     # by name or number; file line of each row
+    (array([2., 4., 6.]), {'gain': 2}, array([3, 4, 5]))
     """
     path = Path(path)
     _check_format(delimiter, comment, decimal, thousands)
@@ -758,6 +783,17 @@ def load_csv(path, *, input, output, time=None, fs=None, header=False, delimiter
     ValueError
         Contradictory arguments (no rate, names without a header, an unknown
         encoding, a delimiter equal to the decimal mark).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = Path(folder) / "step.csv"
+    ...     rows = "".join(f"{k / 100},{k % 5},{0.5 * (k % 5)}\\n" for k in range(20))
+    ...     _ = path.write_text("t,v,x\\n" + rows)
+    ...     rec = load_csv(path, time="t", input="v", output="x", header=True, output_unit="um")
+    >>> rec, rec.output[:3]
+    (Record(20 samples at 100 Hz, u [V] -> y [um]), array([0. , 0.5, 1. ]))
     """
     if time is None and fs is None:
         raise ValueError("give the sampling rate fs [Hz] or a time column (time=...)")
@@ -822,6 +858,11 @@ def turning_points(x, threshold=0.02):
     -------
     ndarray of int
         Ascending indices (the last sample of a plateau at the extreme).
+
+    Examples
+    --------
+    >>> turning_points([0.0, 1.0, 2.0, 1.0, 0.0, 1.0, 2.0, 3.0, 2.0])  # max, min, max
+    array([2, 4, 7])
     """
     x = check_finite_array("x", x, ndim=1, min_length=2)
     threshold = check_positive("threshold", threshold)
@@ -875,6 +916,13 @@ class StartUp:
         stroke from the step's level, the virgin stroke) is start-up.
     note : str
         One line saying what the start-up holds, in samples and seconds.
+
+    Examples
+    --------
+    >>> u = np.concatenate([np.zeros(50), np.cos(2 * np.pi * np.arange(300) / 100)])
+    >>> s = find_start_up(Record(u, u, fs=100.0))   # rest, a step to 1, then cosine strokes
+    >>> s.rest_end, s.step, s.first_turning_point
+    (50, 50, 100)
     """
 
     rest_end: int
@@ -926,6 +974,18 @@ def find_start_up(record, threshold=0.02):
     RecordError
         No turning point after the start-up (the record holds no stroke
         that a hysteresis fit could start from).
+
+    Examples
+    --------
+    A record at rest for 0.5 s that steps to the crest of a cosine: the step
+    and the first stroke down from it are start-up.
+
+    >>> u = np.concatenate([np.zeros(50), np.cos(2 * np.pi * np.arange(300) / 100)])
+    >>> s = find_start_up(Record(u, 2 * u, fs=100.0))
+    >>> s.step, s.first_turning_point
+    (50, 100)
+    >>> s.note
+    'start-up of 100 samples (1 s): rest 50 samples (0.5 s); a step of +1 V at sample 50 ...'
     """
     _check_record(record)
     threshold = check_positive("threshold", threshold)
@@ -1003,6 +1063,14 @@ def cut_at_turning_points(record, threshold=0.02, first=0, last=-1, skip_transie
     ------
     RecordError
         Fewer than two turning points (after the start-up with ``skip_transient``).
+
+    Examples
+    --------
+    >>> from piezolib.signals import triangle
+    >>> t, v = triangle(1.0, 1.0, fs=100.0, periods=3)       # 0 -> 1 -> 0, three times
+    >>> cut = cut_at_turning_points(Record(v, 2 * v, fs=100.0))
+    >>> cut, cut.metadata["cut"]                             # peak 1 to peak 3
+    (Record(201 samples at 100 Hz, u [V] -> y [V]), (50, 251))
     """
     _check_record(record)
     if not isinstance(skip_transient, (bool, np.bool_)):
@@ -1038,6 +1106,14 @@ def detrend(record, which="output", kind="constant"):
     Returns
     -------
     Record
+
+    Examples
+    --------
+    >>> rec = Record(np.array([1.0, 2.0, 3.0, 4.0]), np.array([5.0, 6.0, 7.0, 8.0]), fs=1.0)
+    >>> detrend(rec).output                           # mean removed from the output
+    array([-1.5, -0.5,  0.5,  1.5])
+    >>> detrend(rec, kind="linear").output.round(12) + 0.0
+    array([0., 0., 0., 0.])
     """
     _check_record(record)
     if which not in ("output", "input", "both"):
@@ -1068,6 +1144,17 @@ def decimate(record, factor):
     -------
     Record
         At ``fs / factor``.
+
+    Examples
+    --------
+    >>> t = np.arange(1000) / 1e3
+    >>> slow = np.sin(2 * np.pi * 5 * t)
+    >>> rec = Record(slow, slow + 0.1 * np.sin(2 * np.pi * 400 * t), fs=1e3)  # 400 Hz noise
+    >>> d = decimate(rec, 10)
+    >>> d
+    Record(100 samples at 100 Hz, u [V] -> y [V])
+    >>> bool(np.abs(d.output - slow[::10])[10:-10].max() < 0.01)     # the noise is filtered out
+    True
     """
     _check_record(record)
     factor = check_integer("factor", factor, minimum=1)
@@ -1093,6 +1180,13 @@ def split(record, fraction=0.5):
     Returns
     -------
     first, second : Record
+
+    Examples
+    --------
+    >>> rec = Record(np.arange(10.0), np.arange(10.0), fs=10.0)
+    >>> first, second = split(rec, 0.7)
+    >>> len(first), len(second), second.t0
+    (7, 3, 0.7)
     """
     _check_record(record)
     fraction = check_positive("fraction", fraction)
