@@ -7,6 +7,8 @@ lti         time scaling, balancing, realisation, loop functions, norms
 lft         lower linear fractional transformation and its frequency response
 blocks      uncertainty-block type ``Block`` and the MATLAB ``blk`` parser
 hinf        verified H-infinity synthesis by gamma-iteration (``hinfsyn``)
+hinf_central
+            the central controller at one gamma and its Riccati solutions (hinf's)
 sos         second-order-section magnitude model (shared by dfit and uncertainty)
 dfit        stable minimum-phase fits of magnitude data (D-scalings)
 dk          mu-synthesis by DK-iteration (``musyn``)
