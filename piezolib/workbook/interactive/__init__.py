@@ -45,7 +45,7 @@ from piezolib.workbook.interactive._panel import STATIC_ENV, interactive_availab
 from piezolib.workbook.interactive.dahl_panel import (DAHL_SLIDER_PARAMETERS, DahlView,
                                                       dahl_control, dahl_view, draw_dahl)
 from piezolib.workbook.interactive.spread_panel import (SpreadView, draw_spread, spread_control,
-                                                        spread_view)
+                                                        spread_view, spread_view_from)
 from piezolib.workbook.interactive.weight_panel import (WEIGHT_PARAMETERS, Redesign,
                                                         WeightDesignView, draw_weight_design,
                                                         redesign, weight_design_control,
@@ -55,6 +55,6 @@ __all__ = [
     "STATIC_ENV", "interactive_available",
     "WEIGHT_PARAMETERS", "WeightDesignView", "weight_design_view", "draw_weight_design",
     "Redesign", "redesign", "weight_design_control",
-    "SpreadView", "spread_view", "draw_spread", "spread_control",
+    "SpreadView", "spread_view", "spread_view_from", "draw_spread", "spread_control",
     "DAHL_SLIDER_PARAMETERS", "DahlView", "dahl_view", "draw_dahl", "dahl_control",
 ]

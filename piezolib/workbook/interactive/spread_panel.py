@@ -5,7 +5,9 @@ envelope of the model set and a weight fitted to cover it.
 
 :func:`spread_view` is the pure callback, :func:`draw_spread` the drawing,
 :func:`spread_control` the entry point (a widget, or headless the figure:
-:mod:`piezolib.workbook.interactive`).
+:mod:`piezolib.workbook.interactive`); :func:`spread_view_from` makes the view of a
+set the notebook has already surveyed and covered, so that the control starts there
+without fitting the weight a second time.
 """
 
 from dataclasses import dataclass, field
@@ -15,6 +17,7 @@ import matplotlib as mpl
 import numpy as np
 
 from piezolib.problem import paper
+from piezolib.problem.coefficient_set import EnvelopeCover, ModelSetSurvey
 from piezolib import uncertainty as unc
 from piezolib._checks import (check_frequency_grid, check_integer, check_positive, check_siso,
                               check_type)
@@ -24,7 +27,7 @@ from piezolib.workbook.interactive._panel import (LivePanel, curve_db, finish, i
                                                   static_figure, want_widget)
 from piezolib.workbook.style import PALETTE, STYLE, apply_unit_text, unit_text
 
-__all__ = ["SpreadView", "spread_view", "draw_spread", "spread_control"]
+__all__ = ["SpreadView", "spread_view", "spread_view_from", "draw_spread", "spread_control"]
 
 #: Default grid [rad/s] of the relative-error envelope (that of notebook 02).
 _SPREAD_GRID = (1e0, 1e6, 2000)
@@ -118,13 +121,51 @@ def spread_view(G, spread, omega=None, levels=3):
                          "unstable, there is no envelope of stable members to cover")
     errors = unc.relative_errors(mset, omega)
     envelope = errors[stable].max(axis=0)
-    pick = stable[np.unique(np.linspace(0, stable.size - 1, min(_MEMBER_CURVES, stable.size))
-                            .round().astype(int))]
+    pick = _thinned(stable)
     weight = unc.fit_covering_weight(omega, envelope, order=_COVER_ORDER)
     return SpreadView(spread=float(mset.spread), levels=levels, omega=omega, members=mset.size,
                       unstable=unstable, envelope=envelope, envelope_all=errors.max(axis=0),
                       member_errors=errors[pick], weight=weight,
                       coverage=unc.coverage(weight, omega, envelope))
+
+
+def _thinned(stable):
+    """An evenly spaced selection of at most :data:`_MEMBER_CURVES` of the stable members."""
+    return stable[np.unique(np.linspace(0, stable.size - 1, min(_MEMBER_CURVES, stable.size))
+                            .round().astype(int))]
+
+
+def spread_view_from(survey, cover):
+    """The :class:`SpreadView` of a set already surveyed and covered (nothing is fitted again).
+
+    Parameters
+    ----------
+    survey : piezolib.problem.coefficient_set.ModelSetSurvey
+        The set and its unstable members.
+    cover : piezolib.problem.coefficient_set.EnvelopeCover
+        Its relative errors, the envelope of the stable members and the covering weight
+        fitted to it (of order 5, as :func:`spread_view` fits).
+
+    Returns
+    -------
+    SpreadView
+        The view :func:`spread_view` computes for the survey's spread, levels and the
+        cover's grid, for :func:`spread_control`'s ``start``.
+    """
+    check_type("survey", survey, ModelSetSurvey, "a ModelSetSurvey (coefficient_set.survey_model_set)")
+    check_type("cover", cover, EnvelopeCover, "an EnvelopeCover (coefficient_set.cover_envelope)")
+    mset = survey.mset
+    if cover.errors.shape[0] != mset.size:
+        raise ValueError(f"cover holds {cover.errors.shape[0]} members, survey {mset.size}: "
+                         "cover must be cover_envelope(survey, ...)")
+    stable = np.setdiff1d(np.arange(mset.size), survey.unstable)
+    if stable.size == 0:
+        raise ValueError("survey: every member is unstable, there is no envelope to cover")
+    return SpreadView(spread=float(mset.spread), levels=mset.levels, omega=cover.omega,
+                      members=mset.size, unstable=survey.unstable, envelope=cover.envelope,
+                      envelope_all=cover.errors.max(axis=0),
+                      member_errors=cover.errors[_thinned(stable)], weight=cover.weight,
+                      coverage=cover.fit)
 
 
 def _spread_summary(view, H_m=None):
@@ -184,7 +225,7 @@ def draw_spread(view, H_m=None, fig=None):
 
 
 def spread_control(G, H_m, omega=None, spread=paper.UNCERTAINTY_SPREAD, *, levels=3,
-                   interactive=None):
+                   interactive=None, start=None):
     """A slider for the coefficient spread (0.5 ... 10 %) over the envelope and covering weights.
 
     Parameters
@@ -202,6 +243,9 @@ def spread_control(G, H_m, omega=None, spread=paper.UNCERTAINTY_SPREAD, *, level
     interactive : bool, optional
         Force the widget (True) or the static figure (False); default
         :func:`interactive_available`.
+    start : SpreadView, optional
+        The view of the starting spread when it is already computed
+        (:func:`spread_view_from`): drawn as it is instead of fitted again.
 
     Returns
     -------
@@ -210,14 +254,30 @@ def spread_control(G, H_m, omega=None, spread=paper.UNCERTAINTY_SPREAD, *, level
         the figure of :func:`draw_spread` for ``spread``.
     """
     spread = check_positive("spread", spread)
+    if start is not None:
+        check_type("start", start, SpreadView, "a SpreadView (spread_view_from)")
+        if not (np.isclose(start.spread, spread) and start.levels == levels):
+            raise ValueError(f"start is the view of +-{100 * start.spread:g} % with "
+                             f"{start.levels} levels, the control starts at +-{100 * spread:g} % "
+                             f"with {levels}")
+        if omega is not None and not np.array_equal(np.asarray(omega, dtype=float), start.omega):
+            raise ValueError("start was computed on another grid than omega: pass the grid "
+                             "of its cover (or omega=None)")
+
+    def view_of(value):
+        """The view of one spread: ``start`` for its own, else computed."""
+        if start is not None and np.isclose(value, start.spread):
+            return start
+        return spread_view(G, value, omega, levels)
+
     if not want_widget(interactive):
-        return static_figure(draw_spread(spread_view(G, spread, omega, levels), H_m))
+        return static_figure(draw_spread(view_of(spread), H_m))
     w = import_ipywidgets()
     slider = linear_slider(w, "spread", 100 * spread, 0.5, 10.0, 0.1,
                            description="spread +- [%]")
     slider.description = unit_text(slider.description)
     panel = LivePanel(w, {"spread": slider},
-                      lambda values: spread_view(G, values["spread"] / 100, omega, levels),
+                      lambda values: view_of(values["spread"] / 100),
                       lambda view, fig: draw_spread(view, H_m, fig),
                       lambda view: _spread_summary(view, H_m))
     return finish(panel, panel.box())

@@ -94,3 +94,38 @@ def test_spread_widget_follows_its_slider(problem, widgets):
     slider.value = 3.0
     assert box.panel.view.spread == pytest.approx(0.03) and box.panel.view.n_unstable == 0
     assert "0 unstable" in box.panel.summary.value
+
+
+def _marginal_set():
+    """s^3 + s^2 + 1.02 s + 1 at +-5 %: some members unstable, and its cover (order 1)."""
+    from piezolib.problem import coefficient_set as cs
+    G = ct.tf([1.0], [1.0, 1.0, 1.02, 1.0])
+    omega = np.logspace(-2, 2, 64)
+    survey = cs.survey_model_set(G, 0.05, 3)
+    return G, omega, survey, cs.cover_envelope(survey, omega, ct.tf([0.5], [1.0]), order=1)
+
+
+def test_a_view_from_a_survey_and_its_cover_is_not_fitted_again(monkeypatch, headless):
+    G, omega, survey, cover = _marginal_set()
+    view = I.spread_view_from(survey, cover)
+    assert view.n_unstable == survey.unstable.size > 0
+    assert np.array_equal(view.envelope, cover.envelope) and view.weight is cover.weight
+    assert np.all(view.envelope_all >= view.envelope)
+    assert 0 < len(view.member_errors) <= 60
+    monkeypatch.setattr(I.spread_panel, "spread_view",
+                        lambda *args, **kwargs: pytest.fail("fitted again"))
+    fig = I.spread_control(G, None, omega, spread=0.05, start=view)
+    assert isinstance(fig, Figure)
+
+
+def test_a_start_of_another_spread_or_grid_is_refused():
+    G, omega, survey, cover = _marginal_set()
+    view = I.spread_view_from(survey, cover)
+    with pytest.raises(ValueError, match="start"):
+        I.spread_control(G, None, omega, spread=0.03, start=view, interactive=False)
+    with pytest.raises(ValueError, match="start"):
+        I.spread_control(G, None, omega[::2], spread=0.05, start=view, interactive=False)
+    with pytest.raises(TypeError, match="start"):
+        I.spread_control(G, None, omega, spread=0.05, start="view", interactive=False)
+    with pytest.raises(TypeError, match="cover"):
+        I.spread_view_from(survey, "cover")
