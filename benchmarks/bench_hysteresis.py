@@ -9,9 +9,9 @@ Fit time of each model (Dahl, Prandtl-Ishlinskii) on a raw 10 s record of the
 virtual stage (5x its sensor noise, from rest) at 5 kHz and 10 kHz, full rate.
 
     python benchmarks/bench_hysteresis.py --fits     # only the 10 s record fits
-    python benchmarks/bench_hysteresis.py --raw      # only the raw-record fits (issue 36)
+    python benchmarks/bench_hysteresis.py --raw      # only the raw-record fits
 
-Raw record (issue 36): the virtual stage's 51 000-sample record that starts at rest and steps
+Raw record: the virtual stage's 51 000-sample record that starts at rest and steps
 (``raw_hysteresis_record``): CPU time of fit_dahl (default stride: at most MAX_FIT_SAMPLES
 samples), fit_pi and fit_hammerstein on the whole record and on the record cut after its
 start-up, with the whole-record RMS error; goal for fit_dahl: <= 2 s of CPU.

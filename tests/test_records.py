@@ -356,7 +356,7 @@ def test_split_and_detrend():
         R.detrend(rec, which="time")
 
 
-# --- raw records that start at rest (issue 36) ------------------------------------------------
+# --- raw records that start at rest ------------------------------------------------------
 def raw_record(noise=2e-3, seed=0):
     """Rest, a step onto the input's top (the step is the first turning point), a lightly
     damped resonance ringing after it, then 2 Hz cosines dipping from the top."""

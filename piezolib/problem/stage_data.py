@@ -22,7 +22,8 @@ from piezolib._checks import check_path, check_positive, check_type
 from piezolib.problem import paper
 from piezolib.problem.paths import check_directory, data_dir
 from piezolib.problem.stage import (ADC_RANGE_V, RECORD_COLUMNS, Saturation, StageRecord,
-                                    VirtualStage, case_I_hysteresis, case_I_input)
+                                    VirtualStage)
+from piezolib.problem.stage_calibration import case_I_hysteresis, case_I_input
 
 __all__ = [
     "ChirpSettings", "IDENTIFICATION_CHIRP", "VALIDATION_CHIRP", "EXPERIMENT_SEEDS",
@@ -498,7 +499,7 @@ def write_foreign_records(directory=None):
     return written
 
 
-# --- a raw hysteresis record that starts at rest (issue 36) ---------------------------------
+# --- a raw hysteresis record that starts at rest ------------------------------------------
 #: The default raw record of :func:`raw_hysteresis_record`: 5 kHz, 5x the stage's sensor noise,
 #: 0.2 s at rest at 0 V, a step to the top of the excitation ``top_V``, then a 1 Hz cosine
 #: dipping from the top by twice each of ``amplitudes_V`` (two periods per amplitude) [V of u_c].

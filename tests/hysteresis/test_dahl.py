@@ -231,7 +231,7 @@ def test_not_invertible_exactly_when_the_slope_turns_negative():
         else:
             with pytest.raises(hy.NotInvertibleError, match="not increasing") as err:
                 hy.simulate_dahl(m, v)
-            # the message names the damping and what to do with a raw record (issue 36)
+            # the message names the damping and what to do with a raw record
             assert "0.15" in str(err.value)
             assert "skip_transient=True" in str(err.value) and "fit_hammerstein" in str(err.value)
 

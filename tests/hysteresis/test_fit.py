@@ -173,7 +173,7 @@ def test_rescore_moves_a_fit_to_another_model_and_recomputes_its_errors():
 
 def test_default_stride_keeps_at_most_max_fit_samples():
     """A long record is fitted on every k-th sample (turning points kept): the same fit as
-    the explicit stride, and the reported residuals still cover every sample (issue 36)."""
+    the explicit stride, and the reported residuals still cover every sample."""
     import warnings
     true = hy.DahlModel(alpha1=3.0, alpha2=4.0, beta1=0.0, beta2=0.2 * 4 / 30, gamma_a=30.0,
                         g_a=0.95, form="bliman_sorine")

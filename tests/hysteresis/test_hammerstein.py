@@ -1,4 +1,4 @@
-"""Hammerstein model: a PI operator then linear dynamics, fitted to raw records (issue 36)."""
+"""Hammerstein model: a PI operator then linear dynamics, fitted to raw records."""
 
 import warnings
 
@@ -71,7 +71,7 @@ def test_unknown_dynamics_fit_a_raw_record_with_its_ringing():
 
 
 def test_raw_stage_record_fits_within_1_5_times_the_noise_free_error(raw):
-    """Issue 36's criterion: the whole record, rest and step included, on the virtual stage.
+    """The raw-record criterion: the whole record, rest and step included, on the virtual stage.
 
     The model fitted to the noisy record is scored against the true (noise-free) output;
     its error must stay within 1.5x that of the same fit to the noise-free twin (the

@@ -137,7 +137,7 @@ def test_foreign_records_have_the_foreign_form():
 
 
 def test_raw_record_starts_at_rest_steps_rings_and_has_a_noise_free_twin():
-    """Issue 36's record: the step sample is the input's first turning point, it rings
+    """The raw record: the step sample is the input's first turning point, it rings
     the stage's resonances, and the noisy record differs from its twin by the noise only."""
     from piezolib import records
     from piezolib.problem.stage_data import RAW_RECORD, raw_hysteresis_record

@@ -203,7 +203,7 @@ def test_trial_limit_is_validated_and_wall_time_is_not_an_option():
         hinfsyn(P, 1, 1, time_budget=30.0)
 
 
-# --- regressions of issue 15: false verdicts from scale-dependent thresholds ---
+# --- regressions: false verdicts from scale-dependent thresholds ---
 
 def _s_ks_plant(G, W1):
     """S/KS mixed sensitivity: inputs [w, u], outputs [W1 (w - G u), u, w - G u]."""

@@ -73,7 +73,7 @@ def two_real_scalars_mu(m):
 
 
 def test_purely_real_lower_bound_is_exact_for_two_scalars():
-    # before issue 15 the lower bound was 0 on every purely real structure
+    # before the real-structure start the lower bound was 0 on every purely real structure
     rng = np.random.default_rng(7)
     M = crandn(rng, 60, 2, 2)
     res = mussv(M, [(-1, 0), (-1, 0)])

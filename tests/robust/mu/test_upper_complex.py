@@ -19,7 +19,7 @@ def sigma_max(M):
 
 
 def test_issue_reproducer_scaled_repeated_scalar():
-    # issue 15: upper 22.24 against mu = 1.018 before the balancing start
+    # upper 22.24 against mu = 1.018 before the balancing start
     g = np.random.default_rng(72)
     M = (np.diag(10 ** g.uniform(-3, 3, 3))
          @ (g.standard_normal((3, 3)) + 1j * g.standard_normal((3, 3)))
