@@ -9,15 +9,19 @@ design           the workbook's mu controller in one call
 analysis         Table 3: NS, NP, RS, RP of any controller
 verification     independent checks of the mu designs (notebook 05), with ``checks`` dicts
 hysteresis_fits  the paper's Dahl model and the workbook's Dahl fit to the Case I loops
+dahl_audit       the published Dahl parameters audited (units, steady state, loops), with checks
+hysteresis_choice the Dahl candidates fitted to Case I and the one chosen; Dahl and PI models
+                 compared on unseen records, with checks
+weighting        notebook 04: templates of eq. 15, P against eq. 16, M against eq. 18, Fig. 11
 fsm_benchmark    the CubeSpec fine steering mirror benchmark: data, metric, baselines
 fsm_models       the benchmark's models step by step (BLAs, linear, nonlinear, scores), with checks
 fsm_control      a mu controller for one mirror axis: nominal, design, verification, coupling
 paths            where the checkout and its ``data/`` folder are
-coefficient_box  notebook 09: the coefficient box as real blocks, margins per controller, the
-                 chosen mixed-mu design checked, claims and summary lines
 published_audit  notebook 00: the published design audited (units, poles, nominal loop, Tables 4-5)
 stage_identification  notebook 01: the virtual stage's calibration and identification (Sec. III-A)
 coefficient_set  notebook 02: the 729-model set, E_m, H_m's coverage, the exact margin of a loop
+coefficient_box  notebook 09: the coefficient box as real blocks, margins per controller, the
+                 chosen mixed-mu design checked, claims and summary lines
 
 :func:`piezolib.problem.paper.problem` returns the models G, H_m, H_e, H_y, K
 that the other modules here take explicitly (plant first, then the weights);
@@ -25,7 +29,7 @@ that the other modules here take explicitly (plant first, then the weights);
 """
 
 __all__ = ["paper", "genplant", "stage", "stage_hysteresis", "stage_data", "design",
-           "analysis", "verification", "hysteresis_fits", "fsm_benchmark", "paths",
+           "analysis", "verification", "hysteresis_fits", "dahl_audit", "hysteresis_choice",
+           "weighting", "fsm_benchmark", "paths",
            "fsm_models", "fsm_control",
-           "published_audit", "stage_identification", "coefficient_set",
-           "coefficient_box"]
+           "published_audit", "stage_identification", "coefficient_set", "coefficient_box"]

@@ -13,13 +13,15 @@ cli          the command line (``python -m piezolib {reproduce,data}``)
 outputs      where each study's outputs go
 session      the one call that starts a notebook: study, claim table, figure style
 interactive  the notebooks' interactive controls (one module per control) and their callbacks
-case_comparison  Cases I-III with several Case III controllers side by side (notebook 09)
+feedforward_cases  notebook 03: the Dahl feedforward on the model, Case II, the cross-check
+weighting_findings notebook 04: the closing findings beyond the claim rows
 tracking_study  notebook 06: Sec. V on one study, its checks, claims and findings
 fsm_findings notebook 10: the FSM benchmark's claim rows and closing findings
 your_stage   notebook 08: the pipeline on a user's own records, one call per stage with its checks
+case_comparison  Cases I-III with several Case III controllers side by side (notebook 09)
 """
 
 __all__ = ["study", "pipeline", "loop", "experiments", "report", "style", "plotting", "figures",
-           "reproduce", "cli", "outputs", "session", "interactive", "fsm_findings",
-           "tracking_study",
-           "case_comparison", "your_stage"]
+           "reproduce", "cli", "outputs", "session", "interactive", "feedforward_cases",
+           "weighting_findings", "tracking_study",
+           "case_comparison", "fsm_findings", "your_stage"]
