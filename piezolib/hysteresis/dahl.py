@@ -39,7 +39,19 @@ _SCALE_LIMIT = 1e150
 
 
 class NotInvertibleError(ValueError):
-    """x + H(x) is not monotone along a stroke, so x = g_a v - H has no unique solution."""
+    """x + H(x) is not monotone along a stroke, so x = g_a v - H has no unique solution.
+
+    Examples
+    --------
+    A strongly underdamped model overshoots along a stroke, so x(v) is not unique:
+
+    >>> bad = DahlModel(alpha1=0.2, alpha2=25.0, beta1=0.0, beta2=40.0, gamma_a=1.0, g_a=1.0,
+    ...                 form="bliman_sorine")
+    >>> simulate_dahl(bad, np.linspace(0.0, 4.0, 41))
+    Traceback (most recent call last):
+    ...
+    piezolib.hysteresis.dahl.NotInvertibleError: x + H(x) is not increasing along a stroke ...
+    """
 
 
 # --------------------------------------------------------------------------- model
@@ -70,6 +82,17 @@ class DahlModel:
         otherwise (:meth:`initial_state`): "virgin" (default) z = 0, "rest"
         the state reached after a long descending stroke, i.e. at rest after
         the actuator was lowered.
+
+    Examples
+    --------
+    >>> m = DahlModel(alpha1=3.0, alpha2=2.0, beta1=0.0, beta2=1.0, gamma_a=0.5, g_a=1.0,
+    ...                form="bliman_sorine")
+    >>> m.steady_state(+1), m.steady_state(-1)        # +-beta2 gamma_a / alpha2
+    (0.25, -0.25)
+    >>> round(m.damping, 3), round(m.transient_length, 3)
+    (1.061, 0.667)
+    >>> m.with_offset(0.1).static_part                      # (g_a, x0)
+    (1.0, 0.1)
     """
 
     alpha1: float
@@ -205,6 +228,14 @@ class StrokeDynamics:
     N, P, z_ss, C : dict
         For s = +1 and -1: N_s, N_s - m I, the steady state -s N_s^-1 B and
         the output row of eq. 12 (H = C_s z).
+
+    Examples
+    --------
+    >>> m = DahlModel(alpha1=3.0, alpha2=2.0, beta1=0.0, beta2=1.0, gamma_a=0.5, g_a=1.0,
+    ...                form="bliman_sorine")
+    >>> d = StrokeDynamics(m)           # overdamped: eigenvalues -1 and -2
+    >>> round(d.disc, 3), round(d.slow, 3), round(d.fast, 3), d.z_ss[1].round(3) + 0.0
+    (0.25, -1.0, -2.0, array([0.25, 0.  ]))
     """
 
     def __init__(self, model):
@@ -274,6 +305,11 @@ def strokes(u, direction0=1):
         Sample k in ``start < k <= stop`` moves from sample k-1 in direction
         ``s``; samples at rest keep the previous direction.  ``start`` is the
         index of the sample the run starts from.
+
+    Examples
+    --------
+    >>> strokes(np.array([0.0, 1.0, 2.0, 2.0, 1.0, 0.0, 1.0]))   # the rest at 2 keeps "up"
+    [(0, 3, 1), (3, 5, -1), (5, 6, 1)]
     """
     u = check_finite_array("u", u, ndim=1, min_length=1, real=True)
     d = np.sign(np.diff(u))
@@ -304,7 +340,19 @@ def initial_state_of(model, z0=None, direction0=None):
 
 
 def check_dahl_model(model):
-    """Return ``model`` if it is a :class:`DahlModel`; raise TypeError otherwise."""
+    """Return ``model`` if it is a :class:`DahlModel`; raise TypeError otherwise.
+
+    Examples
+    --------
+    >>> m = DahlModel(alpha1=3.0, alpha2=2.0, beta1=0.0, beta2=1.0, gamma_a=0.5, g_a=1.0,
+    ...                form="bliman_sorine")
+    >>> check_dahl_model(m) is m
+    True
+    >>> check_dahl_model("dahl")
+    Traceback (most recent call last):
+    ...
+    TypeError: model must be a DahlModel, got str
+    """
     if not isinstance(model, DahlModel):
         raise TypeError(f"model must be a DahlModel, got {type(model).__name__}")
     return model
@@ -342,6 +390,13 @@ def dahl_hysteresis(model, x, z0=None, direction0=None, return_state=False, dire
     -------
     H : ndarray
         H at every sample [x-unit]; ``(H, z)`` with ``return_state``.
+
+    Examples
+    --------
+    >>> m = DahlModel(alpha1=3.0, alpha2=2.0, beta1=0.0, beta2=1.0, gamma_a=0.5, g_a=1.0,
+    ...                form="bliman_sorine")
+    >>> dahl_hysteresis(m, np.array([0.0, 1.0, 2.0, 1.0, 0.0])).round(3)  # H up, then down
+    array([ 0.   ,  0.1  ,  0.187,  0.026, -0.133])
     """
     check_dahl_model(model)
     x = check_finite_array("x", x, ndim=1, min_length=2, real=True)
@@ -385,6 +440,15 @@ def feedforward(model, x_r, z0=None, direction0=None):
     -------
     ndarray
         Feedforward input u_f [v-unit] (workbook: amplifier input [V]).
+
+    Examples
+    --------
+    >>> m = DahlModel(alpha1=3.0, alpha2=2.0, beta1=0.0, beta2=1.0, gamma_a=0.5, g_a=1.0,
+    ...                form="bliman_sorine")
+    >>> x_r = np.r_[np.linspace(0.0, 3.0, 31), np.linspace(2.9, 0.0, 30)]
+    >>> u = feedforward(m, x_r)                   # eq. 14: no inversion needed
+    >>> bool(np.allclose(simulate_dahl(m, u).x, x_r))
+    True
     """
     check_dahl_model(model)
     x_r = check_finite_array("x_r", x_r, ndim=1, min_length=2, real=True)
@@ -407,6 +471,14 @@ class DahlResponse:
         Hysteretic term [x-unit].
     z : ndarray
         States, shape (n, 2).
+
+    Examples
+    --------
+    >>> m = DahlModel(alpha1=3.0, alpha2=2.0, beta1=0.0, beta2=1.0, gamma_a=0.5, g_a=1.0,
+    ...                form="bliman_sorine")
+    >>> r = simulate_dahl(m, np.array([0.0, 1.0, 2.0, 1.0, 0.0]))
+    >>> r.x.shape, r.z.shape, bool(np.allclose(r.x, m.g_a * r.v - r.H))
+    ((5,), (5, 2), True)
     """
 
     v: np.ndarray
@@ -443,6 +515,16 @@ def simulate_dahl(model, v, z0=None, direction0=None):
     NotInvertibleError
         When x + H(x) decreases somewhere along a stroke (a strongly
         underdamped model), so that x(v) is not unique.
+
+    Examples
+    --------
+    >>> m = DahlModel(alpha1=3.0, alpha2=2.0, beta1=0.0, beta2=1.0, gamma_a=0.5, g_a=1.0,
+    ...                form="bliman_sorine")
+    >>> from piezolib.signals import triangle
+    >>> t, v = triangle(4.0, 1.0, fs=40.0, periods=2)
+    >>> r = simulate_dahl(m, v)
+    >>> round(float(r.x.max()), 3), round(float(r.H.min()), 3)
+    (3.777, -0.223)
     """
     check_dahl_model(model)
     v = check_finite_array("v", v, ndim=1, min_length=2, real=True)
@@ -458,6 +540,15 @@ def simulate_dahl_records(model, records):
     cost little more than one; each response equals that of
     :func:`simulate_dahl`.  Returns a list of :class:`DahlResponse`; raises
     as :func:`simulate_dahl`.
+
+    Examples
+    --------
+    >>> m = DahlModel(alpha1=3.0, alpha2=2.0, beta1=0.0, beta2=1.0, gamma_a=0.5, g_a=1.0,
+    ...                form="bliman_sorine")
+    >>> v1, v2 = np.linspace(0.0, 4.0, 41), np.linspace(4.0, 0.0, 21)
+    >>> r1, r2 = simulate_dahl_records(m, [v1, v2])
+    >>> bool(np.allclose(r2.x, simulate_dahl(m, v2).x)), len(r1.x), len(r2.x)
+    (True, 41, 21)
     """
     check_dahl_model(model)
     _check_beta1(model)
@@ -578,6 +669,16 @@ def min_stroke_slope(model, z0, direction, length):
     -------
     float
         min over 0 <= sigma <= ``length`` of d(x + H)/dx (dimensionless).
+
+    Examples
+    --------
+    >>> m = DahlModel(alpha1=3.0, alpha2=2.0, beta1=0.0, beta2=1.0, gamma_a=0.5, g_a=1.0,
+    ...                form="bliman_sorine")
+    >>> min_stroke_slope(m, np.zeros(2), direction=1, length=4.0)   # > 0: invertible
+    1.0
+    >>> bad = DahlModel(0.2, 25.0, 0.0, 40.0, 1.0, 1.0, form="bliman_sorine")
+    >>> round(min_stroke_slope(bad, np.zeros(2), 1, 4.0), 2)          # < 0: overshoot
+    -6.28
     """
     check_dahl_model(model)
     s = _direction(direction)

@@ -118,6 +118,17 @@ class PIModel:
         Output offset [x-unit].
     start : {"rest", "virgin"}, optional
         Initial play state relative to the first input v_0 (:data:`PI_STARTS`).
+
+    Examples
+    --------
+    >>> pi = PIModel(thresholds=(0.0, 0.5, 1.0), weights=(1.0, 0.3, 0.2), start="virgin")
+    >>> pi.simulate(np.array([0.0, 1.0, 2.0, 1.0, 0.0]))     # the loop opens on the way down
+    array([0.  , 1.15, 2.65, 1.65, 0.35])
+    >>> pi.invertible, pi.static_part                            # (sum of weights, x0)
+    (True, (1.5, 0.0))
+    >>> x_r = np.array([0.0, 1.0, 2.0, 1.0, 0.0])
+    >>> bool(np.allclose(pi.simulate(pi.feedforward(x_r)), x_r))   # exact inverse
+    True
     """
 
     thresholds: tuple
@@ -258,6 +269,17 @@ class PIFit(FitScores):
     start_scores : dict
         With ``start="auto"``: the weighted residual norm of the fit from each
         initial state (the smaller one was kept); empty otherwise.
+
+    Examples
+    --------
+    >>> pi = PIModel(thresholds=(0.0, 0.5, 1.0), weights=(1.0, 0.3, 0.2), start="virgin")
+    >>> v = np.r_[np.linspace(0, 4, 21), np.linspace(3.8, 0, 20), np.linspace(0.2, 4, 20)]
+    >>> fit = fit_pi([(v, pi.simulate(v))], offset=False, start="virgin",
+    ...              thresholds=pi.thresholds)
+    >>> type(fit).__name__, fit.rms_percent.shape, round(fit.pooled_rms_percent, 6)
+    ('PIFit', (1,), 0.0)
+    >>> fit.parameter_table().index[0]
+    'w_0 (r = 0)'
     """
 
     model: PIModel
@@ -355,6 +377,15 @@ def fit_pi(loops, n_plays=10, offset=True, start="auto", discard=0, thresholds=N
     ValueError
         For loops without an ascending and a descending stroke of v after
         ``discard``, or with x not increasing with v.
+
+    Examples
+    --------
+    >>> pi = PIModel(thresholds=(0.0, 0.5, 1.0), weights=(1.0, 0.3, 0.2), start="virgin")
+    >>> v = np.r_[np.linspace(0, 4, 21), np.linspace(3.8, 0, 20), np.linspace(0.2, 4, 20)]
+    >>> fit = fit_pi([(v, pi.simulate(v))], offset=False, start="virgin",
+    ...              thresholds=pi.thresholds)              # one NNLS solve
+    >>> np.round(fit.model.weights, 6)
+    array([1. , 0.3, 0.2])
     """
     data = check_loops(loops, discard, 1)
     if start != "auto" and start not in PI_STARTS:
