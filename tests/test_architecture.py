@@ -400,3 +400,39 @@ def _is_submodule(package, name):
     except ModuleNotFoundError:
         return False
     return True
+
+
+# -- every package's docstring lists its modules, and only those ---------------------------------
+
+_ENTRY = re.compile(r"^([a-z_][a-z0-9_]*)(/?)(?:\s{2,}\S|\s*$)")
+
+
+def _packages():
+    return sorted(p.parent for p in PACKAGE.rglob("__init__.py")
+                  if "__pycache__" not in p.parts)
+
+
+def _members(package):
+    """Public modules and subpackages of a package (private ones need not be listed)."""
+    names = {p.stem for p in package.glob("*.py") if p.stem not in ("__init__", "__main__")}
+    names |= {p.name for p in package.iterdir() if (p / "__init__.py").is_file()}
+    return {n for n in names if not n.startswith("_")}
+
+
+@pytest.mark.parametrize("package", _packages(), ids=lambda p: str(p.relative_to(PACKAGE.parent)))
+def test_a_package_docstring_lists_its_modules(package):
+    members = _members(package)
+    if not members:
+        return
+    doc = ast.get_docstring(ast.parse((package / "__init__.py").read_text(encoding="utf-8"))) or ""
+    entries = {m.group(1) for line in doc.splitlines() if (m := _ENTRY.match(line))}
+    # a module named by reference in prose counts as listed (the top package's layers)
+    referenced = {name.split(".")[-1] for name in re.findall(r":mod:`~?\.?([\w.]+)`", doc)}
+    listed = entries | referenced
+    missing = sorted(members - listed)
+    if package == PACKAGE:
+        entries &= members          # the top package's entries are its layers (toolkit, ...)
+    stale = sorted(n for n in entries if n not in members and not (package / f"{n}.py").exists()
+                   and not (package / n).is_dir())
+    assert not missing, f"{package.name}/__init__.py does not list {missing}"
+    assert not stale, f"{package.name}/__init__.py lists modules that do not exist: {stale}"

@@ -12,7 +12,8 @@ hinf_central
 sos         second-order-section magnitude model (shared by dfit and uncertainty)
 dfit        stable minimum-phase fits of magnitude data (D-scalings)
 dk          mu-synthesis by DK-iteration (``musyn``)
-fixed_order fixed-order mu-synthesis of a SISO controller (``fixed_order_musyn``),
+fixed_order
+            fixed-order mu-synthesis of a SISO controller (``fixed_order_musyn``),
             complex blocks and real scalars (D,G-scaled bound)
 dgk         mixed-mu synthesis of a SISO controller: DK start, then D,G-K steps (``mixed_musyn``)
 reduction   (weighted) balanced controller reduction

@@ -5,6 +5,8 @@ envelope     relative errors, their envelope and its refined peak, the exact box
 weight       the inverse-notch weight shape, and the fit of a stable minimum-phase weight
              covering an envelope
 margin       exact parametric stability margin (zero exclusion) and small-gain certificates
+parametric   the coefficient box as an LFT with one real block per coefficient, and the
+             robust-stability margin by mixed mu
 sampled      the members at a sampling rate: exact ZOH models, sampled loops with a delay,
              random draws from the box
 polynomials  polynomial helpers shared by the modules above
