@@ -35,6 +35,14 @@ class HysteresisModel(Protocol):
     ``simulate(v)`` returns the displacement [x-unit] for an input record
     [v-unit], ``feedforward(x_r)`` the input that makes the model follow the
     desired displacement x_r (exactly, for the models of this package).
+
+    Examples
+    --------
+    >>> from piezolib.hysteresis import PIModel
+    >>> isinstance(PIModel(thresholds=(0.0,), weights=(2.0,)), HysteresisModel)
+    True
+    >>> isinstance(lambda v: 2.0 * v, HysteresisModel)       # no feedforward
+    False
     """
 
     def simulate(self, v): ...
@@ -73,7 +81,19 @@ def check_hysteresis_model(name, model):
 
 
 class FitScores:
-    """Scores shared by every hysteresis fit result (needs ``rms_percent`` and ``parameters``)."""
+    """Scores shared by every hysteresis fit result (needs ``rms_percent`` and ``parameters``).
+
+    Examples
+    --------
+    >>> from dataclasses import dataclass
+    >>> @dataclass
+    ... class Scores(FitScores):
+    ...     rms_percent: np.ndarray
+    ...     parameters: tuple = ()
+    >>> s = Scores(np.array([3.0, 4.0]))
+    >>> s.worst_rms_percent, round(s.pooled_rms_percent, 4)     # sqrt((9 + 16) / 2)
+    (4.0, 3.5355)
+    """
 
     def parameter_table(self):
         """pandas DataFrame of :attr:`parameters`: value, unit, 95 % CI, at_bound, identifiable."""
@@ -92,7 +112,20 @@ class FitScores:
 
 
 class FitWarning(UserWarning):
-    """A fitted parameter sits on a bound or is not identifiable from the data."""
+    """A fitted parameter sits on a bound or is not identifiable from the data.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> from piezolib.hysteresis import PIModel, fit_pi
+    >>> v = np.r_[np.linspace(0, 4, 21), np.linspace(3.8, 0, 20)]
+    >>> x = PIModel((0.0, 0.5), (1.0, 0.3), start="virgin").simulate(v)
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     fit = fit_pi([(v, x)], offset=False, start="virgin", thresholds=(0.0, 0.5, 1.5))
+    >>> caught[0].category is FitWarning, str(caught[0].message)     # a play not needed
+    (True, "fit_pi (start 'virgin'): w_2 (r = 1.5) = 0 on a bound")
+    """
 
 
 @dataclass(frozen=True)
@@ -116,6 +149,16 @@ class ParameterEstimate:
         The relative standard error is below 1/1.96 (the 95 % interval stays
         within a factor e of the value for a log parameter, excludes 0 for a
         linear one) and the parameter is not on a bound.
+
+    Examples
+    --------
+    >>> p = ParameterEstimate("g_a", 1.02, "x/v", low=0.98, high=1.06, at_bound=False,
+    ...                       identifiable=True)
+    >>> p.low < p.value < p.high, p.identifiable
+    (True, True)
+    >>> from piezolib.hysteresis.common import parameter_frame
+    >>> float(parameter_frame([p]).loc["g_a", "value"])
+    1.02
     """
 
     name: str

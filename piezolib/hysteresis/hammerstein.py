@@ -61,6 +61,12 @@ def unit_dc_dynamics(dynamics, fs):
     b, a : ndarray
         Coefficients in powers of q^-1 (``scipy.signal.lfilter`` form),
         a[0] = 1, b scaled so that B(1) / A(1) = 1.
+
+    Examples
+    --------
+    >>> b, a = unit_dc_dynamics(ct.tf([1], [0.01, 1]), fs=100.0)   # tau = 10 ms, ZOH at 100 Hz
+    >>> b.round(4), a.round(4)
+    (array([0.    , 0.6321]), array([ 1.    , -0.3679]))
     """
     fs = check_positive("fs", fs)
     if not isinstance(dynamics, ct.LTI):
@@ -100,6 +106,18 @@ class HammersteinModel:
         a[0] = 1, B(1) = A(1): unit DC gain; b[0] = 0 for a delay of a sample).
     fs : float
         The rate the dynamics are sampled at [Hz]; records must be at it.
+
+    Examples
+    --------
+    >>> from piezolib.hysteresis import PIModel
+    >>> pi = PIModel(thresholds=(0.0, 0.5, 1.0), weights=(1.0, 0.3, 0.2), start="virgin")
+    >>> true = HammersteinModel(pi, b=(0.0, 0.5), a=(1.0, -0.5), fs=100.0)   # lag, unit DC gain
+    >>> v = np.r_[np.linspace(0, 4, 21), np.linspace(3.8, 0, 20), np.linspace(0.2, 4, 20)]
+    >>> x = true.simulate(v)
+    >>> x[:4].round(4)                          # the PI output delayed and smoothed
+    array([0.  , 0.  , 0.1 , 0.25])
+    >>> true.dynamics.dt, float(ct.dcgain(true.dynamics))
+    (0.01, 1.0)
     """
 
     hysteresis: PIModel
@@ -175,6 +193,17 @@ class HammersteinFit(FitScores):
         Alternations of weights and dynamics (0 with given dynamics).
     start_scores : dict
         Weighted residual norm from each initial play state tried.
+
+    Examples
+    --------
+    >>> from piezolib.hysteresis import PIModel
+    >>> pi = PIModel(thresholds=(0.0, 0.5, 1.0), weights=(1.0, 0.3, 0.2), start="virgin")
+    >>> true = HammersteinModel(pi, b=(0.0, 0.5), a=(1.0, -0.5), fs=100.0)   # lag, unit DC gain
+    >>> v = np.r_[np.linspace(0, 4, 21), np.linspace(3.8, 0, 20), np.linspace(0.2, 4, 20)]
+    >>> fit = fit_hammerstein([(v, true.simulate(v))], fs=100.0, order=(1, 1), n_plays=3,
+    ...                        offset=False, start="virgin")
+    >>> type(fit.model).__name__, len(fit.model.a), fit.iterations > 0
+    ('HammersteinModel', 2, True)
     """
 
     model: HammersteinModel
@@ -281,6 +310,21 @@ def fit_hammerstein(loops, fs, order=(4, 4), n_plays=10, dynamics=None, delay=1,
     ValueError
         Bad loops (as :func:`~piezolib.hysteresis.pi.fit_pi`), bad orders,
         or unstable dynamics.
+
+    Examples
+    --------
+    >>> from piezolib.hysteresis import PIModel
+    >>> pi = PIModel(thresholds=(0.0, 0.5, 1.0), weights=(1.0, 0.3, 0.2), start="virgin")
+    >>> true = HammersteinModel(pi, b=(0.0, 0.5), a=(1.0, -0.5), fs=100.0)   # lag, unit DC gain
+    >>> v = np.r_[np.linspace(0, 4, 21), np.linspace(3.8, 0, 20), np.linspace(0.2, 4, 20)]
+
+    With the dynamics known only the play weights are fitted (one linear solve):
+
+    >>> fit = fit_hammerstein([(v, true.simulate(v))], fs=100.0,
+    ...                       dynamics=ct.tf(0.5, [1, -0.5], 0.01), thresholds=pi.thresholds,
+    ...                       offset=False, start="virgin")
+    >>> np.round(fit.model.hysteresis.weights, 6), fit.iterations
+    (array([1. , 0.3, 0.2]), 0)
     """
     fs = check_positive("fs", fs)
     data = check_loops(loops, discard, 1)
