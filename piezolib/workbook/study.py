@@ -31,7 +31,7 @@ from piezolib.workbook.loop import COMPUTATION_DELAY_SAMPLES
 
 __all__ = ["Study", "UncertaintyChoice", "WeightChoice", "DesignChoice", "LoopChoice",
            "ExperimentChoice", "StudyError", "REFERENCE", "RESERVED_NAMES", "UNCERTAINTY_WEIGHTS",
-           "load", "list_studies", "study_files", "from_dict", "studies_dir", "choices_digest",
+           "load", "study_files", "from_dict", "studies_dir", "choices_digest",
            "section_fields"]
 
 #: Name of the paper's reproduction; only this study writes the committed outputs.
@@ -377,12 +377,6 @@ def studies_dir():
 def study_files():
     """The ``studies/*.toml`` files, the reference's first, the others by name."""
     return sorted(studies_dir().glob("*.toml"), key=lambda path: (path.stem != REFERENCE, path.stem))
-
-
-def list_studies():
-    """``{name: Study}`` of every ``studies/*.toml`` file, the reference first
-    (:func:`load` makes each study's name its file's)."""
-    return {path.stem: load(path) for path in study_files()}
 
 
 def load(spec=REFERENCE):
