@@ -102,6 +102,13 @@ class PlantCoefficients:
 
     ``a`` holds a0 ... a5 (the leading s^6 coefficient is 1) and ``b`` holds
     b0 ... b3.  Time unit: seconds; G maps u_c [V] to v_y [V].
+
+    Examples
+    --------
+    >>> PLANT.den[:2]              # monic, highest power first
+    array([1.00e+00, 1.08e+04])
+    >>> len(PLANT.num), len(PLANT.den)
+    (4, 7)
     """
 
     a: tuple = (2.05e23, 5.79e19, 1.65e16, 1.98e12, 2.95e8, 1.08e4)
@@ -133,6 +140,12 @@ def plant(coefficients=PLANT):
     -------
     control.TransferFunction
         SISO model from ``u_c`` [V] to ``v_y`` [V], named ``G``.
+
+    Examples
+    --------
+    >>> G = plant()
+    >>> round(float(G.dcgain()), 4), G.input_labels, G.output_labels
+    (0.8976, ['u_c'], ['v_y'])
     """
     if not isinstance(coefficients, PlantCoefficients):
         raise TypeError("coefficients must be a PlantCoefficients instance, "
@@ -154,7 +167,15 @@ UNCERTAINTY_LEVELS = 3      #: nominal and the two extremes -> 3**6 = 729 models
 
 @dataclass(frozen=True)
 class UncertaintyWeightParameters:
-    """Table 2: parameters of H_m(s), eq. 8 (frequencies in rad/s)."""
+    """Table 2: parameters of H_m(s), eq. 8 (frequencies in rad/s).
+
+    Examples
+    --------
+    >>> UNCERTAINTY_WEIGHT.g, UNCERTAINTY_WEIGHT.omega1
+    (0.02, 6300.0)
+    >>> UncertaintyWeightParameters(g=0.05).g
+    0.05
+    """
 
     g: float = 0.02
     zeta1: float = 3.5
@@ -190,6 +211,14 @@ def uncertainty_weight(params=UNCERTAINTY_WEIGHT, **overrides):
     -------
     control.TransferFunction
         Fifth-order weight from ``u_c`` to ``y_Delta``, named ``H_m``.
+
+    Examples
+    --------
+    >>> H_m = uncertainty_weight()
+    >>> H_m.name, len(H_m.den[0][0]) - 1        # name, order
+    ('H_m', 5)
+    >>> float(abs(H_m(0))), float(abs(uncertainty_weight(g=0.05)(0)))
+    (0.02, 0.05)
     """
     p = _with_overrides(params, UncertaintyWeightParameters, overrides)
     # checked under Table 2's names first: those are the names the caller passed
@@ -209,6 +238,11 @@ class DahlParameters:
 
     With the equations as printed, ``g_a`` multiplies the actuator input
     voltage in x_a = g_a v_a - H (eq. 13).
+
+    Examples
+    --------
+    >>> DAHL.g_a, DAHL.gamma_a
+    (0.925, 30.0)
     """
 
     alpha1: float = 1.76e3
@@ -225,7 +259,13 @@ DAHL = DahlParameters()
 # --- Sec. IV-B, eq. 15: performance weights ----------------------------------
 @dataclass(frozen=True)
 class ErrorWeightParameters:
-    """Eq. 15: H_e(s) = (s/M_e + omega_e) / (s + omega_e*eps_e), omega in rad/s."""
+    """Eq. 15: H_e(s) = (s/M_e + omega_e) / (s + omega_e*eps_e), omega in rad/s.
+
+    Examples
+    --------
+    >>> ERROR_WEIGHT
+    ErrorWeightParameters(M_e=2.0, eps_e=0.003, omega_e=1260.0)
+    """
 
     M_e: float = 2.0
     eps_e: float = 0.003
@@ -234,7 +274,13 @@ class ErrorWeightParameters:
 
 @dataclass(frozen=True)
 class OutputWeightParameters:
-    """Eq. 15: H_y(s) = ((s + omega_y/M_y) / (eps_y*s + omega_y))^2, rad/s."""
+    """Eq. 15: H_y(s) = ((s + omega_y/M_y) / (eps_y*s + omega_y))^2, rad/s.
+
+    Examples
+    --------
+    >>> OUTPUT_WEIGHT.M_y, OUTPUT_WEIGHT.omega_y
+    (1.5, 7500.0)
+    """
 
     M_y: float = 1.5
     eps_y: float = 1e-4
@@ -263,6 +309,14 @@ def error_weight(params=ERROR_WEIGHT, **overrides):
     -------
     control.TransferFunction
         First-order weight from ``v_e`` to ``y1``, named ``H_e``.
+
+    Examples
+    --------
+    >>> H_e = error_weight()
+    >>> print(f"{1 / abs(H_e(0)):.4f}")      # template on S at DC: eps_e
+    0.0030
+    >>> print(f"{1 / abs(error_weight(M_e=3.0)(1e9j)):.2f}")   # ... M_e far above omega_e
+    3.00
     """
     p = _with_overrides(params, ErrorWeightParameters, overrides)
     for name in ("M_e", "eps_e", "omega_e"):     # the names the caller passed
@@ -289,6 +343,14 @@ def output_weight(params=OUTPUT_WEIGHT, **overrides):
     -------
     control.TransferFunction
         Second-order weight from ``v_y`` to ``y2``, named ``H_y``.
+
+    Examples
+    --------
+    >>> H_y = output_weight()
+    >>> H_y.name, len(H_y.den[0][0]) - 1
+    ('H_y', 2)
+    >>> print(f"{1 / abs(H_y(0)):.4f}")      # template on T at DC: M_y**2
+    2.2500
     """
     p = _with_overrides(params, OutputWeightParameters, overrides)
     for name in ("M_y", "eps_y", "omega_y"):     # the names the caller passed
@@ -304,6 +366,11 @@ class ControllerCoefficients:
 
     ``n`` holds n0 ... n5, ``d`` holds d0 ... d5 (leading s^6 coefficient 1).
     See :data:`CONTROLLER_NOTE` for d3, d4, d5.
+
+    Examples
+    --------
+    >>> CONTROLLER.d[3:]                     # the three printed as 'd3', see CONTROLLER_NOTE
+    (786000000000000.0, 32100000000.0, 469000.0)
     """
 
     n: tuple = (4.73e22, 1.51e22, 7.66e17, 1.04e15, 1.78e10, 5.29e6)
@@ -337,6 +404,15 @@ def controller(coefficients=CONTROLLER):
     -------
     control.TransferFunction
         Sixth-order controller from ``v_e`` [V] to ``u_b`` [V], named ``K``.
+
+    Examples
+    --------
+    >>> import control as ct
+    >>> K = controller()
+    >>> K.input_labels, K.output_labels, len(K.den[0][0]) - 1
+    (['v_e'], ['u_b'], 6)
+    >>> bool((ct.poles(ct.feedback(plant() * K)).real < 0).all())   # stable loop
+    True
     """
     if not isinstance(coefficients, ControllerCoefficients):
         raise TypeError("coefficients must be a ControllerCoefficients instance, "
@@ -398,6 +474,11 @@ def table1():
 
     The table's text layer merges two rows ("30 20 N/um"); the load capacity
     of 30 N is confirmed by Sec. II, which leaves 20 N/um for the stiffness.
+
+    Examples
+    --------
+    >>> table1().set_index("item").loc["resonant frequency", "quantity"]
+    '2100'
     """
     return pd.DataFrame(
         [("driven voltage", "-20 to 120", "V"),
@@ -411,14 +492,26 @@ def table1():
 
 
 def table2():
-    """Table 2: parameters of H_m, as a one-row-per-parameter DataFrame."""
+    """Table 2: parameters of H_m, as a one-row-per-parameter DataFrame.
+
+    Examples
+    --------
+    >>> table2().set_index("parameter").loc[["g", "omega1"], "value"].tolist()
+    [0.02, 6300.0]
+    """
     return pd.DataFrame({"parameter": [f.name for f in fields(UNCERTAINTY_WEIGHT)],
                          "value": [getattr(UNCERTAINTY_WEIGHT, f.name)
                                    for f in fields(UNCERTAINTY_WEIGHT)]})
 
 
 def case_rows_index():
-    """The row index shared by Tables 4 and 5 (and the workbook's reproductions)."""
+    """The row index shared by Tables 4 and 5 (and the workbook's reproductions).
+
+    Examples
+    --------
+    >>> list(case_rows_index())[:3]
+    ['case_I', 'case_II', 'case_III']
+    """
     return pd.Index(CASE_ROWS, name="row")
 
 
@@ -428,6 +521,14 @@ def table4():
     Rows: ``case_I`` (open loop), ``case_II`` (Dahl feedforward),
     ``case_III`` (feedforward + mu controller) and the three improvement rows
     in %.  Columns: actuator voltage amplitude in V.
+
+    Examples
+    --------
+    >>> t4 = table4()
+    >>> t4.shape, list(t4.columns)
+    ((6, 4), [10.0, 20.0, 30.0, 40.0])
+    >>> t4.loc["case_III"].tolist()
+    [0.31, 0.37, 0.41, 0.44]
     """
     data = [[6.19, 9.08, 11.16, 12.44],
             [0.45, 0.81, 1.23, 2.12],
@@ -443,6 +544,14 @@ def table5():
     """Table 5: tracking error % of 12 um triangles versus frequency [Hz].
 
     Same rows as :func:`table4`; columns: triangle frequency in Hz.
+
+    Examples
+    --------
+    >>> t5 = table5()
+    >>> list(t5.columns)
+    [1.0, 10.0, 20.0, 30.0, 40.0, 50.0]
+    >>> t5.loc[["case_I", "case_III"], 50.0].tolist()
+    [12.98, 4.58]
     """
     data = [[7.33, 9.47, 10.56, 11.72, 12.13, 12.98],
             [3.54, 4.29, 4.93, 5.28, 5.72, 6.19],
@@ -472,6 +581,14 @@ class DesignProblem(NamedTuple):
         Output weight of eq. 15, ``v_y`` [V] -> ``y2`` (dimensionless).
     K : control.TransferFunction
         Reduced controller of eq. 24, ``v_e`` [V] -> ``u_b`` [V].
+
+    Examples
+    --------
+    >>> p = problem()
+    >>> p._fields
+    ('G', 'H_m', 'H_e', 'H_y', 'K')
+    >>> p.H_e.name
+    'H_e'
     """
 
     G: ct.TransferFunction
