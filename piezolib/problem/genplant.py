@@ -66,6 +66,13 @@ class RolloffWeight:
         omega_u [rad/s], where the weight reaches its high-frequency level.
     order : int
         n, the slope of the transition in 20 dB/decade.
+
+    Examples
+    --------
+    >>> DESIGN_ROLLOFF.hf_gain, DESIGN_ROLLOFF.order
+    (10.0, 2)
+    >>> RolloffWeight(hf_gain=5.0).lf_gain
+    10000.0
     """
 
     hf_gain: float = 10.0
@@ -85,6 +92,13 @@ def check_models(G, H_m, H_e, H_y):
     ------
     TypeError, ValueError
         Naming the first model that is not a SISO ``control.LTI``.
+
+    Examples
+    --------
+    >>> from piezolib.problem import paper
+    >>> G, H_m, H_e, H_y, _ = paper.problem()
+    >>> check_models(G, H_m, H_e, H_y)[0] is G
+    True
     """
     for name, sys in (("G", G), ("H_m", H_m), ("H_e", H_e), ("H_y", H_y)):
         check_siso(name, sys)
@@ -234,6 +248,13 @@ def design_plant(G, H_m, H_e, H_y, *, effort_weight=DESIGN_EFFORT_WEIGHT, omega_
     -------
     control.StateSpace
         Outputs ``y_Delta, y1, y2, y_u, v_e``.
+
+    Examples
+    --------
+    >>> from piezolib.problem import paper
+    >>> G, H_m, H_e, H_y, _ = paper.problem()
+    >>> design_plant(G, H_m, H_e, H_y).output_labels
+    ['y_Delta', 'y1', 'y2', 'y_u', 'v_e']
     """
     return generalized_plant(G, H_m, H_e, H_y, effort_weight=effort_weight, omega_s=omega_s)
 
@@ -254,6 +275,14 @@ def closed_loop_matrix(K, G, H_m, H_e, H_y, *, omega_s=None):
     -------
     control.StateSpace
         Inputs ``u_Delta, v_r``; outputs ``y_Delta, y1, y2``; named ``M``.
+
+    Examples
+    --------
+    >>> from piezolib.problem import paper
+    >>> G, H_m, H_e, H_y, K = paper.problem()
+    >>> M = closed_loop_matrix(K, G, H_m, H_e, H_y)
+    >>> M.input_labels, M.output_labels, M.nstates
+    (['u_Delta', 'v_r'], ['y_Delta', 'y1', 'y2'], 20)
     """
     _check_controller(K)
     G, H_m, H_e, H_y = check_models(G, H_m, H_e, H_y)
@@ -319,6 +348,14 @@ def rolloff_weight(params=DESIGN_ROLLOFF):
         ``params`` is not a :class:`RolloffWeight`.
     ValueError
         Non-positive gains or frequency, ``lf_gain <= hf_gain`` or order < 1.
+
+    Examples
+    --------
+    >>> W_u = rolloff_weight()
+    >>> W_u.name, W_u.input_labels, W_u.output_labels
+    ('W_u', ['u_b'], ['y_u'])
+    >>> print(f"{1 / abs(W_u(0)):.0f} {1 / abs(W_u(1e9j)):.1f}")   # K_lf in band, K_hf far above
+    10000 10.0
     """
     return _rolloff_weight(params, "params")
 
@@ -379,6 +416,14 @@ def delay_aware_plant(G, H_m, H_e, H_y, *, fs, delay_samples=DESIGN_DELAY_SAMPLE
     control.StateSpace
         Inputs ``u_Delta, v_r, u_b``; outputs ``y_Delta, y1, y2, y_u, v_e``;
         named ``P_delay``; 14 + ``pade_order`` + ``rolloff.order`` states.
+
+    Examples
+    --------
+    >>> from piezolib.problem import paper
+    >>> G, H_m, H_e, H_y, _ = paper.problem()
+    >>> P = delay_aware_plant(G, H_m, H_e, H_y, fs=10e3)
+    >>> P.name, P.nstates                      # 14 + Pade order 2 + roll-off order 2
+    ('P_delay', 18)
     """
     G, H_m, H_e, H_y = check_models(G, H_m, H_e, H_y)
     tau = effective_delay(fs, delay_samples)
@@ -426,6 +471,15 @@ def delayed_closed_loop_response(K, G, H_m, H_e, H_y, omega, *, fs, delay_sample
     -------
     ndarray, shape (len(omega), 3 or 4, 2)
         Inputs ``u_Delta, v_r``.
+
+    Examples
+    --------
+    >>> from piezolib.problem import paper
+    >>> G, H_m, H_e, H_y, K = paper.problem()
+    >>> R = delayed_closed_loop_response(K, G, H_m, H_e, H_y, [1e2, 1e3], fs=10e3,
+    ...                                  delay_samples=1)
+    >>> R.shape                                # (frequencies, y_Delta y1 y2, u_Delta v_r)
+    (2, 3, 2)
     """
     _check_controller(K)
     G, H_m, H_e, H_y = check_models(G, H_m, H_e, H_y)
@@ -454,7 +508,13 @@ def _closed_loop_response(R, K, omega):
 
 def parametric_block_structure(n_coefficients):
     """Block structure of :func:`parametric_design_plant`: one real scalar per
-    coefficient, then the 1 x 3 performance block (v_r -> y1, y2, y_u)."""
+    coefficient, then the 1 x 3 performance block (v_r -> y1, y2, y_u).
+
+    Examples
+    --------
+    >>> parametric_block_structure(2)
+    ((-1, 0), (-1, 0), (1, 3))
+    """
     n_coefficients = check_integer("n_coefficients", n_coefficients, minimum=1)
     return ((-1, 0),) * n_coefficients + ((1, 3),)
 
@@ -493,6 +553,14 @@ def parametric_design_plant(G, H_e, H_y, spread, *, fs, delay_samples=DESIGN_DEL
     control.StateSpace
         Inputs ``w_0 ... w_{n-1}, v_r, u_b``; outputs ``z_0 ... z_{n-1}, y1, y2,
         y_u, v_e``; named ``P_par``.
+
+    Examples
+    --------
+    >>> from piezolib.problem import paper
+    >>> G, _, H_e, H_y, _ = paper.problem()
+    >>> P = parametric_design_plant(G, H_e, H_y, 0.05, fs=10e3)
+    >>> P.name, P.input_labels[-2:], P.output_labels[-4:]
+    ('P_par', ['v_r', 'u_b'], ['y1', 'y2', 'y_u', 'v_e'])
     """
     from piezolib.uncertainty.parametric import parametric_lft
 
@@ -547,6 +615,15 @@ def delayed_parametric_loop_response(K, G, H_e, H_y, spread, omega, *, fs, delay
     ndarray, shape (len(omega), n + 3, n + 1)
         Outputs ``z_0 ... z_{n-1}, y1, y2, y_u``; inputs ``w_0 ... w_{n-1}, v_r``
         (structure :func:`parametric_block_structure`).
+
+    Examples
+    --------
+    >>> from piezolib.problem import paper
+    >>> G, _, H_e, H_y, K = paper.problem()
+    >>> R = delayed_parametric_loop_response(K, G, H_e, H_y, 0.05, [1e2, 1e3], fs=10e3,
+    ...                                      delay_samples=1)
+    >>> R.shape                                # 6 coefficients: (2, 6 + 3, 6 + 1)
+    (2, 9, 7)
     """
     _check_controller(K)
     omega = check_frequency_grid("omega", omega, min_length=1)
