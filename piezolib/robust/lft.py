@@ -50,6 +50,14 @@ def lower_lft(P, K, omega_s=None):
         P has no channels left besides the controller's, a non-finite
         coefficient, or a discrete-time P or K (use python-control's
         ``lft`` on discrete models directly).
+
+    Examples
+    --------
+    >>> G = ct.tf([1], [1, 1])
+    >>> P = ct.ss(ct.tf([[[1], [-1]], [[1], [-1]]], [[[1], [1, 1]], [[1], [1, 1]]]))  # z = y = w - G u
+    >>> S = lower_lft(P, ct.tf(10, 1))                     # S = 1/(1 + K G) for K = 10
+    >>> S.poles(), round(float(ct.dcgain(S)), 4), S.name
+    (array([-11.+0.j]), 0.0909, 'M')
     """
     nmeas, ncon = _split(P, K)
     omega_s = time_scale_of(P, K) if omega_s is None else check_positive("omega_s", omega_s)
@@ -90,6 +98,14 @@ def lft_response(P, K, omega, omega_s=None):
     ValueError
         As :func:`lower_lft`, or when I - P22 K is singular at a frequency of
         ``omega`` (the closed loop has a pole there).
+
+    Examples
+    --------
+    >>> G = ct.tf([1], [1, 1])
+    >>> P = ct.ss(ct.tf([[[1], [-1]], [[1], [-1]]], [[[1], [1, 1]], [[1], [1, 1]]]))  # z = y = w - G u
+    >>> M = lft_response(P, ct.tf(10, 1), [0.0, 1e3])
+    >>> M.shape, np.abs(M[:, 0, 0]).round(4)
+    ((2, 1, 1), array([0.0909, 0.9999]))
     """
     nmeas, ncon = _split(P, K)
     omega = check_finite_array("omega", omega, ndim=1, min_length=1, real=True)
@@ -146,6 +162,17 @@ def lft_hinf_norm(P, K, omega, omega_s=None, rtol=1e-9):
     peak : float
     omega_peak : float
         [rad/s]; 0 for a peak at DC.
+
+    Examples
+    --------
+    GS = G/(1 + K G) of a lightly damped G: z = G (d + u), y = -G (d + u).
+
+    >>> G = ct.tf([1], [1, 0.2, 1])
+    >>> num, den = G.num[0][0], G.den[0][0]
+    >>> P = ct.ss(ct.tf([[num, num], [-num, -num]], [[den, den], [den, den]]))
+    >>> peak, w = lft_hinf_norm(P, ct.tf(0.1, 1), np.logspace(-1, 1, 200))
+    >>> round(peak, 3), round(w, 3)                      # 1 / (0.2 sqrt(1.09)) at sqrt(1.08)
+    (4.789, 1.039)
     """
     _split(P, K)
     omega = check_finite_array("omega", omega, ndim=1, min_length=2, real=True)

@@ -25,11 +25,26 @@ __all__ = [
 ]
 
 LoopFunctions = namedtuple("LoopFunctions", ["S", "T", "KS", "GS"])
-LoopFunctions.__doc__ = "The four closed-loop functions S, T, KS, GS of a SISO loop."
+LoopFunctions.__doc__ = """The four closed-loop functions S, T, KS, GS of a SISO loop.
+
+Examples
+--------
+>>> lf = loop_functions(ct.tf([1], [1, 1]), ct.tf([10], [1]))
+>>> lf._fields, type(lf.T).__name__
+(('S', 'T', 'KS', 'GS'), 'StateSpace')
+>>> bool(np.isclose(ct.dcgain(lf.S) + ct.dcgain(lf.T), 1.0))     # S + T = 1
+True
+"""
 
 
 def frequency_grid(omega_min=1.0, omega_max=1e6, n=2000):
-    """Logarithmic frequency grid in rad/s (explicit grids keep runs repeatable)."""
+    """Logarithmic frequency grid in rad/s (explicit grids keep runs repeatable).
+
+    Examples
+    --------
+    >>> frequency_grid(1.0, 100.0, n=3)
+    array([  1.,  10., 100.])
+    """
     omega_min = check_positive("omega_min", omega_min)
     omega_max = check_positive("omega_max", omega_max)
     if omega_max <= omega_min:
@@ -48,6 +63,12 @@ def scaled_coefficients(num, den, omega_s):
     -------
     num, den : ndarray
         Scaled numerator and monic denominator.
+
+    Examples
+    --------
+    >>> num, den = scaled_coefficients(np.array([1.0]), np.array([1.0, 101.0, 100.0]), 10.0)
+    >>> num, den                                   # poles -1, -100 become -0.1, -10
+    (array([0.01]), array([ 1. , 10.1,  1. ]))
     """
     omega_s = check_positive("omega_s", omega_s)
     num = np.atleast_1d(num).astype(float)
@@ -59,7 +80,14 @@ def scaled_coefficients(num, den, omega_s):
 
 
 def max_singular_value(sys, omega):
-    """Largest singular value of sys(j omega) at each frequency of ``omega`` [rad/s]."""
+    """Largest singular value of sys(j omega) at each frequency of ``omega`` [rad/s].
+
+    Examples
+    --------
+    >>> G = ct.tf([1], [1, 101, 100])
+    >>> max_singular_value(G, [0.0, 10.0]).round(4)              # |G(0)|, |G(10j)|
+    array([0.01 , 0.001])
+    """
     check_model("sys", sys)
     omega = check_finite_array("omega", np.atleast_1d(omega), ndim=1, min_length=1, real=True)
     resp = np.moveaxis(sys(1j * omega, squeeze=False), -1, 0)
@@ -74,6 +102,12 @@ def scale_time(sys, omega_s):
     ``H`` divided by ``omega_s``.  Works on transfer functions (coefficient
     scaling) and state-space models (A/omega_s, B/sqrt(omega_s),
     C/sqrt(omega_s)).
+
+    Examples
+    --------
+    >>> Gs = scale_time(ct.tf([1], [1, 101, 100]), 10.0)
+    >>> np.sort(Gs.poles().real)                      # the poles divided by omega_s
+    array([-10. ,  -0.1])
     """
     check_model("sys", sys)
     omega_s = check_positive("omega_s", omega_s)
@@ -143,6 +177,12 @@ def to_scaled(sys, omega_s):
     -------
     control.StateSpace
         H(omega_s p), same signal names.
+
+    Examples
+    --------
+    >>> Ps = to_scaled(ct.tf([1], [1, 101, 100]), 10.0)
+    >>> type(Ps).__name__, np.sort(Ps.poles().real).round(6)
+    ('StateSpace', array([-10. ,  -0.1]))
     """
     return balance(ct.ss(scale_time(sys, omega_s)))
 
@@ -165,6 +205,13 @@ def from_scaled(sys, omega_s, inputs=None, outputs=None, name=None):
     -------
     control.StateSpace
         The model in ordinary time (seconds).
+
+    Examples
+    --------
+    >>> G = ct.tf([1], [1, 101, 100])
+    >>> back = from_scaled(to_scaled(G, 10.0), 10.0, inputs=["u"], outputs=["y"])
+    >>> np.sort(back.poles().real).round(6), back.input_labels
+    (array([-100.,   -1.]), ['u'])
     """
     omega_s = check_positive("omega_s", omega_s)
     out = balance(scale_time(ct.ss(sys), 1.0 / omega_s))
@@ -184,6 +231,12 @@ def with_signals(sys, inputs=None, outputs=None, name=None):
     -------
     control.StateSpace
         Same matrices and sample time, new names.
+
+    Examples
+    --------
+    >>> G = with_signals(ct.ss(ct.tf([1], [1, 1])), ["u_c"], ["v_y"], name="G")
+    >>> G.input_labels, G.output_labels, G.name
+    (['u_c'], ['v_y'], 'G')
     """
     sys = ct.ss(check_finite_lti("sys", sys))
     if name is not None and not isinstance(name, str):
@@ -211,6 +264,15 @@ def balance(sys):
     Uses LAPACK's matrix balancing of A (powers-of-two scaling, no
     permutation), so the transfer function is unchanged bit for bit in exact
     arithmetic.
+
+    Examples
+    --------
+    >>> sys = ct.ss([[-1e3, -1e6], [1.0, 0.0]], [[1.0], [0.0]], [[0.0, 1e6]], [[0.0]])
+    >>> balance(sys).A                               # powers-of-two scaling of the states
+    array([[-1000.    ,  -976.5625],
+           [ 1024.    ,     0.    ]])
+    >>> bool(np.isclose(ct.dcgain(balance(sys)), ct.dcgain(sys)))
+    True
     """
     sys = ct.ss(check_finite_lti("sys", sys))
     if sys.nstates == 0:
@@ -238,6 +300,12 @@ def realize(sys, omega_s=None):
     Returns
     -------
     control.StateSpace
+
+    Examples
+    --------
+    >>> r = realize(ct.tf([1e12], [1, 2e3, 1e6, 0]))   # large coefficients, poles 0, -1e3, -1e3
+    >>> r.nstates, np.sort(np.abs(r.poles())).round(-1)
+    (3, array([   0., 1000., 1000.]))
     """
     check_model("sys", sys)
     omega_s = time_scale_of(sys) if omega_s is None else check_positive("omega_s", omega_s)
@@ -269,6 +337,14 @@ def loop_functions(G, K, omega_s=None):
         Named tuple of ``control.StateSpace`` models: ``S`` (v_r -> v_e),
         ``T`` (v_r -> v_y), ``KS`` (v_r -> u_b), ``GS`` (input disturbance
         d -> v_y).
+
+    Examples
+    --------
+    >>> lf = loop_functions(ct.tf([1], [1, 1]), ct.tf([10], [1]))   # G = 1/(s+1), K = 10
+    >>> [round(float(ct.dcgain(f)), 4) for f in lf]                 # S, T, KS, GS at DC
+    [0.0909, 0.9091, 0.9091, 0.0909]
+    >>> lf.S.input_labels, lf.S.output_labels
+    (['v_r'], ['v_e'])
     """
     for name, sys in (("G", G), ("K", K)):
         check_siso(name, sys)
@@ -293,6 +369,11 @@ def closed_loop_poles(G, K, omega_s=None):
     """Poles [rad/s] of the loop of G and K, computed in scaled time.
 
     ``omega_s`` [rad/s] defaults to :func:`time_scale_of` ``(G, K)``.
+
+    Examples
+    --------
+    >>> closed_loop_poles(ct.tf([1], [1, 1]), ct.tf([10], [1]))     # s + 1 + 10 = 0
+    array([-11.+0.j])
     """
     for name, sys in (("G", G), ("K", K)):
         check_siso(name, sys)
@@ -304,7 +385,15 @@ def closed_loop_poles(G, K, omega_s=None):
 
 
 def is_stable(G, K, omega_s=None):
-    """True when every closed-loop pole of the loop (G, K) has Re < 0."""
+    """True when every closed-loop pole of the loop (G, K) has Re < 0.
+
+    Examples
+    --------
+    >>> is_stable(ct.tf([1], [1, 1]), ct.tf([10], [1]))
+    True
+    >>> is_stable(ct.tf([1], [1, -1]), ct.tf([0.5], [1]))      # unstable plant, gain too low
+    False
+    """
     return bool(np.all(closed_loop_poles(G, K, omega_s).real < 0))
 
 
@@ -331,6 +420,12 @@ def hinf_norm(sys, omega=None, rtol=1e-9):
         max over omega of the largest singular value of sys(j omega).
     omega_peak : float
         Frequency of the peak [rad/s]; 0 for a peak at DC.
+
+    Examples
+    --------
+    >>> peak, w = hinf_norm(ct.tf([1], [1, 0.2, 1]))        # zeta = 0.1 resonance
+    >>> round(peak, 4), round(w, 4)                          # 1/(2 zeta sqrt(1 - zeta^2))
+    (5.0252, 0.9899)
     """
     check_finite_lti("sys", sys)
     check_continuous("sys", sys)
@@ -361,6 +456,13 @@ def bandwidth(sys, level_dB=-3.0, omega=None):
 
     For T this is the usual closed-loop bandwidth (-3 dB); returns ``nan``
     when the gain never crosses the level on the grid.
+
+    Examples
+    --------
+    >>> round(bandwidth(ct.tf([1], [1, 1])), 2)              # -3 dB of 1/(s+1): 1 rad/s
+    1.0
+    >>> round(bandwidth(ct.tf([1], [1, 1]), level_dB=-20.0), 1)
+    9.9
     """
     check_siso("sys", sys)
     check_model("sys", sys)
