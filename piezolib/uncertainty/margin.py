@@ -144,10 +144,31 @@ def parametric_stability_margin(G, K=None, spread_max=1.0, omega=None, *, delay=
 _PADE_ORDER = 12
 
 
+#: A delay whose phase stays below this [rad] up to the loop's fastest pole or zero moves no
+#: closed-loop pole beyond rounding: the loop is judged without it (see _nominally_stable).
+_NEGLIGIBLE_DELAY_PHASE = 1e-6
+
+
 def _nominally_stable(polys, G, K, delay):
-    """Nominal closed loop stable (with the delay as a 12th-order Pade approximation)."""
+    """Nominal closed loop stable (with the delay as a 12th-order Pade approximation).
+
+    A delay far below every time constant of the loop (phase below
+    :data:`_NEGLIGIBLE_DELAY_PHASE` at its fastest pole or zero) is a singular
+    perturbation: the loop's poles are those without it, plus fast poles that
+    are stable exactly when |L(j inf)| < 1.  The Pade polynomial of such a delay
+    would span hundreds of decades (its roots lost to rounding), so that case is
+    decided without it.
+    """
     if delay == 0:
         return bool(np.all(npoly.polyroots(polys.c0).real < 0))
+    loop_num = np.trim_zeros(npoly.polymul(polys.b, polys.n), "b")
+    loop_den = np.trim_zeros(npoly.polymul(polys.a, polys.d), "b")
+    corners = np.abs(np.r_[npoly.polyroots(loop_num), npoly.polyroots(loop_den)])
+    fastest = corners.max() if corners.size else 1.0            # scaled rad/s
+    if delay * polys.ws * max(fastest, 1.0) < _NEGLIGIBLE_DELAY_PHASE:
+        gain_at_infinity = (abs(loop_num[-1] / loop_den[-1]) if loop_num.size == loop_den.size
+                            else 0.0)
+        return bool(gain_at_infinity < 1 and np.all(npoly.polyroots(polys.c0).real < 0))
     num, den = ct.pade(delay * polys.ws, _PADE_ORDER)
     pade_num, pade_den = np.asarray(num, float)[::-1], np.asarray(den, float)[::-1]
     c = npoly.polyadd(npoly.polymul(npoly.polymul(polys.a, polys.d), pade_den),

@@ -183,3 +183,20 @@ def test_delay_margin_tends_to_the_delay_free_one_and_its_critical_member_is_on_
         unc.parametric_stability_margin(G, K, delay=-1.0)
     with pytest.raises(ValueError, match="delay"):
         unc.parametric_stability_margin(G, None, delay=1e-4)
+
+
+@pytest.mark.parametrize("delay", [1e-300, 1e-14, 1e-12, 1e-11])
+def test_a_negligible_delay_gives_the_delay_free_margin(delay):
+    # the 12th-order Pade polynomial of such a delay spans hundreds of decades: its roots
+    # are lost to rounding (spread 0 and "nominally unstable" before, or a LinAlgError)
+    G, K = ct.tf([1], [1, 3, 3, 1]), ct.tf([0.5], [1])
+    free = unc.parametric_stability_margin(G, K)
+    tiny = unc.parametric_stability_margin(G, K, delay=delay)
+    assert tiny.nominal_stable and tiny.spread == pytest.approx(free.spread, rel=1e-6)
+
+
+def test_any_delay_destabilises_a_loop_whose_gain_at_infinity_exceeds_one():
+    # L = -2 (s + 2)/(s + 1): stable without delay (pole at -3), |L(j inf)| = 2
+    G, K = ct.tf([1, 2], [1, 1]), ct.tf([-2.0], [1])
+    assert unc.parametric_stability_margin(G, K).nominal_stable
+    assert not unc.parametric_stability_margin(G, K, delay=1e-12).nominal_stable
