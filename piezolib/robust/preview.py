@@ -148,9 +148,11 @@ def zpetc(Gd, radius=1.0):
     lead = num[0] / den[0]
     den = den / den[0]
     zeros = np.roots(num)
-    if np.any(np.isclose(zeros, 1.0, rtol=0, atol=1e-9)):
-        raise ValueError("Gd has a zero at z = 1: it blocks constant inputs, so no "
-                         "feedforward can track a constant reference")
+    near_one = np.abs(zeros - 1.0)
+    if np.any(near_one <= _UNIT_ZERO_DISTANCE):
+        raise ValueError(f"Gd has a zero at z = 1 (within {near_one.min():.1e}): it blocks "
+                         "constant inputs, so no feedforward can track a constant reference "
+                         "(its inverse would need a gain of order 1/distance^2)")
     inside = np.abs(zeros) < radius
     b_a, b_u = (np.atleast_1d(np.real(np.poly(z))) for z in (zeros[inside], zeros[~inside]))
     s = int(np.count_nonzero(~inside))
@@ -163,5 +165,30 @@ def zpetc(Gd, radius=1.0):
     tracking = ct.tf(np.polymul(b_u, b_u[::-1]) / np.polyval(b_u, 1.0) ** 2,
                      np.r_[1.0, np.zeros(s)], dt, inputs="r", outputs="y_model",
                      name="zero_phase")
+    _check_zero_phase(Gd, F, tracking, d + s)
     return PreviewFeedforward(F=F, preview=d + s, tracking=tracking,
                               cancelled_zeros=zeros[inside], mirrored_zeros=zeros[~inside])
+
+
+#: Zeros closer than this to z = 1 are refused: the ZPETC's DC normalisation divides by
+#: the square of their distance.
+_UNIT_ZERO_DISTANCE = 1e-6
+#: Relative error allowed between G_d F z^p and the zero-phase ``tracking`` it must equal.
+_ZERO_PHASE_RTOL = 1e-6
+
+
+def _check_zero_phase(Gd, F, tracking, preview):
+    """Raise unless G_d F z^preview equals ``tracking`` (real, 1 at DC) on a grid: the
+    factorisation can lose that to rounding (zeros near z = 1, ill-conditioned roots)."""
+    w = np.linspace(0.0, np.pi, 64)
+    z = np.exp(1j * w)
+    got = np.ravel(Gd(z)) * np.ravel(F(z)) * z ** preview
+    want = np.ravel(tracking(z))
+    scale = max(1.0, np.abs(want).max())
+    error = max(np.abs(got - want).max(), np.abs(want.imag).max(), abs(want[0] - 1.0)) / scale
+    if not error <= _ZERO_PHASE_RTOL:
+        raise ValueError(f"the ZPETC of Gd is numerically unreliable: G_d F z^{preview} "
+                         f"differs from its zero-phase target by {error:.2g} (relative), F's "
+                         f"gain reaches {np.abs(np.ravel(F(z))).max():.3g}; zeros of Gd near "
+                         "z = 1 or badly conditioned coefficients (balance or reduce the "
+                         "model first)")

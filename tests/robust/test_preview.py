@@ -66,3 +66,20 @@ def test_a_smaller_radius_mirrors_a_lightly_damped_zero():
 def test_a_plant_that_blocks_dc_is_refused():
     with pytest.raises(ValueError, match="zero at z = 1"):
         zpetc(ct.tf([1.0, -1.0], [1.0, -0.5], 0.1))
+
+
+@pytest.mark.parametrize("distance", [1e-12, 1e-8, 1e-7])
+def test_a_zero_next_to_one_is_refused_not_inverted(distance):
+    # a zero at 1 + 1e-8 passed the old check (within 1e-9): F's gain reached 4e16 and the
+    # returned "zero-phase" tracking differed from G F z^p by 17
+    G = ct.tf([1, -(1 + distance)], [1, -0.5, 0.06], 0.01)
+    with pytest.raises(ValueError, match="zero at z = 1"):
+        zpetc(G)
+
+
+def test_the_returned_tracking_is_what_the_feedforward_achieves():
+    G = ct.tf([1, -(1 + 1e-3)], [1, -0.5, 0.06], 0.01)     # near 1, yet well defined
+    res = zpetc(G)
+    z = np.exp(1j * np.linspace(0, np.pi, 50))
+    achieved = np.ravel(G(z)) * np.ravel(res.F(z)) * z ** res.preview
+    np.testing.assert_allclose(achieved, np.ravel(res.tracking(z)), rtol=1e-6, atol=1e-9)
