@@ -12,7 +12,16 @@ __all__ = ["project_root", "data_dir", "check_directory"]
 def project_root():
     """The workbook checkout: ``$PIEZOLIB_ROOT`` if set, else the folder above
     the package when it holds ``notebooks/`` (editable install), else the
-    current directory."""
+    current directory.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from unittest import mock
+    >>> with tempfile.TemporaryDirectory() as root, mock.patch.dict(os.environ, {"PIEZOLIB_ROOT": root}):
+    ...     project_root() == Path(root).resolve()
+    True
+    """
     env = os.environ.get("PIEZOLIB_ROOT")
     if env:
         return Path(env).resolve()
@@ -23,7 +32,13 @@ def project_root():
 
 
 def data_dir():
-    """``data/``: virtual-stage experiment files and the results tables."""
+    """``data/``: virtual-stage experiment files and the results tables.
+
+    Examples
+    --------
+    >>> data_dir() == project_root() / "data"
+    True
+    """
     return project_root() / "data"
 
 

@@ -41,7 +41,16 @@ RESERVED_NAMES = outputs.RESERVED_NAMES
 
 
 class StudyError(ValueError):
-    """A study file or a study change that cannot be used (names the field)."""
+    """A study file or a study change that cannot be used (names the field).
+
+    Examples
+    --------
+    >>> try:
+    ...     Study(name="no/slash")
+    ... except StudyError as exc:
+    ...     print(exc)
+    study name must be letters, digits, '_' or '-', got 'no/slash'
+    """
 
 
 #: The uncertainty weights a study can design with: the paper's H_m of eq. 8,
@@ -71,6 +80,13 @@ class UncertaintyChoice:
     weight_grid : tuple of (float, float, int)
         Lowest and highest frequency [rad/s] and number of log-spaced points
         of the grid the fitted weight covers the envelope on.
+
+    Examples
+    --------
+    >>> UncertaintyChoice().spread, UncertaintyChoice().levels
+    (0.05, 3)
+    >>> UncertaintyChoice().weight_choices()      # the published H_m depends on nothing else
+    {'weight': 'published'}
     """
 
     spread: float = paper.UNCERTAINTY_SPREAD
@@ -111,7 +127,13 @@ class UncertaintyChoice:
 
 @dataclass(frozen=True)
 class WeightChoice:
-    """The performance weights H_e and H_y of eq. 15 (notebook 04); frequencies in rad/s."""
+    """The performance weights H_e and H_y of eq. 15 (notebook 04); frequencies in rad/s.
+
+    Examples
+    --------
+    >>> WeightChoice(omega_e=2e3).error
+    ErrorWeightParameters(M_e=2.0, eps_e=0.003, omega_e=2000.0)
+    """
 
     M_e: float = paper.ERROR_WEIGHT.M_e
     eps_e: float = paper.ERROR_WEIGHT.eps_e
@@ -149,6 +171,11 @@ class DesignChoice:
         Maximum number of DK iterations.
     delay_samples : int
         Computation delay [samples] modelled in the synthesis plant.
+
+    Examples
+    --------
+    >>> DesignChoice()
+    DesignChoice(order=6, d_order=4, max_iter=8, delay_samples=1)
     """
 
     order: int = 6
@@ -174,6 +201,11 @@ class LoopChoice:
     delay_samples : int
         Computation delay [samples] of the simulated loop (u_b applied this
         many ticks after v_y is read).
+
+    Examples
+    --------
+    >>> LoopChoice()
+    LoopChoice(fs_Hz=10000.0, delay_samples=1)
     """
 
     fs_Hz: float = paper.SAMPLING_FREQUENCY_HZ
@@ -202,6 +234,13 @@ class ExperimentChoice:
         Number of noise seeds, ``stage_seed``, ``stage_seed + 1``, ...: each
         Table 4-5 entry is reported as the mean over them with its 95 %
         interval (at least 2).
+
+    Examples
+    --------
+    >>> ExperimentChoice(noise_seeds=3).seeds
+    (0, 1, 2)
+    >>> ExperimentChoice().frequencies_Hz
+    (1.0, 10.0, 20.0, 30.0, 40.0, 50.0)
     """
 
     amplitudes_V: tuple = paper.HYSTERESIS_TEST["actuator_amplitudes_V"]
@@ -258,6 +297,17 @@ class Study:
         One sentence on what the study changes and why.
     uncertainty, weights, design, loop, experiments
         The choices of each pipeline stage (see their classes).
+
+    Examples
+    --------
+    >>> s = Study()                                 # the paper's reproduction
+    >>> s.name, s.is_reference, s.weights.omega_e
+    ('reference', True, 1260.0)
+    >>> wide = s.replace(name="wide_He", weights={"omega_e": 2.5e3})
+    >>> wide.weights.omega_e, wide.is_reference, wide.digest("design") == s.digest("design")
+    (2500.0, False, True)
+    >>> wide.figures_dir.relative_to(outputs.project_root()).as_posix()
+    'runs/wide_He/figures'
     """
 
     name: str = REFERENCE
@@ -370,12 +420,24 @@ class Study:
 
 
 def studies_dir():
-    """``studies/``: the study files of the checkout."""
+    """``studies/``: the study files of the checkout.
+
+    Examples
+    --------
+    >>> studies_dir().relative_to(outputs.project_root()).as_posix()
+    'studies'
+    """
     return outputs.project_root() / "studies"
 
 
 def study_files():
-    """The ``studies/*.toml`` files, the reference's first, the others by name."""
+    """The ``studies/*.toml`` files, the reference's first, the others by name.
+
+    Examples
+    --------
+    >>> study_files()[0].name
+    'reference.toml'
+    """
     return sorted(studies_dir().glob("*.toml"), key=lambda path: (path.stem != REFERENCE, path.stem))
 
 
@@ -387,6 +449,15 @@ def load(spec=REFERENCE):
     StudyError
         Unknown name, missing file, TOML error, unknown section or field, or
         an invalid value (each message names the file and the field).
+
+    Examples
+    --------
+    >>> load("reference") == Study()
+    True
+    >>> load("wide_error_weight").weights.omega_e       # studies/wide_error_weight.toml
+    2000.0
+    >>> load("studies/uncertainty_3pct.toml").uncertainty.spread
+    0.03
     """
     if isinstance(spec, Study):
         return spec
@@ -422,7 +493,16 @@ def load(spec=REFERENCE):
 
 
 def from_dict(data):
-    """A study from the dict layout of :meth:`Study.to_toml` (unknown keys are errors)."""
+    """A study from the dict layout of :meth:`Study.to_toml` (unknown keys are errors).
+
+    Examples
+    --------
+    >>> s = from_dict({"name": "explore", "weights": {"M_e": 3.0}})
+    >>> s.weights.M_e, s.design == DesignChoice()
+    (3.0, True)
+    >>> from_dict(Study().replace(name="x", loop={"fs_Hz": 5e3}).choices() | {"name": "x"}).loop.fs_Hz
+    5000.0
+    """
     if not isinstance(data, dict):
         raise StudyError(f"a study is a table of sections, got {type(data).__name__}")
     unknown = set(data) - set(_SECTIONS) - {"name", "description"}
@@ -437,13 +517,27 @@ def from_dict(data):
 
 def section_fields():
     """``{section: {field: type}}`` of every choice a study holds (``int``, ``float``,
-    ``str`` or ``tuple``): what a sweep can vary, and how to draw it."""
+    ``str`` or ``tuple``): what a sweep can vary, and how to draw it.
+
+    Examples
+    --------
+    >>> section_fields()["loop"]
+    {'fs_Hz': <class 'float'>, 'delay_samples': <class 'int'>}
+    """
     return {section: {f.name: f.type for f in fields(cls)} for section, cls in _SECTIONS.items()}
 
 
 def choices_digest(choices):
     """Short SHA-256 (16 hex digits) of a dict of choices; numbers hash as floats,
-    so 2500 and 2500.0 give the same digest."""
+    so 2500 and 2500.0 give the same digest.
+
+    Examples
+    --------
+    >>> choices_digest({"omega_e": 2500}) == choices_digest({"omega_e": 2500.0})
+    True
+    >>> len(choices_digest({"omega_e": 2500}))
+    16
+    """
     if not isinstance(choices, dict):
         raise TypeError(f"choices must be a dict, got {type(choices).__name__}")
     try:
