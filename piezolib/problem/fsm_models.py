@@ -552,6 +552,8 @@ class LevelSpreadWeight:
     frequency_Hz : ndarray
     pair_is_largest : bool
         Whether the pair is the diagonal pair with the largest peak gain.
+    order : int
+        The covering weight's order.
     """
 
     pair: tuple
@@ -563,6 +565,7 @@ class LevelSpreadWeight:
     weight_magnitude: np.ndarray
     frequency_Hz: np.ndarray
     pair_is_largest: bool
+    order: int
 
     @property
     def i_peak(self):
@@ -632,4 +635,4 @@ def level_spread_weight(blas, linear, pair=(2, 2), order=4):
     W_resp = np.abs(np.ravel(W(1j * omega_rad_s)))
     return LevelSpreadWeight(pair=tuple(pair), coupling=coupling, relative_errors=rel_err,
                              envelope=envelope, weight=W, coverage=cover, weight_magnitude=W_resp,
-                             frequency_Hz=f, pair_is_largest=largest)
+                             frequency_Hz=f, pair_is_largest=largest, order=order)

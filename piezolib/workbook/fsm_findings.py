@@ -178,7 +178,7 @@ def summary_lines(blas, scores, change, nonlinear, weight, nominal, design, veri
         f"resonance",
         f"uncertainty weight of the levels' spread ({weight.pair_label} against the all-levels "
         f"model): envelope peak {weight.envelope[i_peak]:.2f} at "
-        f"{weight.frequency_Hz[i_peak]:.0f} Hz, covered by an order-{weight.weight.nstates} "
+        f"{weight.frequency_Hz[i_peak]:.0f} Hz, covered by an order-{weight.order} "
         f"weight; cross-coupling: off-diagonal peak gains {peak_off.min():.2f}-"
         f"{peak_off.max():.2f} of the diagonal ones, so a SISO loop is a design of one axis only",
         f"μ controller for the axis {weight.pair_label}: nominal model the (3,3) entry of the "

@@ -39,7 +39,7 @@ def _results():
         pair=(2, 2), coupling=pd.DataFrame(np.ones((3, 3))), relative_errors={},
         envelope=np.array([0.1, 0.5, 0.2]), weight=ct.ss([[-1.0]], [[1.0]], [[1.0]], [[0.0]]),
         coverage=SimpleNamespace(covers=True), weight_magnitude=np.ones(3), frequency_Hz=f,
-        pair_is_largest=True)
+        pair_is_largest=True, order=4)
     reduction = pd.DataFrame({"rms error < 100 Hz [%]": [6.4512, 4.3]}, index=[12, 48])
     nominal = fsm_control.AxisNominal(
         pair=(2, 2), g_full=SimpleNamespace(nstates=48), g_level={},
@@ -95,4 +95,5 @@ def test_the_summary_names_the_levels_where_the_scheduled_model_beats_the_lfr():
     nonlinear_line = next(x for x in lines if x.startswith("one model for all levels, not"))
     assert "below the LFR at 100 mV; above it at 200 mV, 300 mV" in nonlinear_line
     assert "why the Hammerstein model fails: 60 %" in lines[6]
+    assert "envelope peak 0.50 at 900 Hz, covered by an order-4 weight" in lines[7]
     assert lines[-1] == "not done: a MIMO controller for the mirror"
