@@ -33,7 +33,18 @@ _GOLDEN = (np.sqrt(5.0) - 1) / 2   # low-discrepancy spacing of those trials
 
 
 class HinfSynthesisError(ValueError):
-    """No verified H-infinity controller: unstabilisable, infeasible or out of trials."""
+    """No verified H-infinity controller: unstabilisable, infeasible or out of trials.
+
+    Examples
+    --------
+    An unstable mode the control cannot reach:
+
+    >>> P = ct.ss([[1.0]], [[1.0, 0.0]], [[1.0], [1.0]], np.zeros((2, 2)))
+    >>> hinfsyn(P, 1, 1)
+    Traceback (most recent call last):
+    ...
+    piezolib.robust.hinf.HinfSynthesisError: P cannot be stabilised: the mode at 1 rad/s is not controllable ...
+    """
 
 
 class _ControllersFailed(HinfSynthesisError):
@@ -94,6 +105,17 @@ class HinfResult:
         "as given", or how P was re-realised when the given realisation gave
         no converged controller and the re-realised one did better (the
         result is then checked on the plant as given too).
+
+    Examples
+    --------
+    >>> s = ct.tf("s")
+    >>> G, W1 = 1 / (s + 1), 0.5 * (s + 10) / (s + 0.1)
+    >>> P = ct.ss(ct.combine_tf([[W1, -W1 * G], [0, 0.1], [1, -G]]))   # z = (W1 e, 0.1 u), y = e
+    >>> r = hinfsyn(P, 1, 1)
+    >>> bool(np.all(r.closed_loop_poles.real < 0)), r.regularization == ""
+    (True, True)
+    >>> bool(abs(r.norm - r.gamma) < 1e-2 * r.gamma)       # the norm on P as given
+    True
     """
 
     K: ct.StateSpace
@@ -425,6 +447,19 @@ def hinfsyn(P, nmeas=1, ncon=1, *, gamma_max=1e6, rtol=1e-3, max_iter=60,
         (up to 8 raises of gamma, by 1 %, 2 %, 4 %, ... or 10 ``rtol`` if larger:
         the controller must pass the dense-grid check, stabilise the given
         plant with a margin and meet gamma on it).
+
+    Examples
+    --------
+    Mixed sensitivity for G = 1/(s+1): ||(W1 S, 0.1 K S)||_inf.
+
+    >>> s = ct.tf("s")
+    >>> G, W1 = 1 / (s + 1), 0.5 * (s + 10) / (s + 0.1)
+    >>> P = ct.ss(ct.combine_tf([[W1, -W1 * G], [0, 0.1], [1, -G]]))   # z = (W1 e, 0.1 u), y = e
+    >>> r = hinfsyn(P, nmeas=1, ncon=1)
+    >>> round(r.gamma, 2), r.converged, r.K.nstates
+    (0.8, True, 2)
+    >>> bool(r.gamma_infeasible < r.gamma <= r.gamma_infeasible * (1 + 1e-3))
+    True
     """
     options = dict(gamma_max=gamma_max, rtol=rtol, max_iter=max_iter, time_scale=time_scale,
                    verify_rtol=verify_rtol)
