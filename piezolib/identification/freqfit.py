@@ -41,6 +41,7 @@ A 4th-order 2 x 2 system is found from noise-free data:
 (True, True, True)
 """
 
+import warnings
 from dataclasses import dataclass
 
 import control as ct
@@ -50,7 +51,8 @@ import scipy.signal
 
 from piezolib._checks import check_finite_array, check_integer, check_positive, check_type
 
-__all__ = ["fit_frf", "frf_error", "select_order", "OrderSelection", "simulate_discrete"]
+__all__ = ["fit_frf", "frf_error", "select_order", "OrderSelection", "simulate_discrete",
+           "FitQualityWarning", "POOR_FIT_ERROR"]
 
 #: Largest pole radius the fitted model may have.
 MAX_POLE_RADIUS = 0.9995
@@ -209,22 +211,56 @@ def fit_frf(G, frequency_Hz, fs, order, weight=None, *, n_rows=None, iterations=
         raise ValueError(f"n_rows must exceed order = {order}, got {n_rows}")
     iterations = check_integer("iterations", iterations, minimum=0)
     # scale each output so that the subspace step sees balanced rows
-    scale = np.sqrt(np.mean(np.abs(G) ** 2, axis=(1, 2)))
-    scale = np.where(scale > 0, scale, 1.0)
+    scale = _output_scales(G)
     Gs = G / scale[:, None, None]
-    ws = w * scale[:, None, None] ** 2
+    with np.errstate(under="ignore", over="ignore"):
+        ws = w * scale[:, None, None] ** 2
+    if not (np.isfinite(ws).all() and ws.max() > 0):     # scales beyond float range squared
+        ws = w * (scale / scale.max())[:, None, None] ** 2
     ws = ws / ws.max()
     z = _z(f, fs)
     A, C = _subspace_AC(Gs, z, order, n_rows)
+    reflected = int(np.count_nonzero(np.abs(np.linalg.eigvals(A)) > MAX_POLE_RADIUS))
     A = _stabilise(A)
     B, D = _solve_BD(A, C, Gs, z, ws)
     for _ in range(iterations):
         C, D = _solve_CD(A, B, Gs, z, ws)
         B, D = _solve_BD(A, C, Gs, z, ws)
     C, D = C * scale[:, None], D * scale[:, None]
-    return ct.ss(A, B, C, D, 1.0 / fs,
-                 inputs=input_labels or [f"u[{i}]" for i in range(n_u)],
-                 outputs=output_labels or [f"y[{i}]" for i in range(n_y)])
+    model = ct.ss(A, B, C, D, 1.0 / fs,
+                  inputs=input_labels or [f"u[{i}]" for i in range(n_u)],
+                  outputs=output_labels or [f"y[{i}]" for i in range(n_y)])
+    if reflected:
+        error = frf_error(model, G, f, w)
+        if error > POOR_FIT_ERROR:
+            warnings.warn(
+                f"fit_frf: the subspace step found {reflected} pole(s) outside the unit circle "
+                f"and reflected them inside; the stable model misses the FRF by {error:.3g} "
+                "(relative): the data may come from an unstable system (fit it in closed loop) "
+                "or need another order", FitQualityWarning, stacklevel=2)
+    return model
+
+
+#: Relative error (:func:`frf_error`) above which a fit whose poles had to be reflected is
+#: reported (:class:`FitQualityWarning`).
+POOR_FIT_ERROR = 0.1
+
+
+class FitQualityWarning(UserWarning):
+    """A fitted model misses its data by far (e.g. a stable model of an unstable system)."""
+
+
+def _output_scales(G):
+    """RMS of each output's FRF over inputs and lines (1 for an all-zero output), computed
+    without overflow or underflow for FRFs at the ends of the float range."""
+    with np.errstate(over="ignore", under="ignore"):
+        scale = np.sqrt(np.mean(np.abs(G) ** 2, axis=(1, 2)))
+    peak = np.abs(G).max(axis=(1, 2))
+    bad = (~np.isfinite(scale) | (scale == 0)) & (peak > 0)
+    if np.any(bad):       # |G|^2 out of range: the same RMS from G / peak
+        scale[bad] = peak[bad] * np.sqrt(np.mean(np.abs(G[bad] / peak[bad, None, None]) ** 2,
+                                                 axis=(1, 2)))
+    return np.where(scale > 0, scale, 1.0)
 
 
 def frf_error(model, G, frequency_Hz, weight=None):
@@ -254,7 +290,13 @@ def frf_error(model, G, frequency_Hz, weight=None):
                          f"shape {G.shape}")
     w = _check_weight(weight, G.shape)
     Gm = np.asarray(model(_z(f, fs))).reshape(G.shape)
-    return float(np.sqrt(np.sum(w * np.abs(Gm - G) ** 2) / np.sum(w * np.abs(G) ** 2)))
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        error = np.sqrt(np.sum(w * np.abs(Gm - G) ** 2) / np.sum(w * np.abs(G) ** 2))
+    if not np.isfinite(error):       # |G|^2 beyond float range: the same ratio from G / peak
+        peak = np.abs(G).max()
+        error = np.sqrt(np.sum(w * np.abs((Gm - G) / peak) ** 2)
+                        / np.sum(w * np.abs(G / peak) ** 2))
+    return float(error)
 
 
 @dataclass(frozen=True)

@@ -4,7 +4,8 @@ import control as ct
 import numpy as np
 import pytest
 
-from piezolib.identification import fit_frf, frf_error, select_order, simulate_discrete
+from piezolib.identification import (FitQualityWarning, fit_frf, frf_error, select_order,
+                                     simulate_discrete)
 
 FS = 2000.0
 
@@ -94,3 +95,27 @@ def test_simulation_matches_a_time_loop():
     g = response(true, np.array([f_line]))[:, 0, 0]
     expected = np.abs(g[0]) * np.cos(2 * np.pi * f_line * np.arange(5000) / FS + np.angle(g[0]))
     np.testing.assert_allclose(y_tone[-500:, 0], expected[-500:], atol=1e-6)
+
+
+def _second_order_frf(fs=1000.0):
+    G = ct.ss(ct.c2d(ct.tf([100.0], [1, 2, 100.0]), 1 / fs))
+    f = np.linspace(1.0, 400.0, 200)
+    return G, np.ravel(G(np.exp(2j * np.pi * f / fs)))[None, None, :], f, fs
+
+
+@pytest.mark.parametrize("k", [1e-300, 1e-150, 1e150, 1e300])
+def test_an_frf_at_either_end_of_the_float_range_fits_as_well_as_at_one(k):
+    # |G|^2 underflowed (1e-300: a model of relative error 1.1, no warning) or overflowed
+    # (1e300: a deep SVD error); the output scaling now works on G / max|G|
+    _, H, f, fs = _second_order_frf()
+    model = fit_frf(k * H, f, fs, 2)
+    assert frf_error(model, k * H, f) < 1e-9
+
+
+def test_a_stable_fit_of_an_unstable_frf_warns_with_its_error():
+    fs = 1000.0
+    f = np.linspace(1.0, 400.0, 200)
+    U = ct.ss(ct.c2d(ct.tf([1.0], [1, -5.0]), 1 / fs))          # a pole at z = e^(5/fs) > 1
+    H = np.ravel(U(np.exp(2j * np.pi * f / fs)))[None, None, :]
+    with pytest.warns(FitQualityWarning, match="outside the unit circle"):
+        fit_frf(H, f, fs, 1)
