@@ -35,7 +35,13 @@ from piezolib.workbook import study as studies
 __all__ = ["Session", "start", "DISPLAY_OPTIONS", "CheckFailed", "claim_lines"]
 
 class CheckFailed(AssertionError):
-    """A notebook's check does not hold (an ``AssertionError``, so nbval reports the cell)."""
+    """A notebook's check does not hold (an ``AssertionError``, so nbval reports the cell).
+
+    Examples
+    --------
+    >>> issubclass(CheckFailed, AssertionError)     # nbval reports the failing cell
+    True
+    """
 
 
 #: pandas display options every notebook starts with (tables of claims and numbers).
@@ -55,6 +61,15 @@ class Session:
         results folder by ``claims.save()``.
     started : float
         :func:`time.perf_counter` at the start (see :meth:`elapsed`).
+
+    Examples
+    --------
+    >>> nb = Session(studies.Study().replace(name="explore"), claims="weights")
+    >>> nb, nb.reference
+    (Session(study='explore', claims='weights'), False)
+    >>> row = nb.check("eq. 15", "omega_e", 1260.0, 1260.0, rtol=0.01)
+    >>> row["verdict"], len(nb.claims.rows)
+    ('agrees', 1)
     """
 
     def __init__(self, study, claims=None):
@@ -286,6 +301,20 @@ def start(study=studies.REFERENCE, claims=None):
     Returns
     -------
     Session
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> import matplotlib
+    >>> from unittest import mock
+    >>> with (tempfile.TemporaryDirectory() as root,                # a temporary checkout
+    ...       mock.patch.dict(os.environ, {"PIEZOLIB_ROOT": root}),
+    ...       pd.option_context(*sum(DISPLAY_OPTIONS.items(), ())),  # restored after
+    ...       matplotlib.rc_context()):
+    ...     nb = start("reference", claims="demo")
+    ...     _ = nb.check("IV-C", "||H_e S||_inf", 0.81, 0.808, rtol=0.01, expect="agrees")
+    ...     print(nb, nb.claims.save().relative_to(os.path.realpath(root)).as_posix())
+    Session(study='reference', claims='demo') data/results/demo.csv
     """
     session = Session(study, claims)
     style.use_style()
