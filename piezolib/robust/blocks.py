@@ -204,6 +204,12 @@ def block_slices(blocks):
 
     ``inputs`` indexes M's columns (the block's rows), ``outputs`` M's rows
     (the block's columns), in the order of ``blocks``.
+
+    Examples
+    --------
+    >>> blocks = parse_blk([(1, 1), (2, 3)])          # a 1x1 and a 2x3 complex block
+    >>> block_slices(blocks)
+    ((slice(0, 1, None), slice(0, 1, None)), (slice(1, 3, None), slice(1, 4, None)))
     """
     blocks = tuple(blocks) if hasattr(blocks, "__iter__") and not isinstance(blocks, str) else ()
     if not blocks or not all(isinstance(b, Block) for b in blocks):

@@ -50,6 +50,13 @@ class MagnitudeFit:
     parameters : ndarray
         ``theta`` of :mod:`piezolib.robust.sos` (log gain, log section
         frequencies and dampings); a warm start for the next fit.
+
+    Examples
+    --------
+    >>> w = np.logspace(-1, 2, 40)
+    >>> f = fit_magnitude(w, np.abs(10 * (1j * w + 1) / (1j * w + 10)), order=1)
+    >>> f.order, bool(f.max_log_error < 1e-6), f.parameters.shape
+    (1, True, (3,))
     """
 
     tf: ct.TransferFunction
@@ -97,6 +104,14 @@ def fit_magnitude(omega, magnitude, order, weight=None, *, n_starts=3, initial=N
     Returns
     -------
     MagnitudeFit
+
+    Examples
+    --------
+    >>> w = np.logspace(-1, 2, 40)
+    >>> d = np.abs(10 * (1j * w + 1) / (1j * w + 10))          # |d| of 10 (s + 1) / (s + 10)
+    >>> f = fit_magnitude(w, d, order=1)
+    >>> f.tf.num[0][0].round(4), f.tf.den[0][0].round(4)
+    (array([10., 10.]), array([ 1., 10.]))
     """
     omega = check_finite_array("omega", omega, ndim=1, min_length=2, real=True)
     magnitude = check_finite_array("magnitude", magnitude, ndim=1, real=True)

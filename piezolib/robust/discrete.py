@@ -41,6 +41,14 @@ class DiscreteController:
         Sampled loop with the zero-order-hold plant stable (None if no plant).
     loop_spectral_radius : float or None
         Largest |pole| of that sampled loop.
+
+    Examples
+    --------
+    >>> d = discretize(ct.tf([100], [1, 100]), 10e3, G=ct.tf([1], [1, 1]), check_Hz=100.0)
+    >>> d.fs, d.prewarp_frequency, d.matches, d.loop_stable
+    (10000.0, None, True, True)
+    >>> bool(d.max_relative_error < 1e-3), bool(d.loop_spectral_radius < 1)
+    (True, True)
     """
 
     K: ct.StateSpace
@@ -58,6 +66,14 @@ def least_damped_frequency(K, omega_max):
     """Natural frequency [rad/s] of the least-damped pole or zero of K below omega_max.
 
     Returns None when K has no complex pole or zero below omega_max.
+
+    Examples
+    --------
+    >>> K = ct.tf([1, 0.2, 1e6], [1, 100, 1e6])           # a notch at 1000 rad/s
+    >>> least_damped_frequency(K, omega_max=1e5)
+    1000.0
+    >>> print(least_damped_frequency(ct.tf([1], [1, 1]), 1e3))   # no complex root
+    None
     """
     check_siso("K", K)
     check_model("K", K)

@@ -55,6 +55,14 @@ def sensitivity_weight(low_frequency_bound, high_frequency_bound, bandwidth_rad_
     ValueError, TypeError
         When a bound or the bandwidth is not a positive finite number, or
         ``order`` is not an integer >= 1 (the message names the argument).
+
+    Examples
+    --------
+    >>> W = sensitivity_weight(0.01, 2.0, 10.0)          # |S| <= 1 % at DC, <= 2 at HF
+    >>> W.num[0][0], W.den[0][0], W.input_labels
+    (array([ 0.5, 10. ]), array([1. , 0.1]), ['e'])
+    >>> round(float(abs(W(0))), 3), round(float(abs(W(1e6j))), 3)      # 1/A and 1/M
+    (100.0, 0.5)
     """
     A, M, omega_b, order = _checked(low_frequency_bound, high_frequency_bound, bandwidth_rad_s,
                                     order)
@@ -93,6 +101,12 @@ def complementary_sensitivity_weight(low_frequency_bound, high_frequency_bound, 
     ------
     ValueError, TypeError
         As :func:`sensitivity_weight`.
+
+    Examples
+    --------
+    >>> W = complementary_sensitivity_weight(1.5, 1e-3, 100.0, order=2)
+    >>> round(float(abs(W(0))), 4), np.sort(np.abs(W.poles())).round(-3)   # 1/M^2; poles at omega_b/eps
+    (0.4444, array([100000., 100000.]))
     """
     M, eps, omega_b, order = _checked(low_frequency_bound, high_frequency_bound, bandwidth_rad_s,
                                       order)

@@ -37,6 +37,11 @@ def n_parameters(order):
     -------
     int
         ``1 + 4 * (order // 2) + 2 * (order % 2)``.
+
+    Examples
+    --------
+    >>> [n_parameters(order) for order in range(4)]      # k, then (w_z, z_z, w_p, z_p) or (w_z, w_p)
+    [1, 3, 5, 7]
     """
     order = int(order)
     if order < 0:
@@ -124,6 +129,12 @@ def transfer_function(theta, order, inputs=None, outputs=None, name=None):
     -------
     control.TransferFunction
         Stable, minimum phase and biproper; the denominator is monic.
+
+    Examples
+    --------
+    >>> H = transfer_function(np.log([2.0, 1.0, 10.0]), 1)     # k = 2, w_z = 1, w_p = 10
+    >>> H.num[0][0], H.den[0][0]                            # 2 (s/1 + 1) / (s/10 + 1)
+    (array([20., 20.]), array([ 1., 10.]))
     """
     theta = _check_theta(theta, order)
     num, den = np.array([np.exp(theta[0])]), np.ones(1)
@@ -159,6 +170,12 @@ def parameter_bounds(order, log_frequency, log_damping, log_gain=(-np.inf, np.in
     Returns
     -------
     lower, upper : ndarray, shape (n_parameters(order),)
+
+    Examples
+    --------
+    >>> lower, upper = parameter_bounds(1, (-5.0, 5.0), (-3.0, 3.0))
+    >>> lower, upper
+    (array([-inf,  -5.,  -5.]), array([inf,  5.,  5.]))
     """
     lw, lz = tuple(log_frequency), tuple(log_damping)
     pairs = [tuple(log_gain)] + [lw, lz, lw, lz] * (order // 2) + [lw, lw] * (order % 2)
