@@ -58,6 +58,15 @@ def verdict(paper, ours, rtol=0.0, atol=0.0, interval=None):
     ``interval = (low, high)`` (a statistic's 95 % interval) the claim agrees
     when the interval meets the band ``paper +- tol``: only an interval wholly
     outside it shows a difference that the noise cannot explain.
+
+    Examples
+    --------
+    >>> verdict(0.81, 0.808, rtol=0.01)
+    ('agrees', '+-1%')
+    >>> verdict(0.71, 1.45, rtol=0.05)
+    ('differs', '+-5%')
+    >>> verdict(0.43, 0.5, atol=0.05, interval=(0.4, 0.6))    # the interval meets the band
+    ('agrees', '+-0.05')
     """
     rtol = check_nonnegative("rtol", rtol)
     atol = check_nonnegative("atol", atol)
@@ -109,6 +118,12 @@ def side_by_side(published, ours):
     pandas.DataFrame
         Columns in the published table's sorted order, the paper's value
         before ours.
+
+    Examples
+    --------
+    >>> published = pd.DataFrame({"x": [1.0], "y": [2.0]})
+    >>> side_by_side(published, 1.1 * published).columns.tolist()
+    [('x', 'paper'), ('x', 'ours'), ('y', 'paper'), ('y', 'ours')]
     """
     _check_frame("published", published)
     _check_frame("ours", ours, published.columns)
@@ -149,6 +164,14 @@ class ClaimTable:
         that study's results folder (:func:`piezolib.workbook.outputs.study_results_dir`),
         and a claim of a study other than the reference that differs from
         the paper gets the reason ``"study"`` unless it states one.
+
+    Examples
+    --------
+    >>> claims = ClaimTable("demo", "explore")
+    >>> claims.add("IV-C", "mu_RP", 0.71, 1.448, rtol=0.05)
+    >>> claims.add("IV-B", "controller order", 6, 6)
+    >>> claims.frame()[["quantity", "verdict", "reason"]].values.tolist()
+    [['mu_RP', 'differs', 'study'], ['controller order', 'agrees', '']]
     """
 
     def __init__(self, name, study):
@@ -242,6 +265,17 @@ def save_results(frame, name, study):
     An existing file is left as it is when every row is the same result
     (:func:`same_result`): a rerun on another machine, whose rounding moves
     a value within its precision, leaves the committed table unchanged.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from unittest import mock
+    >>> frame = pd.DataFrame({"quantity": ["mu_RP"], "ours": [1.448321]})
+    >>> with (tempfile.TemporaryDirectory() as root,
+    ...       mock.patch.dict(os.environ, {"PIEZOLIB_ROOT": root})):
+    ...     path = save_results(frame, "demo", "explore")
+    ...     print(path.relative_to(os.path.realpath(root)).as_posix(), path.read_text().split())
+    runs/explore/results/demo.csv ['quantity,ours', 'mu_RP,1.448']
     """
     _check_frame("frame", frame)
     if not isinstance(name, str) or not name.isidentifier():
@@ -280,6 +314,14 @@ def same_result(first, second):
     numbers (``paper``, ``ours``, ``low``, ``high``) may differ by less than
     the larger of the two rows' ``precision`` (empty: one unit of the 4th
     significant digit of the larger value).
+
+    Examples
+    --------
+    >>> row = pd.Series({"quantity": "mu_RP", "ours": "1.448", "precision": "", "verdict": "differs"})
+    >>> same_result(row, row.replace("1.448", "1.4481"))      # within the 4th digit
+    True
+    >>> same_result(row, row.replace("1.448", "1.46"))
+    False
     """
     check_type("first", first, pd.Series, "a row (pandas Series) of a claim table")
     check_type("second", second, pd.Series, "a row (pandas Series) of a claim table")
@@ -400,6 +442,11 @@ def figure_path(name, study=REFERENCE_STUDY):
     ------
     FileNotFoundError
         Naming the notebook to run when neither exists.
+
+    Examples
+    --------
+    >>> figure_path("fig12_mu_bounds.png").relative_to(outputs.project_root()).as_posix()
+    'figures/fig12_mu_bounds.png'
     """
     check_type("name", name, str, "a figure file name such as 'fig12_mu_bounds.png'")
     _check_study_exists(study)
@@ -435,6 +482,12 @@ def load_claims(names=None, study=REFERENCE_STUDY):
     ------
     FileNotFoundError
         Naming the notebook to run when a table is missing.
+
+    Examples
+    --------
+    >>> claims = load_claims(["audit"])                 # data/results/audit.csv
+    >>> list(claims.columns[:4]), set(claims.study)
+    (['source', 'study', 'section', 'quantity'], {'reference'})
     """
     if isinstance(names, str) or not (names is None or isinstance(names, Iterable)):
         raise TypeError(f"names must be a sequence of table names, got {names!r}")
@@ -499,6 +552,12 @@ def compare_studies(first, second, names=None, changed_only=True):
     pandas.DataFrame
         Index (source, quantity); columns ``unit``, ``paper``, the two
         studies' values and verdicts.
+
+    Examples
+    --------
+    >>> table = compare_studies("reference", "wide_error_weight", names=["weights"])
+    >>> list(table.columns)
+    ['unit', 'paper', 'reference', 'wide_error_weight', 'verdict (reference)', 'verdict (wide_error_weight)', 'from (wide_error_weight)']
     """
     for name, value in (("first", first), ("second", second)):
         if not isinstance(value, str):
@@ -533,6 +592,14 @@ def reproduction_table(claims):
 
     A row that differs without a reason is marked ``"unexplained"`` in the
     ``reason`` column so that it cannot pass unnoticed.
+
+    Examples
+    --------
+    >>> claims = pd.DataFrame({"quantity": ["mu_RP", "order", "mu_RS"],
+    ...                        "verdict": ["differs", "agrees", "not published"],
+    ...                        "reason": ["", "", ""]})
+    >>> reproduction_table(claims)[["quantity", "reason"]].values.tolist()
+    [['mu_RP', 'unexplained'], ['order', '']]
     """
     _check_frame("claims", claims, ["verdict", "reason"])
     published = claims[claims["verdict"] != "not published"].copy()
@@ -559,6 +626,14 @@ def inconsistent_verdicts(table):
     -------
     pandas.DataFrame
         The offending rows (empty when every verdict is consistent).
+
+    Examples
+    --------
+    >>> table = pd.DataFrame({"paper": ["1.0", "1.0"], "ours": ["1.2", "1.01"],
+    ...                       "tolerance": ["+-5%", "+-5%"], "verdict": ["agrees", "agrees"],
+    ...                       "low": ["", ""]})
+    >>> inconsistent_verdicts(table).index.tolist()     # 1.2 is not within 5 % of 1.0
+    [0]
     """
     _check_frame("table", table, ["paper", "ours", "tolerance", "verdict"])
     bad = []
@@ -585,7 +660,15 @@ def inconsistent_verdicts(table):
 
 
 def verdict_counts(table):
-    """Agrees / differs counts per source notebook (rows) as a DataFrame."""
+    """Agrees / differs counts per source notebook (rows) as a DataFrame.
+
+    Examples
+    --------
+    >>> table = pd.DataFrame({"source": ["00_audit", "00_audit", "05_mu"],
+    ...                       "verdict": ["agrees", "differs", "agrees"]})
+    >>> verdict_counts(table).loc["all"].tolist()
+    [2, 1]
+    """
     _check_frame("table", table, ["source", "verdict"])
     counts = pd.crosstab(table["source"], table["verdict"])
     counts.loc["all"] = counts.sum()
@@ -610,6 +693,16 @@ def summary(table, study=REFERENCE_STUDY):
         differences (the unexplained ones named first), the counts per
         notebook and, when the study has not written some tables, how many
         rows come from the reference's.
+
+    Examples
+    --------
+    >>> table = pd.DataFrame({"source": ["00_audit", "05_mu"], "study": ["explore"] * 2,
+    ...                       "verdict": ["agrees", "differs"], "reason": ["", "study"]})
+    >>> print(summary(table, study="explore"))
+    **2 published numbers recomputed** (study `explore`): **1 agree** with the paper within their tolerance, **1 differ**.
+    <BLANKLINE>
+    - Every difference has a reason: 1 study.
+    - Per notebook (agree of published): 00: 1 of 1, 05: 0 of 1.
     """
     _check_frame("table", table, ["source", "study", "verdict", "reason"])
     counts = table["verdict"].value_counts()
