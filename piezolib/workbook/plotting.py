@@ -57,6 +57,14 @@ def name_figure(fig, number, what):
         The paper's figure number; ``None`` for a figure of the workbook's own.
     what : str
         Short lower-case description, e.g. ``"step_responses"``.
+
+    Examples
+    --------
+    >>> import matplotlib.pyplot as plt
+    >>> fig = name_figure(plt.figure(), 12, "mu_bounds")
+    >>> fig.get_label()
+    'fig12_mu_bounds'
+    >>> plt.close(fig)
     """
     check_type("fig", fig, mpl.figure.Figure, "a matplotlib Figure")
     fig.set_label(figure_name(number, what))
@@ -81,6 +89,17 @@ def save_figure(fig, directory):
     -------
     pathlib.Path
         The file written or kept.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> import matplotlib.pyplot as plt
+    >>> fig = name_figure(plt.figure(figsize=(2, 1)), None, "demo")
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = save_figure(fig, folder)
+    ...     print(path.name, path.stat().st_size > 0, save_figure(fig, folder) == path)
+    extra_demo.png True True
+    >>> plt.close(fig)
     """
     check_type("fig", fig, mpl.figure.Figure, "a matplotlib Figure")
     name = fig.get_label()
@@ -119,6 +138,17 @@ def same_picture(first, second, tolerance=PIXEL_TOLERANCE):
         PNG files' contents.
     tolerance : float, optional
         Largest accepted difference of a channel (0..1 scale), >= 0.
+
+    Examples
+    --------
+    >>> import io
+    >>> import matplotlib.pyplot as plt
+    >>> def png(y):
+    ...     fig = plt.figure(figsize=(2, 1)); fig.gca().plot([0, 1], [0, y])
+    ...     buffer = io.BytesIO(); fig.savefig(buffer, format="png"); plt.close(fig)
+    ...     return buffer.getvalue()
+    >>> same_picture(png(1.0), png(1.0)), same_picture(png(1.0), png(-1.0))
+    (True, False)
     """
     tolerance = check_nonnegative("tolerance", tolerance)
     images = []

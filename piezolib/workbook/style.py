@@ -63,6 +63,13 @@ class Palette:
         Near-black: a block diagram's wires, arrow heads and signs.
     box_fill : str
         Pale blue: the inside of a block diagram's boxes.
+
+    Examples
+    --------
+    >>> PALETTE.primary, PALETTE.contrast
+    ('#1f4e79', '#c0504d')
+    >>> len(PALETTE.cycle), PALETTE.peers[0]
+    (7, '#1f77b4')
     """
 
     primary: str = "#1f4e79"
@@ -126,12 +133,31 @@ _UNIT_RULES = [
 
 
 def use_style():
-    """Apply :data:`STYLE` to matplotlib's global rcParams."""
+    """Apply :data:`STYLE` to matplotlib's global rcParams.
+
+    Examples
+    --------
+    >>> import matplotlib as mpl
+    >>> with mpl.rc_context():                  # restores the rcParams afterwards
+    ...     use_style()
+    ...     mpl.rcParams["savefig.dpi"], mpl.rcParams["axes.grid"]
+    (150.0, True)
+    """
     mpl.rcParams.update(STYLE)
 
 
 def new_figure(nrows=1, ncols=1, **kwargs):
-    """``plt.subplots`` in the workbook style (``constrained`` layout)."""
+    """``plt.subplots`` in the workbook style (``constrained`` layout).
+
+    Examples
+    --------
+    >>> import matplotlib as mpl
+    >>> with mpl.rc_context():
+    ...     fig, axes = new_figure(2, 1, sharex=True)
+    ...     print(len(axes), fig.get_layout_engine().__class__.__name__)
+    2 ConstrainedLayoutEngine
+    >>> plt.close(fig)
+    """
     nrows = check_integer("nrows", nrows, minimum=1)
     ncols = check_integer("ncols", ncols, minimum=1)
     use_style()
@@ -171,7 +197,16 @@ def unit_text(text):
 
 
 def apply_unit_text(fig):
-    """Apply :func:`unit_text` to every text of ``fig`` (in place) and return ``fig``."""
+    """Apply :func:`unit_text` to every text of ``fig`` (in place) and return ``fig``.
+
+    Examples
+    --------
+    >>> fig, ax = plt.subplots()
+    >>> _ = ax.set_xlabel("omega [rad/s]"); _ = ax.set_ylabel("x [um]")
+    >>> apply_unit_text(fig) is fig, ax.get_xlabel(), ax.get_ylabel()
+    (True, 'ω [rad/s]', 'x [µm]')
+    >>> plt.close(fig)
+    """
     check_type("fig", fig, mpl.figure.Figure, "a matplotlib Figure")
     for text in fig.findobj(mpl.text.Text):
         old = text.get_text()
@@ -182,7 +217,13 @@ def apply_unit_text(fig):
 
 
 def db(x):
-    """Magnitude in decibels, 20 log10 |x| (-inf for 0; NaN and inf pass through)."""
+    """Magnitude in decibels, 20 log10 |x| (-inf for 0; NaN and inf pass through).
+
+    Examples
+    --------
+    >>> db([1.0, 10.0, 0.5]).round(2).tolist()
+    [0.0, 20.0, -6.02]
+    """
     x = np.asarray(x)
     if not np.issubdtype(x.dtype, np.number):
         raise TypeError(f"x must be numeric, got dtype {x.dtype}")
@@ -191,7 +232,18 @@ def db(x):
 
 
 def plot_magnitude(ax, omega, response, label=None, **kwargs):
-    """Plot |response| in dB against omega [rad/s] on a log axis."""
+    """Plot |response| in dB against omega [rad/s] on a log axis.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> fig, ax = plt.subplots()
+    >>> omega = np.logspace(0, 3, 50)
+    >>> line = plot_magnitude(ax, omega, 1 / (1 + 1j * omega / 10), label="low-pass")
+    >>> ax.get_xscale(), ax.get_ylabel(), line.get_label()
+    ('log', 'magnitude [dB]', 'low-pass')
+    >>> plt.close(fig)
+    """
     check_type("ax", ax, mpl.axes.Axes, "a matplotlib Axes")
     omega = check_finite_array("omega", omega, ndim=1, min_length=1, real=True)
     if np.any(omega <= 0):

@@ -125,6 +125,13 @@ def readable(frame, digits=DIGITS, index=False, units=UNITS_COLUMNS):
     pandas.io.formats.style.Styler
         Renders as HTML in a notebook (and in the exported report): numbers
         right-aligned on one line, text left-aligned and wrapped instead of cut.
+
+    Examples
+    --------
+    >>> frame = pd.DataFrame({"quantity": ["mu_RP"], "ours": [1.448321], "paper": [0.71]})
+    >>> html_text = readable(frame).to_html()
+    >>> "μ_RP" in html_text, "1.448" in html_text
+    (True, True)
     """
     check_type("frame", frame, pd.DataFrame, "a pandas DataFrame")
     format_number(0.0, digits)                               # a bad ``digits`` fails here
