@@ -35,6 +35,13 @@ class RLSResult:
         e0(t+1) = y(t+1) - Psi_hat(t)^T theta(t), eq. 1.
     gain_matrix : ndarray, shape (p, p)
         Final W.
+
+    Examples
+    --------
+    >>> t = np.arange(50.0)
+    >>> r = rls(np.c_[np.ones(50), t], 2.0 + 0.5 * t)
+    >>> r.a_priori_errors.shape, r.gain_matrix.shape, bool(abs(r.a_priori_errors[-1]) < 1e-3)
+    ((50,), (2, 2), True)
     """
 
     parameters: np.ndarray
@@ -78,6 +85,15 @@ def rls(regressors, y, initial_gain=1e6, initial_parameters=None):
     ValueError
         Empty, non-finite or mismatched data, or ``initial_gain`` outside
         (0, MAX_INITIAL_GAIN].
+
+    Examples
+    --------
+    Fit y = 2 + 0.5 t by RLS on the regressors (1, t):
+
+    >>> t = np.arange(50.0)
+    >>> r = rls(np.c_[np.ones(50), t], 2.0 + 0.5 * t)
+    >>> r.parameters.round(4), r.history.shape
+    (array([2. , 0.5]), (50, 2))
     """
     phi = check_finite_array("regressors", regressors, ndim=2, real=True)
     n, p = phi.shape
@@ -131,6 +147,16 @@ def arx_regressors(u, y, na, nb, nk=1):
         y[k] for k >= n0.
     n0 : int
         First predicted sample, max(na, nk + nb - 1).
+
+    Examples
+    --------
+    >>> u = np.random.default_rng(0).standard_normal(500)
+    >>> y = np.zeros(500)
+    >>> for k in range(1, 500):                         # y[k] = 0.9 y[k-1] + 0.5 u[k-1]
+    ...     y[k] = 0.9 * y[k - 1] + 0.5 * u[k - 1]
+    >>> phi, target, n0 = arx_regressors(u, y, na=1, nb=1)   # rows [-y[k-1], u[k-1]]
+    >>> phi.shape, n0, bool(np.allclose(phi @ [-0.9, 0.5], target))
+    ((499, 2), 1, True)
     """
     u, y = check_io(u, y)
     na = check_integer("na", na, minimum=1)
@@ -162,6 +188,16 @@ class ArxModel:
         Parameter histories of the estimation.
     system : control.TransferFunction
         The model as a discrete-time transfer function in z, ``u`` -> ``y``.
+
+    Examples
+    --------
+    >>> u = np.random.default_rng(0).standard_normal(500)
+    >>> y = np.zeros(500)
+    >>> for k in range(1, 500):                         # y[k] = 0.9 y[k-1] + 0.5 u[k-1]
+    ...     y[k] = 0.9 * y[k - 1] + 0.5 * u[k - 1]
+    >>> m = fit_arx(u, y, fs=100.0, na=1, nb=1)
+    >>> m.system.dt, np.round(m.system.poles().real, 4), m.rls.history.shape
+    (0.01, array([0.9]), (499, 2))
     """
 
     a: np.ndarray
@@ -210,6 +246,16 @@ def fit_arx(u, y, fs, na=6, nb=6, nk=1, initial_gain=DEFAULT_INITIAL_GAIN):
     ValueError
         NaN/inf, unequal lengths, fewer than 10 samples per parameter, a
         constant input, or regressors that are not persistently exciting.
+
+    Examples
+    --------
+    >>> u = np.random.default_rng(0).standard_normal(500)
+    >>> y = np.zeros(500)
+    >>> for k in range(1, 500):                         # y[k] = 0.9 y[k-1] + 0.5 u[k-1]
+    ...     y[k] = 0.9 * y[k - 1] + 0.5 * u[k - 1]
+    >>> m = fit_arx(u, y, fs=100.0, na=1, nb=1)
+    >>> m.a.round(4), m.b.round(4), m.dt                    # 1 - 0.9 z^-1, 0.5 z^-1
+    (array([ 1. , -0.9]), array([0. , 0.5]), 0.01)
     """
     fs = check_positive("fs", fs)
     phi, target = checked_arx_regressors(u, y, na, nb, nk)
@@ -288,6 +334,12 @@ def excitation_band(u, fs, share=0.99):
     -------
     float
         The frequency [Hz] (0 for a constant input).
+
+    Examples
+    --------
+    >>> t = np.arange(1000) / 1000.0
+    >>> round(excitation_band(np.sin(2 * np.pi * 5 * t), fs=1000.0), 1)    # a 5 Hz sine
+    5.0
     """
     u = check_finite_array("u", u, ndim=1, min_length=16, real=True)
     fs = check_positive("fs", fs)
@@ -321,6 +373,12 @@ def least_squares(phi, target):
     -------
     ndarray, shape (p,)
         Parameters minimising ||phi @ theta - target||.
+
+    Examples
+    --------
+    >>> x = np.arange(5.0)
+    >>> least_squares(np.c_[np.ones(5), x], 1.0 + 2.0 * x).round(6)
+    array([1., 2.])
     """
     phi = check_finite_array("phi", phi, ndim=2, min_length=1, real=True)
     target = check_finite_array("target", target, ndim=1, real=True)
@@ -355,6 +413,16 @@ def check_io(u, y):
     ------
     ValueError
         NaN/inf, unequal lengths, or a constant input.
+
+    Examples
+    --------
+    >>> u, y = check_io([0, 1, 0, 1], [0.0, 0.1, 0.2, 0.1])
+    >>> u.dtype, len(y)
+    (dtype('float64'), 4)
+    >>> check_io([1.0, 1.0, 1.0], [0.0, 0.1, 0.2])
+    Traceback (most recent call last):
+    ...
+    ValueError: u is constant: a constant input does not excite the system
     """
     u = check_finite_array("u", u, ndim=1, real=True)
     y = check_finite_array("y", y, ndim=1, real=True)
