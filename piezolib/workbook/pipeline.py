@@ -247,15 +247,15 @@ def checked_cache_call(func, *args):
     entry = cached(*key, func, ran)
     if ran:
         if not was_stored:
-            return _unsealed(entry)[0], "derived (now cached)"
+            return _unsealed(entry, key)[0], "derived (now cached)"
         problem = "unreadable"
-        value = _unsealed(entry)[0]
+        value = _unsealed(entry, key)[0]
     else:
-        value, problem = _unsealed(entry)
+        value, problem = _unsealed(entry, key)
         if problem is None:
             return value, "disk cache"
         # overwrite the entry, so that the next call reads a good one
-        value = _unsealed(cached.call(*key, func, ran)[0])[0]
+        value = _unsealed(cached.call(*key, func, ran)[0], key)[0]
     logger.warning("the disk cache entry of %s in %s %s: computed anew", key[0],
                    store.location, "could not be read" if problem == "unreadable" else problem)
     return value, f"recomputed (cache entry {problem})"
@@ -263,20 +263,29 @@ def checked_cache_call(func, *args):
 
 def _sealed_call(name, code, args, func, ran):
     """The computation :func:`checked_cache_call` caches: ``func(*args)`` pickled and the
-    SHA-256 (hex) of the pickle (``name`` and ``code`` only key the entry; ``ran`` records
-    that it ran)."""
+    SHA-256 (hex) of the pickle together with the entry's key (``name``, ``code`` and
+    ``args``), so that an entry is served only for the call it was computed for (``ran``
+    records that it ran)."""
     ran.append(True)
     payload = pickle.dumps(func(*args), protocol=pickle.HIGHEST_PROTOCOL)
-    return payload, hashlib.sha256(payload).hexdigest()
+    return payload, _seal_digest(payload, (name, code, args))
 
 
-def _unsealed(entry):
-    """(value, None) from an entry of :func:`_sealed_call`, or (None, what is wrong with it)."""
+def _seal_digest(payload, key):
+    """SHA-256 (hex) of a pickled result bound to the key of its cache entry."""
+    import joblib
+
+    return hashlib.sha256(payload + joblib.hash(key).encode()).hexdigest()
+
+
+def _unsealed(entry, key):
+    """(value, None) from an entry of :func:`_sealed_call` made for ``key``, or (None, what
+    is wrong with it): unreadable, failing its checksum, or another call's (a swapped file)."""
     if not (isinstance(entry, tuple) and len(entry) == 2 and isinstance(entry[0], bytes)
             and isinstance(entry[1], str)):
         return None, "unreadable"
     payload, digest = entry
-    if hashlib.sha256(payload).hexdigest() != digest:
+    if _seal_digest(payload, key) != digest:
         return None, "failed its checksum"
     try:
         return pickle.loads(payload), None

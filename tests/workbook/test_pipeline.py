@@ -214,6 +214,22 @@ def test_a_cache_entry_with_a_flipped_bit_is_recomputed_not_served(fake_cache, c
     assert_same_controllers(again, found)
 
 
+def test_a_cache_entry_swapped_for_another_calls_is_recomputed_not_served(fake_cache, caplog):
+    # two valid entries; the file of one copied over the other's: the seal covers the key the
+    # entry belongs to, so the other arguments' value is not served as "disk cache"
+    pipeline.checked_cache_call(fake_design_pair, {}, {}, {"max_iter": 3}, {}, "x")
+    pipeline.checked_cache_call(fake_design_pair, {}, {}, {"max_iter": 4}, {}, "x")
+    first, second = sorted(fake_cache.rglob("output.pkl"), key=lambda p: p.stat().st_mtime)
+    second.write_bytes(first.read_bytes())
+    with caplog.at_level(logging.WARNING, logger=pipeline.__name__):
+        value, source = pipeline.checked_cache_call(fake_design_pair, {}, {}, {"max_iter": 4},
+                                                    {}, "x")
+    assert source == "recomputed (cache entry failed its checksum)"
+    expected = fake_design_pair({}, {}, {"max_iter": 4}, {}, "x")[0].K_full
+    np.testing.assert_array_equal(value[0].K_full.A, expected.A)
+    assert len(FAKE_RUNS) == 4 and "failed its checksum" in caplog.text
+
+
 @pytest.mark.filterwarnings("ignore:.*Exception while loading results:UserWarning")
 def test_a_truncated_cache_entry_is_recomputed_and_says_so(fake_cache, caplog):
     first = pipeline.derive_controllers(SMALL)
