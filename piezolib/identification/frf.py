@@ -80,6 +80,21 @@ class BLA:
         Variance of ``G`` due to noise and nonlinear distortion (groups' spread).
     n_periods, n_groups : int
         Periods P and groups M the estimates come from.
+
+    Examples
+    --------
+    >>> N, lines = 64, np.arange(1, 11)                # 10 lines of a 64-sample period
+    >>> rng = np.random.default_rng(0)
+    >>> u = np.zeros((N, 1, 2, 2))                      # N, n_u, R = 2 realisations, P = 2 periods
+    >>> for r in range(2):
+    ...     phases = rng.uniform(0, 2 * np.pi, lines.size)
+    ...     u[:, 0, r, :] = np.cos(2 * np.pi * np.outer(np.arange(N), lines) / N + phases).sum(1)[:, None]
+    >>> y = 0.5 * u + 0.5 * np.roll(u, 1, axis=0)       # y[k] = (u[k] + u[k-1]) / 2, periodic
+    >>> b = bla_periodic(u, y, fs=64.0)
+    >>> b.frequency_Hz[:3], b.lines[:3]
+    (array([1., 2., 3.]), array([1, 2, 3]))
+    >>> bool(b.std_total.max() < 1e-12), b.frd().ninputs        # linear, noise free
+    (True, 1)
     """
 
     frequency_Hz: np.ndarray
@@ -214,6 +229,21 @@ def bla_periodic(u, y, fs, lines=None, relative_threshold=1e-3):
         estimated), R not a multiple of n_u, shapes that do not match, or a
         group's input matrix singular on a line (condition number above
         :data:`MAX_CONDITION`).
+
+    Examples
+    --------
+    >>> N, lines = 64, np.arange(1, 11)                # 10 lines of a 64-sample period
+    >>> rng = np.random.default_rng(0)
+    >>> u = np.zeros((N, 1, 2, 2))                      # N, n_u, R = 2 realisations, P = 2 periods
+    >>> for r in range(2):
+    ...     phases = rng.uniform(0, 2 * np.pi, lines.size)
+    ...     u[:, 0, r, :] = np.cos(2 * np.pi * np.outer(np.arange(N), lines) / N + phases).sum(1)[:, None]
+    >>> y = 0.5 * u + 0.5 * np.roll(u, 1, axis=0)       # y[k] = (u[k] + u[k-1]) / 2, periodic
+    >>> b = bla_periodic(u, y, fs=64.0)
+    >>> b.G.shape, b.n_periods, b.n_groups
+    ((1, 1, 10), 2, 2)
+    >>> bool(np.allclose(b.G[0, 0], 0.5 + 0.5 * np.exp(-2j * np.pi * lines / N)))
+    True
     """
     u = _as_periodic("u", u)
     y = _as_periodic("y", y)
