@@ -45,6 +45,11 @@ class ChirpSettings:
     to ``f1_Hz`` that starts at its crest and never exceeds ``top_V``.
     Approaching from below and staying below the last maximum keeps every
     play still when 2 ``amplitude_V`` is below the stage's small-signal limit.
+
+    Examples
+    --------
+    >>> IDENTIFICATION_CHIRP.f0_Hz, IDENTIFICATION_CHIRP.f1_Hz, IDENTIFICATION_CHIRP.method
+    (5.0, 4500.0, 'logarithmic')
     """
 
     name: str
@@ -90,6 +95,12 @@ def chirp_input(settings, fs=paper.SAMPLING_FREQUENCY_HZ):
     ------
     TypeError, ValueError
         ``settings`` is not a :class:`ChirpSettings` or ``fs`` is not positive.
+
+    Examples
+    --------
+    >>> u, start = chirp_input(IDENTIFICATION_CHIRP)      # 0.2 s ramp, 0.05 s hold, 2 s sweep
+    >>> u.shape, start, float(u.max())
+    ((22500,), 2500, 2.0)
     """
     check_type("settings", settings, ChirpSettings, "a ChirpSettings")
     fs = check_positive("fs", fs)
@@ -119,6 +130,15 @@ class ChirpExperiment:
         ``hold_start`` and ``start``).
     metadata : dict
         Header of the file (settings, seed, units).
+
+    Examples
+    --------
+    >>> chirp = load_chirp("identification")              # data/chirp_identification.csv
+    >>> chirp.hold_start, chirp.start, chirp.sweep.t_s.shape
+    (2000, 2500, (20000,))
+    >>> u, y, sweep_start = chirp.deviations()
+    >>> u.shape, sweep_start
+    ((20500,), 500)
     """
 
     record: StageRecord
@@ -188,6 +208,11 @@ def experiment_paths(directory=None):
     TypeError, NotADirectoryError
         ``directory`` is not a path, or is a file (as in every function here that takes
         a ``directory``: :func:`piezolib.problem.paths.check_directory`).
+
+    Examples
+    --------
+    >>> {key: path.name for key, path in experiment_paths().items()}
+    {'identification': 'chirp_identification.csv', 'validation': 'chirp_validation.csv', 10.0: 'hysteresis_loop_10V.csv', 20.0: 'hysteresis_loop_20V.csv', 30.0: 'hysteresis_loop_30V.csv', 40.0: 'hysteresis_loop_40V.csv'}
     """
     d = _folder(directory, data_dir)
     paths = {"identification": d / "chirp_identification.csv",
@@ -260,7 +285,13 @@ MANIFEST_NAME = "manifest.json"
 
 
 def manifest_path(directory=None):
-    """Path of the manifest of the experiment files (``data/manifest.json``)."""
+    """Path of the manifest of the experiment files (``data/manifest.json``).
+
+    Examples
+    --------
+    >>> manifest_path().relative_to(data_dir()).as_posix()
+    'manifest.json'
+    """
     return _folder(directory, data_dir) / MANIFEST_NAME
 
 
@@ -286,6 +317,12 @@ def read_manifest(directory=None):
     ------
     records.RecordError
         When the manifest itself is not valid JSON.
+
+    Examples
+    --------
+    >>> entries = read_manifest()
+    >>> "chirp_identification.csv" in entries
+    True
     """
     path = manifest_path(directory)
     if not path.exists():
@@ -311,6 +348,11 @@ def check_experiment_files(directory=None):
         ``{Path: problem}`` for the files that are missing or fail their check
         (empty when all are fine); ``problem`` is a one-line message naming the
         file and, where it applies, the line.
+
+    Examples
+    --------
+    >>> check_experiment_files()          # the committed files match their manifest
+    {}
     """
     problems = {}
     try:
@@ -356,6 +398,14 @@ def load_record(path):
         (a ``ValueError``) naming the file and the line: a missing column,
         text or NaN in a number column, too few rows, or a file that differs
         from its manifest entry (truncated, changed).
+
+    Examples
+    --------
+    >>> record, meta = load_record("data/hysteresis_loop_20V.csv")
+    >>> meta["actuator_amplitude_V"], meta["frequency_Hz"], record.t_s.shape
+    (20.0, 10.0, (3001,))
+    >>> record.input_saturation.count
+    0
     """
     path = check_path("path", path)
     if not path.exists():
@@ -394,6 +444,15 @@ def load_chirp(which="identification", directory=None):
     Returns
     -------
     ChirpExperiment
+
+    Examples
+    --------
+    >>> chirp = load_chirp("validation")
+    >>> chirp.metadata["method"], chirp.metadata["f1_Hz"]
+    ('linear', 4500.0)
+    >>> u_op, y_op = chirp.operating_point
+    >>> round(u_op, 3)
+    3.0
     """
     if which not in ("identification", "validation"):
         raise ValueError(f"which must be 'identification' or 'validation', got {which!r}")
@@ -415,6 +474,12 @@ def load_hysteresis_loops(directory=None):
     dict
         {actuator amplitude [V] (10.0, 20.0, 30.0, 40.0): StageRecord} with
         time, u_c, v_a, x and v_y of three periods of the 10 Hz triangle.
+
+    Examples
+    --------
+    >>> loops = load_hysteresis_loops()
+    >>> sorted(loops), loops[40.0].v_y_V.shape
+    ([10.0, 20.0, 30.0, 40.0], (3001,))
     """
     paths = experiment_paths(directory)
     return {A: load_record(paths[A])[0] for A in EXPERIMENT_SEEDS}
@@ -442,7 +507,13 @@ _FOREIGN_RUNS = {
 
 
 def foreign_record_paths(directory=None):
-    """Paths of the foreign-form records (default ``data/own_stage/``), by file name."""
+    """Paths of the foreign-form records (default ``data/own_stage/``), by file name.
+
+    Examples
+    --------
+    >>> sorted(foreign_record_paths())
+    ['chirp.csv', 'loop_sine.csv', 'loop_triangle.csv']
+    """
     d = _folder(directory, lambda: data_dir() / "own_stage")
     return {name: d / name for name in _FOREIGN_RUNS}
 
