@@ -12,7 +12,7 @@ import warnings
 
 from piezolib import identification as ident
 from piezolib.problem import stage as vstage
-from piezolib.problem import stage_data
+from piezolib.problem import stage_calibration, stage_data
 
 
 def best_of(func, repeat=3):
@@ -30,7 +30,7 @@ def main():
     t = best_of(lambda: stage.run(u))
     print(f"run(), 2.25 s chirp ({len(u)} samples):      {t * 1e3:7.1f} ms")
 
-    triangles = [vstage.case_I_input(A) for A in (10.0, 20.0, 30.0, 40.0)]
+    triangles = [stage_calibration.case_I_input(A) for A in (10.0, 20.0, 30.0, 40.0)]
     t = best_of(lambda: [stage.run(x) for x in triangles])
     print(f"run(), four Case I triangles:              {t * 1e3:7.1f} ms")
 
@@ -43,7 +43,7 @@ def main():
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        t = best_of(vstage.calibrate_hysteresis, repeat=1)
+        t = best_of(stage_calibration.calibrate_hysteresis, repeat=1)
     print(f"calibrate_hysteresis():                    {t:7.2f} s")
 
     ex = stage_data.load_chirp("identification")

@@ -27,11 +27,13 @@ from sweep import bad_calls
 from piezolib.hysteresis import DahlModel
 from piezolib.problem import paper
 from piezolib.problem.stage import VirtualStage
+from piezolib.problem.stage_batch import StageBatch
 from piezolib.workbook import cli
 
 LAYERS = {
-    "problem": ("paper", "genplant", "stage", "stage_data", "design", "analysis",
-                "hysteresis_fits", "stage_hysteresis", "paths", "fsm_benchmark"),
+    "problem": ("paper", "genplant", "stage", "stage_batch", "stage_calibration", "stage_data",
+                "design", "analysis", "hysteresis_fits", "stage_hysteresis", "paths",
+                "fsm_benchmark"),
     "workbook": ("study", "pipeline", "loop", "experiments", "report", "style", "plotting",
                  "reproduce", "cli", "outputs", "session", "two_dof", "set_tracking", "sweep",
                  "tables", "document"),
@@ -41,6 +43,7 @@ G, H_M, H_E, H_Y, K = paper.problem()
 S = ct.tf("s")
 FS = paper.SAMPLING_FREQUENCY_HZ
 STAGE = VirtualStage(seed=0)
+STAGE_BATCH = StageBatch.of_seeds(STAGE, [0, 1])
 DAHL = DahlModel(alpha1=236.0, alpha2=335.4, beta1=0.0, beta2=2.56, gamma_a=30.0, g_a=1.28,
                  form="bliman_sorine", x0=-0.15, start="rest")
 V_R = np.zeros(200)
@@ -164,20 +167,21 @@ CASES = {
     "genplant.delayed_closed_loop_response": (
         dict(K=K, G=G, H_m=H_M, H_e=H_E, H_y=H_Y, omega=OMEGA, fs=FS, delay_samples=1),
         {"K": LTI, "omega": GRID, "fs": POSITIVE, "delay_samples": {"negative": -1}}),
-    # problem.stage
-    "stage.check_seeds": (dict(seeds=[1, 2]), {"seeds": SEEDS}),
-    "stage.case_I_input": (dict(amplitude_V=5.0), {"amplitude_V": POSITIVE,
-                                                   "periods": POSITIVE_INT,
-                                                   "frequency_Hz": POSITIVE}),
-    "stage.run_case_I": (None, {"stage": STAGE_BAD, "amplitudes_V": {"empty": [],
-                                                                    "negative": [-5.0],
-                                                                    "text": ["a"]},
-                                "periods": POSITIVE_INT}),
-    "stage.case_I_hysteresis": (None, {"records": {"empty": {}, "text": "abc",
-                                                   "not records": {5.0: 1.0}}}),
-    "stage.calibrate_hysteresis": (None, {"targets": {"negative": {5.0: -1.0},
-                                                      "not a dict": [1.0], "empty": {}},
-                                          "law": {"text": "abc"}}),
+    # problem.stage_batch, stage_calibration
+    "stage_batch.check_seeds": (dict(seeds=[1, 2]), {"seeds": SEEDS}),
+    "stage_calibration.case_I_input": (dict(amplitude_V=5.0), {"amplitude_V": POSITIVE,
+                                                               "periods": POSITIVE_INT,
+                                                               "frequency_Hz": POSITIVE}),
+    "stage_calibration.run_case_I": (None, {"stage": STAGE_BAD,
+                                            "amplitudes_V": {"empty": [], "negative": [-5.0],
+                                                             "text": ["a"]},
+                                            "periods": POSITIVE_INT}),
+    "stage_calibration.case_I_hysteresis": (None, {"records": {"empty": {}, "text": "abc",
+                                                               "not records": {5.0: 1.0}}}),
+    "stage_calibration.calibrate_hysteresis": (None, {"targets": {"negative": {5.0: -1.0},
+                                                                  "not a dict": [1.0],
+                                                                  "empty": {}},
+                                                      "law": {"text": "abc"}}),
     # problem.stage_data
     # the valid call is cheap, and the settings FILLER (None) would fail before fs
     "stage_data.chirp_input": (
@@ -454,7 +458,7 @@ CASES = {
                                      "sections": {"text": "x", "another filter": SECTIONS_10K}}),
     "set_tracking.tracking_over_set": (
         dict(stage=STAGE, mset=MEMBERS, model=DAHL, controller=K, frequencies_Hz=[50.0]),
-        {"stage": {"text": "x", "a batch": STAGE.batch([0, 1])}, "mset": {"a plant": G},
+        {"stage": {"text": "x", "a batch": STAGE_BATCH}, "mset": {"a plant": G},
          "model": {"text": "x"}, "controller": {"text": "x"},
          "case": {"unknown": "V", "number": 3}, "frequencies_Hz": {"empty": [], "negative": [-1.0],
                                                                    "text": "x"},

@@ -2,9 +2,11 @@
 
 paper            the published numbers, the units table, ``problem()`` -> G, H_m, H_e, H_y, K
 genplant         generalized plant of Fig. 9 / eq. 16
-stage            virtual P-752.21 stage (the hardware stand-in)
+stage            virtual P-752.21 stage (the hardware stand-in): one stage, one run
+stage_batch      N virtual stages run at once (noise seeds, members of a model set)
 stage_hysteresis the virtual stage's hysteresis truth (play operators)
 stage_data       its experiment files (chirps, Table 4 Case I loops): definitions, CSV I/O
+stage_calibration  the Table 4 Case I experiment and the hysteresis law calibrated on it
 design           the workbook's mu controller in one call
 analysis         Table 3: NS, NP, RS, RP of any controller
 verification     independent checks of the mu designs (notebook 05), with ``checks`` dicts
@@ -28,8 +30,9 @@ that the other modules here take explicitly (plant first, then the weights);
 ``piezolib.paper`` is the same module under its old name.
 """
 
-__all__ = ["paper", "genplant", "stage", "stage_hysteresis", "stage_data", "design",
-           "analysis", "verification", "hysteresis_fits", "dahl_audit", "hysteresis_choice",
+__all__ = ["paper", "genplant", "stage", "stage_batch", "stage_calibration",
+           "stage_hysteresis", "stage_data", "design", "analysis", "verification",
+           "hysteresis_fits", "dahl_audit", "hysteresis_choice",
            "weighting", "fsm_benchmark", "paths",
            "fsm_models", "fsm_control",
            "published_audit", "stage_identification", "coefficient_set", "coefficient_box"]

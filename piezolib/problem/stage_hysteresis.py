@@ -3,8 +3,8 @@
 :class:`PlayHysteresis` is the operator the stage applies to the actuator
 voltage, :class:`HysteresisLaw` the two-parameter family it is chosen from,
 :data:`CALIBRATED_HYSTERESIS` the law calibrated on Table 4 Case I only.
-Calibrating runs the stage, so :func:`piezolib.problem.stage.calibrate_hysteresis`
-lives with the stage, which imports this module (never the other way).
+Calibrating runs the stage, so :func:`piezolib.problem.stage_calibration.calibrate_hysteresis`
+lives above the stage, which imports this module (never the other way).
 
 Operator definition and calibration rule: ``docs/stage.md``.
 """
@@ -153,5 +153,5 @@ class HysteresisLaw:
 
 
 #: Calibrated on Table 4 Case I only; re-derive with
-#: :func:`piezolib.problem.stage.calibrate_hysteresis`.
+#: :func:`piezolib.problem.stage_calibration.calibrate_hysteresis`.
 CALIBRATED_HYSTERESIS = HysteresisLaw(density_per_V=0.0553682, decay_V=20.9598)

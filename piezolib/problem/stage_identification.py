@@ -34,7 +34,8 @@ from piezolib.hysteresis import hysteresis_measure
 from piezolib.identification import (identify, monic_coefficients, pole_pairs, whiteness,
                                      zoh_coefficients, zoh_simulate, fit_percent)
 from piezolib.problem import paper
-from piezolib.problem.stage import VirtualStage, case_I_hysteresis
+from piezolib.problem.stage import VirtualStage
+from piezolib.problem.stage_calibration import case_I_hysteresis
 from piezolib.problem.stage_data import ChirpExperiment
 
 __all__ = ["CALIBRATION_ATOL_PERCENT", "ACCEPTANCE_RTOL", "WHITENESS_LAGS",

@@ -220,14 +220,14 @@ def _report(args, stream):
 def _data(stream):
     from piezolib import files
     from piezolib.problem import paper
-    from piezolib.problem import stage, stage_data
+    from piezolib.problem import stage_calibration, stage_data
     from piezolib.workbook.outputs import data_dir
 
     start = time.perf_counter()
     files.remove_stale_temporaries(data_dir())       # what a killed earlier run left
     for path in stage_data.write_experiment_files():
         print(path, file=stream)
-    got = stage.case_I_hysteresis(stage_data.load_hysteresis_loops())
+    got = stage_calibration.case_I_hysteresis(stage_data.load_hysteresis_loops())
     paper_row = paper.table4().loc["case_I"]
     for amplitude, value in got.items():
         print(f"Case I hysteresis at {amplitude:4.0f} V: {value:6.2f} %  "

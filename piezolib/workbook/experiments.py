@@ -42,7 +42,8 @@ from piezolib.hysteresis.measure import hysteresis_measure
 from piezolib.metrics import improvement_percent, mean_interval
 from piezolib.problem import paper
 from piezolib.problem.hysteresis_fits import workbook_dahl_fit
-from piezolib.problem.stage import StageBatch, VirtualStage, check_seeds
+from piezolib.problem.stage import VirtualStage
+from piezolib.problem.stage_batch import StageBatch, check_seeds
 from piezolib.robust.export import SOSController
 from piezolib.workbook.loop import (COMPUTATION_DELAY_SAMPLES, DISCARD_PERIODS,
                                     discrete_controller, run_loop)

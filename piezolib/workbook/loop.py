@@ -5,7 +5,7 @@ first, then the discrete controller on v_e[k] = v_r[k] - v_y[k] sample by
 sample, its output applied ``d`` samples later (the computation delay,
 default :data:`COMPUTATION_DELAY_SAMPLES` = 1), each u_c held for one DAQ
 period.  :func:`run_loop` with ``seeds`` (or a
-:class:`~piezolib.problem.stage.StageBatch`) runs N copies of the loop at
+:class:`~piezolib.problem.stage_batch.StageBatch`) runs N copies of the loop at
 once, one per noise seed, with one state array of shape (N,) per state:
 member i is identical, float for float, to the single run with seed i, and
 N = 32 seeds cost about four single runs
@@ -246,7 +246,7 @@ def run_loop(stage, v_r, *, feedforward=None, controller=None,
     ----------
     stage : piezolib.problem.stage.VirtualStage or StageBatch
         Each run starts from the stage's rest state with its noise seed.  A
-        :class:`~piezolib.problem.stage.StageBatch` runs the loop on every
+        :class:`~piezolib.problem.stage_batch.StageBatch` runs the loop on every
         member at once (as ``seeds`` does).
     v_r : array_like
         Reference voltage [V] at the stage's rate, 1-D (x_r = 3 um/V * v_r).
@@ -274,7 +274,7 @@ def run_loop(stage, v_r, *, feedforward=None, controller=None,
         Arithmetic of an SOSController.
     seeds : sequence of int, optional
         Noise seeds (distinct, non-negative): run the loop once per seed,
-        all seeds at once, on ``stage.batch(seeds)`` (the stage with only
+        all seeds at once, on ``StageBatch.of_seeds(stage, seeds)`` (the stage with only
         its seed changed).  ``None``: one run with the stage's seed.
 
     Returns
@@ -291,7 +291,8 @@ def run_loop(stage, v_r, *, feedforward=None, controller=None,
         Bad reference or seeds, a controller at another sample time, or a
         controller output that stops being finite (an unstable loop).
     """
-    from piezolib.problem.stage import StageBatch, VirtualStage   # imported lazily by the package
+    from piezolib.problem.stage import VirtualStage               # imported lazily by the package
+    from piezolib.problem.stage_batch import StageBatch
     # the reference and the arithmetic first: both paths below would otherwise name an
     # internal signal (u_c) or fail deep in the section filter
     v_r = check_finite_array("v_r", v_r, ndim=1, min_length=2, real=True)
@@ -307,8 +308,8 @@ def run_loop(stage, v_r, *, feedforward=None, controller=None,
         raise TypeError(f"stage must be a VirtualStage or a StageBatch, got "
                         f"{type(stage).__name__}")
     if seeds is not None:
-        return _run_batch(stage.batch(seeds), v_r, feedforward, controller, delay_samples,
-                          sections_dtype)
+        return _run_batch(StageBatch.of_seeds(stage, seeds), v_r, feedforward, controller,
+                          delay_samples, sections_dtype)
     delay = check_integer("delay_samples", delay_samples, minimum=0)
     u_f, ff_text = _feedforward_signal(feedforward, v_r)
     if isinstance(controller, SOSController):

@@ -5,7 +5,8 @@ virtual stage.  :func:`tracking_over_set` runs one case of the tracking test
 on a copy of the stage per member of a
 :class:`~piezolib.uncertainty.ModelSet` (the paper's 729 models with ±5 % on
 a0…a5, or a random sample of the box), all members at once on the batched
-loop (one state array per state, :meth:`VirtualStage.over_model_set`), at
+loop (one state array per state,
+:meth:`~piezolib.problem.stage_batch.StageBatch.over_model_set`), at
 the loop's rate with its computation delay.  Members whose loop is unstable
 are named, not run: for Case II the open-loop unstable plants, for Cases
 III–IV the members whose sampled loop (exact ZOH plant, the controller's
@@ -36,6 +37,7 @@ from piezolib.hysteresis import FitWarning
 from piezolib.problem import paper
 from piezolib.problem.hysteresis_fits import workbook_dahl_fit, workbook_pi_fit
 from piezolib.problem.stage import StageSaturationWarning, VirtualStage
+from piezolib.problem.stage_batch import StageBatch
 from piezolib.robust.export import SOSController
 from piezolib.uncertainty.margin import parametric_stability_margin
 from piezolib.uncertainty.modelset import (ModelSet, check_model_set, model_set,
@@ -193,7 +195,7 @@ def tracking_over_set(stage, mset, model, controller=None, case="III", frequenci
     Parameters
     ----------
     stage : VirtualStage
-        The nominal stage; member k is ``stage.over_model_set(mset)`` member k
+        The nominal stage; member k is ``StageBatch.over_model_set(stage, mset)`` member k
         (its plant replaced, everything else kept).
     mset : ModelSet
         The members (normally around ``stage.settings.plant``).
@@ -234,7 +236,7 @@ def tracking_over_set(stage, mset, model, controller=None, case="III", frequenci
         (rho, zeta), unstable = (None, None), unstable_members(mset)
     stable = np.setdiff1d(np.arange(mset.size), unstable)
     chunks = [stable[i:i + MEMBERS_PER_BATCH] for i in range(0, len(stable), MEMBERS_PER_BATCH)]
-    batches = [stage.over_model_set(_subset(mset, members)) for members in chunks]
+    batches = [StageBatch.over_model_set(stage, _subset(mset, members)) for members in chunks]
     errors = np.full((mset.size, len(frequencies_Hz)), np.nan)
     saturated = np.zeros((mset.size, len(frequencies_Hz)), dtype=int)
     for j, f in enumerate(frequencies_Hz):

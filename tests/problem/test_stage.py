@@ -1,4 +1,4 @@
-"""Virtual stage simulator: determinism, step == run, causality, saturation, calibration."""
+"""Virtual stage simulator: determinism, step == run, causality, saturation, settings."""
 
 import warnings
 
@@ -8,8 +8,8 @@ import pytest
 
 from piezolib import identification, paper
 from piezolib.problem import stage as S
+from piezolib.problem.stage_calibration import case_I_input
 from piezolib.problem.stage_data import IDENTIFICATION_CHIRP, chirp_input
-from piezolib.problem.stage_hysteresis import CALIBRATED_HYSTERESIS
 
 FS = paper.SAMPLING_FREQUENCY_HZ
 
@@ -35,7 +35,7 @@ def test_same_seed_same_record_other_seed_other_noise(stage):
 
 @pytest.mark.parametrize("make_u", [
     chirp_u,
-    lambda: S.case_I_input(40.0, periods=1),
+    lambda: case_I_input(40.0, periods=1),
     lambda: np.r_[np.linspace(0, 13, 300), np.linspace(13, -3, 300)],   # saturates
 ])
 def test_step_equals_run_exactly(stage, make_u):
@@ -158,7 +158,7 @@ def test_one_step_is_fast_enough_for_closed_loops(stage):
 
 
 def test_simulation_state_is_the_play_state_of_the_operator(stage):
-    u = S.case_I_input(30.0, periods=1)[:700]         # up, then partly down again
+    u = case_I_input(30.0, periods=1)[:700]         # up, then partly down again
     sim = stage.start()
     for u_k in u:
         sim.step(u_k)
@@ -187,87 +187,6 @@ def test_run_rejects_complex_input(stage):
         stage.run(np.ones(100) * (1 + 1j))
 
 
-# --- N stages at once: StageBatch and StageBatchSimulation --------------------------
-def saturating_u():
-    return np.r_[np.linspace(0, 13, 300), np.linspace(13, -3, 300), np.linspace(-3, 4, 400)]
-
-
-def members_of(stage, seeds):
-    return [stage.replace(seed=s) for s in seeds]
-
-
-@pytest.mark.parametrize("make_u", [chirp_u, saturating_u])
-def test_batch_run_is_each_members_run_exactly(stage, make_u):
-    u, seeds = make_u(), [0, 5, 2]
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        batch = stage.batch(seeds).run(u)
-        single = [st.run(u) for st in members_of(stage, seeds)]
-    for one, member in zip(single, batch):
-        for name in S.RECORD_COLUMNS:
-            assert np.array_equal(getattr(one, name), getattr(member, name)), name
-        assert (one.input_saturation, one.output_saturation, one.adc_saturation) == (
-            member.input_saturation, member.output_saturation, member.adc_saturation)
-        assert one.seed == member.seed
-    # one warning per place of the chain for the batch, naming its members
-    n_places = sum(any(getattr(r, p).occurred for r in single)
-                   for p in ("input_saturation", "output_saturation", "adc_saturation"))
-    batch_warnings = [str(w.message) for w in caught if "batch members" in str(w.message)]
-    assert len(batch_warnings) == n_places
-    assert all("seeds 0, 5, 2" in m for m in batch_warnings)
-
-
-@pytest.mark.parametrize("make_u", [chirp_u, saturating_u,
-                                    lambda: S.case_I_input(40.0, periods=1)])
-def test_batch_steps_are_each_members_simulation_exactly(stage, make_u):
-    u, seeds = make_u(), [4, 0, 9]
-    offsets = np.array([0.0, 1e-3, -0.37])      # a different input per member
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", S.StageSaturationWarning)
-        sim = stage.batch(seeds).start()
-        measured = [sim.v_y_V]
-        for u_k in u:
-            measured.append(sim.step(u_k + offsets))
-        records = sim.records()
-        for i, st in enumerate(members_of(stage, seeds)):
-            one = st.start()
-            mine = [one.v_y_V] + [one.step(u_k + offsets[i]) for u_k in u]
-            rec = one.record()
-            for name in S.RECORD_COLUMNS:
-                assert np.array_equal(getattr(rec, name), getattr(records[i], name)), name
-            assert (rec.input_saturation, rec.output_saturation, rec.adc_saturation) == (
-                records[i].input_saturation, records[i].output_saturation,
-                records[i].adc_saturation)
-            assert np.array_equal(np.array(measured)[:, i], mine)
-            assert np.array_equal(sim.state[0][i], one.state[0])
-            assert np.array_equal(sim.state[1][i], one.state[1])
-    assert sim.k == len(u) and sim.seeds == tuple(seeds)
-
-
-def test_batch_members_may_differ_in_noise_plant_and_hysteresis():
-    base = S.VirtualStage(seed=1)
-    members = [base, base.replace(noise_rms_V=0.0),
-               base.replace(seed=2, plant=0.9 * paper.plant()),
-               base.replace(seed=3, hysteresis=S.PlayHysteresis((0.5, 2.0, 9.0),
-                                                                (0.05, 0.02, 0.01)))]
-    with pytest.raises(ValueError, match="same number of plays"):
-        S.StageBatch(members)
-    members = members[:3]
-    batch = S.StageBatch(members)
-    assert batch.b.shape == (3, len(base.b)) and batch.noise_rms_V[1] == 0.0
-    u = S.case_I_input(30.0, periods=1)[:3000]
-    sim = batch.start()
-    for u_k in u:
-        sim.step(u_k)
-    for st, rec, run in zip(members, sim.records(), batch.run(u)):
-        one = st.start()
-        for u_k in u:
-            one.step(u_k)
-        assert np.array_equal(one.record().v_y_V, rec.v_y_V)
-        assert np.array_equal(st.run(u).v_y_V, run.v_y_V)
-    assert np.array_equal(sim.records()[1].v_y_V, members[1].run(u).v_y_V)
-
-
 def test_replace_changes_only_what_it_is_told(stage):
     other = stage.replace(seed=7)
     assert other.seed == 7 and stage.seed == 0 and other.b is stage.b
@@ -280,65 +199,6 @@ def test_replace_changes_only_what_it_is_told(stage):
         stage.replace(gain=3)
 
 
-@pytest.mark.parametrize("seeds, match", [
-    ([], r"seeds must hold at least 1 seed\(s\), got 0"),
-    ([1, 2.5], "seeds must be integers, got 2.5"),
-    ([True], "seeds must be integers"),
-    ([3, -1], "seeds must be non-negative, got -1"),
-    ([1, 2, 1], r"seeds must be distinct, got \[1\] more than once"),
-    ("012", "seeds must be a sequence of non-negative integers"),
-    (5, "seeds must be a sequence of non-negative integers"),
-])
-def test_batch_rejects_bad_seeds(stage, seeds, match):
-    with pytest.raises(ValueError, match=match):
-        stage.batch(seeds)
-
-
-def test_check_seeds_says_why_a_minimum_applies():
-    assert S.check_seeds(np.arange(3)) == (0, 1, 2)
-    with pytest.raises(ValueError, match="at least 2 seed.*got 1: N >= 2 for an interval"):
-        S.check_seeds([4], min_count=2, why="N >= 2 for an interval")
-
-
-def test_batch_rejects_incompatible_stages_and_bad_steps(stage):
-    with pytest.raises(ValueError, match="at least one"):
-        S.StageBatch([])
-    with pytest.raises(TypeError, match=r"stages\[1\] must be a VirtualStage"):
-        S.StageBatch([stage, "stage"])
-    with pytest.raises(ValueError, match="converters"):
-        S.StageBatch([stage, S.VirtualStage(adc_bits=12)])
-    with pytest.raises(ValueError, match="one order"):
-        S.StageBatch([stage, S.VirtualStage(plant=ct.tf([1.0], [1.0, 1.0]))])
-    sim = stage.batch([0, 1]).start()
-    with pytest.raises(ValueError, match="u_c must be finite"):
-        sim.step([1.0, np.nan])
-    with pytest.raises(ValueError, match=r"shape \(2,\)"):
-        sim.step(np.ones(3))
-    v_y = sim.step(0.5)                              # a scalar is applied to every member
-    assert np.array_equal(v_y, sim.v_y_V)
-    assert sim.record(1).u_c_V[0] == sim.record(0).u_c_V[0] == stage.run([0.5]).u_c_V[0]
-    with pytest.raises(ValueError, match="batch size"):
-        sim.record(2)
-
-
-def test_calibration_rederives_the_stored_parameters():
-    law, achieved = S.calibrate_hysteresis()
-    assert law.density_per_V == pytest.approx(CALIBRATED_HYSTERESIS.density_per_V, rel=1e-3)
-    assert law.decay_V == pytest.approx(CALIBRATED_HYSTERESIS.decay_V, rel=1e-3)
-    target = paper.table4().loc["case_I"]
-    assert all(abs(achieved[A] - target[A]) <= 0.5 for A in achieved)
-
-
-@pytest.mark.parametrize("targets, match", [({5.0: -1.0}, r"targets\[5.0\]"),
-                                            ({-5.0: 1.0}, "targets"),
-                                            ({5.0: np.nan}, r"targets\[5.0\]"),
-                                            ([1.0], "targets"), ({}, "targets")])
-def test_calibration_refuses_impossible_targets(targets, match):
-    # a negative target used to be fitted (to whatever least squares found)
-    with pytest.raises((TypeError, ValueError), match=match):
-        S.calibrate_hysteresis(targets=targets)
-
-
 def test_an_unstable_plant_is_accepted_only_when_asked_for():
     with pytest.raises(ValueError, match="plant must be stable"):
         S.VirtualStage(plant=ct.tf([1.0], [1.0, 0.5, -1.0]))
@@ -346,30 +206,3 @@ def test_an_unstable_plant_is_accepted_only_when_asked_for():
     stage = S.VirtualStage(plant=unstable, unstable_plant_ok=True)
     b, a = identification.zoh_coefficients(unstable, 1.0 / stage.fs)
     np.testing.assert_array_equal(stage.a, a)
-
-
-def test_a_model_set_batch_has_each_members_exact_zoh_plant_and_the_stages_rest(stage):
-    from piezolib.uncertainty import model_set
-    mset = model_set(stage.settings.plant, 0.05)
-    members = [0, 364, 728]                          # a corner, the nominal, the other corner
-    batch = stage.over_model_set(type(mset)(mset.plant, 0.05, 3, mset.offsets[members]))
-    for member, k in zip(batch.stages, members):
-        b, a = identification.zoh_coefficients(mset.member(k), 1.0 / stage.fs)
-        np.testing.assert_allclose(member.a, a, rtol=0, atol=1e-12 * np.abs(a).max())
-        np.testing.assert_allclose(member.b, b, rtol=0, atol=1e-12 * np.abs(a).max())
-        assert member.seed == stage.seed and member.hysteresis is stage.hysteresis
-        assert member.settings.unstable_plant_ok
-    # members that share the hysteresis: the batch run is still each member's own run
-    u = 0.5 + 0.4 * np.sin(np.linspace(0, 30, 3000))
-    for record, member in zip(batch.run(u), batch.stages):
-        np.testing.assert_array_equal(record.v_y_V, member.run(u).v_y_V)
-
-
-def test_a_model_set_batch_checks_its_seeds(stage):
-    from piezolib.uncertainty import model_set
-    mset = model_set(stage.settings.plant, 0.05, 2)
-    with pytest.raises(ValueError, match="one seed per member"):
-        stage.over_model_set(mset, seeds=[1, 2])
-    with pytest.raises(TypeError, match="mset"):
-        stage.over_model_set(stage.settings.plant)
-    assert stage.over_model_set(mset, seeds=range(mset.size)).seeds == tuple(range(mset.size))

@@ -5,7 +5,8 @@ import pytest
 
 from piezolib import paper
 from piezolib.problem import stage_data as D
-from piezolib.problem.stage import VirtualStage, case_I_input
+from piezolib.problem.stage import VirtualStage
+from piezolib.problem.stage_calibration import case_I_input
 from piezolib.workbook.outputs import data_dir
 
 

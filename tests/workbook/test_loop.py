@@ -260,7 +260,7 @@ def test_batched_closed_loop_member_is_the_single_run_with_its_seed(stage, kind,
 
 
 def test_batched_open_loop_and_stage_batch_argument(stage):
-    from piezolib.problem.stage import StageBatch
+    from piezolib.problem.stage_batch import StageBatch
     v = reference()
     runs = loop.run_loop(stage, v, feedforward=DAHL, seeds=SEEDS)
     for seed, member in zip(SEEDS, runs):

@@ -10,6 +10,7 @@ import pytest
 from piezolib.hysteresis import PIModel
 from piezolib.problem import paper
 from piezolib.problem.stage import VirtualStage
+from piezolib.problem.stage_batch import StageBatch
 from piezolib.robust import controller_sos
 from piezolib.uncertainty import model_set, random_model_set, unstable_members
 from piezolib.uncertainty.modelset import ModelSet
@@ -34,7 +35,7 @@ def test_each_member_runs_as_its_stage_would_alone():
     """Member k's error equals Case III run on member k's stage by itself, float for float."""
     mset = random_model_set(STAGE.settings.plant, 0.05, 5, seed=7)
     res = tracking_over_set(STAGE, mset, MODEL, K, frequencies_Hz=[20.0, 50.0])
-    batch = STAGE.over_model_set(mset)
+    batch = StageBatch.over_model_set(STAGE, mset)
     for k in (0, 3):
         for f in (20.0, 50.0):
             v_r = experiments.tracking_reference(f, experiments.tracking_periods(f))[1]
