@@ -15,7 +15,8 @@ session      the one call that starts a notebook: study, claim table, figure sty
 interactive  the notebooks' interactive controls (one module per control) and their callbacks
 feedforward_cases  notebook 03: the Dahl feedforward on the model, Case II, the cross-check
 weighting_findings notebook 04: the closing findings beyond the claim rows
-tracking_study  notebook 06: Sec. V on one study, its checks, claims and findings
+tracking_setup  notebook 06: what Sec. V's runs use, the loop's margins, the mu_RP certificate
+tracking_study  notebook 06: Sec. V's runs on one study, their checks, claims and findings
 fsm_findings notebook 10: the FSM benchmark's claim rows and closing findings
 your_stage   notebook 08: the pipeline on a user's own records, one call per stage with its checks
 case_comparison  Cases I-III with several Case III controllers side by side (notebook 09)
@@ -23,5 +24,5 @@ case_comparison  Cases I-III with several Case III controllers side by side (not
 
 __all__ = ["study", "pipeline", "loop", "experiments", "report", "style", "plotting", "figures",
            "reproduce", "cli", "outputs", "session", "interactive", "feedforward_cases",
-           "weighting_findings", "tracking_study",
+           "weighting_findings", "tracking_setup", "tracking_study",
            "case_comparison", "fsm_findings", "your_stage"]
