@@ -62,6 +62,14 @@ def published_dahl(form="printed", params=paper.DAHL):
     -------
     DahlModel
         With offset x0 = 0 and a virgin start: eq. 10-13 exactly.
+
+    Examples
+    --------
+    >>> model = published_dahl()                    # eq. 10-13 as printed
+    >>> model.form, model.alpha1, model.g_a
+    ('printed', 1760.0, 0.925)
+    >>> published_dahl("bliman_sorine").form
+    'bliman_sorine'
     """
     if not isinstance(params, paper.DahlParameters):
         raise TypeError("params must be a paper.DahlParameters instance")
@@ -175,6 +183,15 @@ def validation_loops(stage=None):
     ------
     TypeError
         ``stage`` is not a :class:`~piezolib.problem.stage.VirtualStage`.
+
+    Examples
+    --------
+    >>> loops = validation_loops()                  # VirtualStage(seed=1), 10 kHz
+    >>> list(loops)
+    ['triangle 15 V', 'triangle 25 V', 'triangle 35 V', 'minor loops']
+    >>> u_c, v_y, first = loops["triangle 25 V"]
+    >>> u_c.shape == v_y.shape, first              # scored from the second period
+    (True, 1000)
     """
     from piezolib import signals
     from piezolib.problem.stage import VirtualStage
@@ -234,7 +251,13 @@ _STORED_OUTPUT_RTOL = 1e-3
 
 
 def workbook_dahl_path():
-    """``data/models/workbook_dahl.json``: the committed workbook Dahl model."""
+    """``data/models/workbook_dahl.json``: the committed workbook Dahl model.
+
+    Examples
+    --------
+    >>> workbook_dahl_path().relative_to(data_dir()).as_posix()
+    'models/workbook_dahl.json'
+    """
     return data_dir() / "models" / "workbook_dahl.json"
 
 
@@ -276,6 +299,12 @@ def read_dahl_model(path):
     ValueError
         Naming the file: not a Dahl model file of this format, or its content
         fails its checksum (edited or corrupted), with the way to write it anew.
+
+    Examples
+    --------
+    >>> model = read_dahl_model(workbook_dahl_path())     # the committed workbook model
+    >>> model.form
+    'bliman_sorine'
     """
     path = check_path("path", path)
     doc = _read_model_document(path)
@@ -334,6 +363,14 @@ def write_dahl_model(model, path, about=""):
     TypeError
         ``model`` not a DahlModel, ``path`` not a path or ``about`` not text (it would
         otherwise be written as whatever JSON makes of it).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = write_dahl_model(published_dahl(), Path(folder) / "dahl.json", about="eq. 10-13")
+    ...     print(path.name, read_dahl_model(path) == published_dahl())
+    dahl.json True
     """
     check_type("model", model, DahlModel, "a DahlModel")
     path = check_path("path", path)
