@@ -40,6 +40,13 @@ class ModelSet:
         Values per coefficient, equally spaced in [-spread, +spread].
     offsets : ndarray, shape (M, n)
         Normalised offsets q in [-1, 1]; column i perturbs a_i (s^i).
+
+    Examples
+    --------
+    >>> G = ct.tf([1], [1, 0.2, 1])
+    >>> mset = model_set(G, 0.05, levels=2)
+    >>> mset.size, mset.order, mset.offsets.shape        # 2 levels ** 2 coefficients
+    (4, 2, (4, 2))
     """
 
     plant: ct.TransferFunction
@@ -113,6 +120,14 @@ def level_offsets(levels, n):
     ------
     ValueError
         When ``levels**n`` exceeds :data:`MAX_MEMBERS`.
+
+    Examples
+    --------
+    >>> level_offsets(3, 2)[:4]                 # every combination of -1, 0, 1 for 2 coefficients
+    array([[-1., -1.],
+           [-1.,  0.],
+           [-1.,  1.],
+           [ 0., -1.]])
     """
     levels = check_integer("levels", levels, minimum=2)
     n = check_integer("n", n, minimum=1)
@@ -146,6 +161,13 @@ def perturbed_plant(G, spread, offsets, name=None):
     Returns
     -------
     control.TransferFunction
+
+    Examples
+    --------
+    >>> G = ct.tf([1], [1, 0.2, 1])
+    >>> Gp = perturbed_plant(G, 0.1, [1, -1])          # a0 up 10 %, a1 down 10 %
+    >>> Gp.den[0][0]
+    array([1.  , 0.18, 1.1 ])
     """
     G = check_plant(G)
     spread = check_spread(spread)
@@ -232,6 +254,14 @@ def set_response(mset, omega):
     mset : ModelSet
     omega : array_like
         Frequencies [rad/s], positive.
+
+    Examples
+    --------
+    >>> G = ct.tf([1], [1, 0.2, 1])
+    >>> mset = model_set(G, 0.1)
+    >>> R = set_response(mset, [1e-4, 1.0])             # one row per member; 1 / a0 near DC
+    >>> R.shape, round(float(np.abs(R[:, 0]).min()), 4), round(float(np.abs(R[:, 0]).max()), 4)
+    ((9, 2), 0.9091, 1.1111)
     """
     a, b, ws, V = frequency_basis(mset, omega)
     num = scale_coefficients(b, ws, len(a) - 1) @ V[:, :len(b)].T
@@ -242,6 +272,13 @@ def member_poles(mset):
     """Poles [rad/s] of every member, shape (M, n).
 
     From stacked companion matrices in scaled time (one batched eigenvalue call).
+
+    Examples
+    --------
+    >>> G = ct.tf([1], [1, 0.2, 1])
+    >>> poles = member_poles(model_set(G, 0.1))
+    >>> poles.shape, bool(np.all(poles.real < 0))
+    ((9, 2), True)
     """
     check_model_set(mset)
     ws = mset.time_scale
@@ -289,6 +326,13 @@ def unstable_members(mset, K=None):
     Returns
     -------
     ndarray of int
+
+    Examples
+    --------
+    >>> mset = model_set(ct.tf([1], [1, 2, 2, 1]), 0.5)   # +-50 % on a third-order denominator
+    >>> bad = unstable_members(mset)
+    >>> len(bad) > 0, mset.offsets[bad[0]]     # a0 up, a1 and a2 down: a2 a1 < a0
+    (True, array([ 1., -1., -1.]))
     """
     poles = member_poles(mset) if K is None else member_closed_loop_poles(mset, K)
     return np.flatnonzero(poles.real.max(axis=1) >= 0)

@@ -128,6 +128,16 @@ def fit_covering_weight(omega, envelope, order, starts=2, max_iter=60, fit_point
     ------
     ValueError
         When E is not positive and finite on the grid, or ``order < 1``.
+
+    Examples
+    --------
+    >>> from piezolib.uncertainty import model_set, relative_error_envelope, coverage
+    >>> omega = np.logspace(-1, 1, 100)
+    >>> E = relative_error_envelope(model_set(ct.tf([1], [1, 0.2, 1]), 0.1), omega)
+    >>> W = fit_covering_weight(omega, E, order=2)
+    >>> c = coverage(W, omega, E)
+    >>> c.covers, bool(c.worst_ratio >= 1), bool(c.max_excess_dB < 6), W.name
+    (True, True, True, 'W_m')
     """
     omega = check_frequencies(omega)
     env = check_finite_array("envelope", envelope, ndim=1)
