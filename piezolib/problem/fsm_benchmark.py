@@ -81,7 +81,13 @@ MANIFEST_NAME = "manifest.json"
 
 
 def data_folder():
-    """``data/real/fsm_benchmark/`` of the checkout."""
+    """``data/real/fsm_benchmark/`` of the checkout.
+
+    Examples
+    --------
+    >>> data_folder().relative_to(paths.data_dir()).as_posix()
+    'real/fsm_benchmark'
+    """
     return paths.data_dir() / "real" / "fsm_benchmark"
 
 
@@ -107,6 +113,11 @@ def file_name(signal, level_mV, split):
     level_mV : int
         One of :data:`LEVELS_MV`.
     split : {"train", "test"}
+
+    Examples
+    --------
+    >>> file_name("u", 100, "train"), file_name("y", 300, "test")
+    ('u_100mV_train.npy', 'y_300mV_test.npy')
     """
     if signal not in ("u", "y"):
         raise ValueError(f"signal must be 'u' or 'y', got {signal!r}")
@@ -170,6 +181,11 @@ def check_files(folder=None):
     ----------
     folder : str or Path, optional
         Default :func:`data_folder`.
+
+    Examples
+    --------
+    >>> check_files()                    # the committed arrays match their manifest
+    {}
     """
     folder = _folder(folder)
     problems = {}
@@ -202,6 +218,12 @@ def load(level_mV, split, folder=None):
     ------
     ValueError
         A file missing, differing from its SHA-256 or of another shape.
+
+    Examples
+    --------
+    >>> u, y = load(100, "test")          # data/real/fsm_benchmark/
+    >>> u.shape, y.shape                  # (samples, channels, realisations, periods)
+    ((8192, 3, 3, 2), (8192, 3, 3, 2))
     """
     level, split, folder = _level(level_mV), _split(split), _folder(folder)
     manifest = _manifest(folder)
@@ -233,6 +255,13 @@ class Score:
         RMSE per output [um], averaged over realisations and periods.
     nrmse : ndarray, shape (3,)
         NRMSE per output (fraction).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> s = Score(100, rmse_um=np.array([0.1, 0.2, 0.3]), nrmse=np.array([0.05, 0.1, 0.15]))
+    >>> round(s.nrmse_percent, 6), round(s.mean_rmse_um, 6)
+    (10.0, 0.2)
     """
 
     level_mV: int
@@ -265,6 +294,13 @@ def score(model, level_mV, split="test", folder=None):
     Returns
     -------
     Score
+
+    Examples
+    --------
+    >>> import numpy as np, control as ct
+    >>> slow = ct.ss(0.5 * np.eye(3), np.eye(3), 1e-9 * np.eye(3), np.zeros((3, 3)), 1 / 6400)
+    >>> round(score(slow, 100).nrmse_percent)        # an almost silent model: about 100 %
+    100
     """
     check_type("model", model, ct.StateSpace, "a discrete StateSpace")
     if (model.ninputs, model.noutputs) != (3, 3):
@@ -294,6 +330,12 @@ def score_simulation(simulate, level_mV, split="test", folder=None):
     Returns
     -------
     Score
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> round(score_simulation(lambda u: np.zeros_like(u), 100).nrmse_percent)   # predicts 0
+    100
     """
     if not callable(simulate):
         raise TypeError(f"simulate must be a callable u -> y, got {type(simulate).__name__}")
@@ -323,6 +365,12 @@ def noise_floor(level_mV, split="test", folder=None):
     -------
     Score
         ``rmse_um`` the noise standard deviation [um], ``nrmse`` the floor.
+
+    Examples
+    --------
+    >>> floor = noise_floor(100)
+    >>> floor.level_mV, bool(0 < floor.nrmse_percent < 5)
+    (100, True)
     """
     u, y = load(level_mV, split, folder)
     kept = y[N_INIT:]
@@ -381,6 +429,15 @@ def axis_design_plant(G, W_m, W_S, W_T, W_u, *, fs, delay_samples=1, pade_order=
     control.StateSpace
         Inputs ``u_Delta, v_r, u_b``; outputs ``y_Delta, y1, y2, y_u, v_e``;
         block structure ((1, 1), (1, 3)).
+
+    Examples
+    --------
+    >>> import control as ct
+    >>> from piezolib.problem import paper, genplant
+    >>> P = axis_design_plant(paper.plant(), ct.tf([0.1], [1]), paper.error_weight(),
+    ...                       paper.output_weight(), genplant.rolloff_weight(), fs=10e3)
+    >>> P.input_labels, P.output_labels
+    (['u_Delta', 'v_r', 'u_b'], ['y_Delta', 'y1', 'y2', 'y_u', 'v_e'])
     """
     _check_axis_models(G=G, W_m=W_m, W_S=W_S, W_T=W_T, W_u=W_u)
     fs = check_positive("fs", fs)
@@ -430,6 +487,16 @@ def axis_loop_response(K, G, W_m, W_S, W_T, W_u, omega, *, fs, delay_samples=1):
     ndarray, shape (len(omega), 4, 2)
         Outputs ``y_Delta, y1, y2, y_u``; inputs ``u_Delta, v_r``; block
         structure ((1, 1), (1, 3)).
+
+    Examples
+    --------
+    >>> import control as ct
+    >>> from piezolib.problem import paper, genplant
+    >>> R = axis_loop_response(paper.controller(), paper.plant(), ct.tf([0.1], [1]),
+    ...                        paper.error_weight(), paper.output_weight(),
+    ...                        genplant.rolloff_weight(), [1e2, 1e3], fs=10e3)
+    >>> R.shape                           # (frequencies, y_Delta y1 y2 y_u, u_Delta v_r)
+    (2, 4, 2)
     """
     check_siso("K", K)
     check_proper("K", K)

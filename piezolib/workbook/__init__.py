@@ -20,9 +20,10 @@ tracking_study  notebook 06: Sec. V's runs on one study, their checks, claims an
 fsm_findings notebook 10: the FSM benchmark's claim rows and closing findings
 your_stage   notebook 08: the pipeline on a user's own records, one call per stage with its checks
 case_comparison  Cases I-III with several Case III controllers side by side (notebook 09)
+sweep_spec   the sweep specs of ``sweep``: their TOML layout, checks and points
 """
 
 __all__ = ["study", "pipeline", "loop", "experiments", "report", "style", "plotting", "figures",
            "reproduce", "cli", "outputs", "session", "interactive", "feedforward_cases",
            "weighting_findings", "tracking_setup", "tracking_study",
-           "case_comparison", "fsm_findings", "your_stage"]
+           "case_comparison", "fsm_findings", "your_stage", "sweep_spec"]

@@ -112,11 +112,11 @@ def _scheduler_address(text):
 
 
 def _sweep(args, stream):
-    from piezolib.workbook import sweep
+    from piezolib.workbook import sweep, sweep_spec
 
     try:
-        spec = sweep.load_spec(args.spec)
-    except sweep.SweepError as exc:
+        spec = sweep_spec.load_spec(args.spec)
+    except sweep_spec.SweepError as exc:
         print(f"python -m piezolib sweep: {exc}", file=sys.stderr)
         return 2
     try:
