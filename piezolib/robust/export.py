@@ -80,6 +80,12 @@ class SOSController:
         A section matrix that is not finite, real and (n >= 1, 6), a section
         not normalised (a0 != 1: every formula here divides by a0 = 1), a
         non-positive fs or a name that is not a C identifier.
+
+    Examples
+    --------
+    >>> c = SOSController(np.array([[0.5, 0.0, 0.0, 1.0, -0.5, 0.0]]), fs=1e3, name="K")
+    >>> c.sos.shape, c.fs, c.name                               # 0.5 / (1 - 0.5 z^-1)
+    ((1, 6), 1000.0, 'K')
     """
 
     sos: np.ndarray
@@ -588,6 +594,11 @@ def sos_filter(controller, x, dtype="float64"):
     -------
     ndarray
         Output samples (float64 array holding the ``dtype`` results).
+
+    Examples
+    --------
+    >>> sos_filter(np.array([[0.5, 0.0, 0.0, 1.0, -0.5, 0.0]]), [1.0, 1.0, 1.0, 1.0])   # a step
+    array([0.5   , 0.75  , 0.875 , 0.9375])
     """
     x = check_finite_array("x", x, ndim=1, min_length=1, real=True)
     f = SectionFilter(controller, dtype, _stacklevel=3)
@@ -647,6 +658,17 @@ def write_json(controller, path, meta=None):
     -----
     ExportWarning
         The float32 sections' response is off by more than the rounding explains.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> Kd = ct.c2d(ct.tf([100], [1, 100]), 1e-3, "tustin")       # a 100 rad/s low-pass at 1 kHz
+    >>> c = controller_sos(Kd, "K_lp")
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = write_json(c, Path(folder) / "K_lp.json", meta={"method": "tustin"})
+    ...     back = read_json(path)
+    >>> path.name, bool(np.array_equal(back.sos, c.sos)), back.fs
+    ('K_lp.json', True, 1000.0)
     """
     _check_controller(controller)
     meta = _meta_json(meta)
@@ -690,6 +712,16 @@ def read_json(path, dtype="float64"):
         stored in it (edited or corrupted), or its sections are not
         normalised (a0 != 1: the file names the section and the value;
         write_json always writes 1).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> Kd = ct.c2d(ct.tf([100], [1, 100]), 1e-3, "tustin")       # a 100 rad/s low-pass at 1 kHz
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = write_json(controller_sos(Kd, "K_lp"), Path(folder) / "K_lp.json")
+    ...     c32 = read_json(path, dtype="float32")                   # what a float target runs
+    >>> bool(np.array_equal(c32.sos, c32.sos.astype(np.float32))), c32.name   # float32 values
+    (True, 'K_lp')
     """
     key = {"float64": "sos_float64", "float32": "sos_float32"}[_dtype(dtype).__name__]
     path = _path("path", path)
@@ -743,6 +775,16 @@ def write_c_header(controller, path):
     -----
     ExportWarning
         The float sections' response is off by more than the rounding explains.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> Kd = ct.c2d(ct.tf([100], [1, 100]), 1e-3, "tustin")       # a 100 rad/s low-pass at 1 kHz
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = write_c_header(controller_sos(Kd, "K_lp"), Path(folder) / "K_lp.h")
+    ...     text = path.read_text()
+    >>> path.suffix, "K_lp" in text, "float" in text and "double" in text
+    ('.h', True, True)
     """
     _check_controller(controller)
     path = _path("path", path)
@@ -832,6 +874,20 @@ def export_controller(Kd, directory, name, meta=None, dtype="float32", rtol=None
         The float32 response differs from the float64 one by more than
         ``rtol`` (or than the rounding explains), with the worst error, its
         frequency and the DC gains.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> Kd = ct.c2d(ct.tf([100], [1, 100]), 1e-3, "tustin")       # a 100 rad/s low-pass at 1 kHz
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     deployed = export_controller(Kd, folder, "K_lp")
+    ...     files = sorted(p.name for p in Path(folder).iterdir())
+    >>> files, deployed.fs, deployed.sos.shape
+    (['K_lp.h', 'K_lp.json'], 1000.0, (1, 6))
+    >>> bool(np.array_equal(deployed.sos, deployed.sos.astype(np.float32)))   # float32 values
+    True
+    >>> round(float(deployed.sos[0, 4]), 4)                      # the pole at z = 0.9048
+    -0.9048
     """
     directory = _path("directory", directory, directory=True)
     meta = _meta_json(meta)
