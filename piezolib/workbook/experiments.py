@@ -82,6 +82,12 @@ def table4_reference(amplitude_V, periods=3, frequency_Hz=None, fs=paper.SAMPLIN
         Time [s].
     v_r : ndarray
         Reference [V].
+
+    Examples
+    --------
+    >>> t, v_r = table4_reference(20.0)          # 20 V actuator amplitude, 3 periods at 10 Hz
+    >>> t.shape, float(v_r.max()), float(t[-1])
+    ((3001,), 2.0, 0.3)
     """
     amplitude_V = check_positive("amplitude_V", amplitude_V)
     gain = check_positive("amplifier_gain", amplifier_gain)
@@ -121,6 +127,13 @@ def table4_measure(reference_V, v_y_V, discard_periods=1, frequency_Hz=None,
     -------
     HysteresisMeasure
         In actuator volts and micrometres.
+
+    Examples
+    --------
+    >>> from piezolib.problem.stage_data import load_hysteresis_loops
+    >>> loop = load_hysteresis_loops()[20.0]      # Case I: the reference is u_c itself
+    >>> round(table4_measure(loop.u_c_V, loop.v_y_V).percent, 1)   # Table 4: 9.08 %
+    9.2
     """
     reference_V = check_finite_array("reference_V", reference_V, ndim=1, min_length=8)
     v_y_V = check_finite_array("v_y_V", v_y_V, ndim=1, min_length=8)
@@ -189,6 +202,17 @@ def run_case(case, stage, v_r, model, controller=None, case_I_gain=None,
     ValueError
         An unknown case, Case III without a controller, or Case I without
         ``case_I_gain`` for a model without a ``static_part``.
+
+    Examples
+    --------
+    >>> from piezolib.problem.hysteresis_fits import read_dahl_model, workbook_dahl_path
+    >>> from piezolib.problem.stage import VirtualStage
+    >>> model = read_dahl_model(workbook_dahl_path())
+    >>> _, v_r = table4_reference(20.0, periods=1)
+    >>> run_case("II", VirtualStage(seed=0), v_r, model).feedforward
+    'Dahl eq. 14 (g_a = ...)'
+    >>> len(run_case("I", VirtualStage(seed=0), v_r, model))
+    1001
     """
     if not isinstance(case, str) or case not in CASES:
         raise ValueError(f"case must be one of {sorted(CASES)}, got {case!r}")
@@ -225,6 +249,14 @@ def case_table(case_values, columns):
     -------
     pandas.DataFrame
         Rows as in :func:`piezolib.problem.paper.table4` (its row index).
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> table = case_table({"I": [10.0, 12.0], "II": [5.0, 6.0], "III": [1.0, 1.5]},
+    ...                    pd.Index([1.0, 10.0], name="frequency_Hz"))
+    >>> table.loc["improvement_III_vs_I"].tolist()      # % of Case I's error removed
+    [90.0, 87.5]
     """
     check_type("case_values", case_values, dict, 'a dict {"I": ..., "II": ..., "III": ...}')
     missing = [c for c in CASES if c not in case_values]
@@ -456,7 +488,13 @@ def _table5_triangle(frequency_Hz, periods, amplitude_um, fs):
 def tracking_periods(frequency_Hz, discard_periods=DISCARD_PERIODS,
                      min_measured_s=MIN_MEASURED_S):
     """Periods to simulate: ``discard_periods`` plus whole periods covering
-    at least ``min_measured_s`` [s] (one period at least)."""
+    at least ``min_measured_s`` [s] (one period at least).
+
+    Examples
+    --------
+    >>> tracking_periods(1.0), tracking_periods(50.0)   # 2 discarded + at least 0.1 s measured
+    (3, 7)
+    """
     frequency_Hz = check_positive("frequency_Hz", frequency_Hz)
     discard_periods = check_integer("discard_periods", discard_periods, minimum=0)
     min_measured_s = check_positive("min_measured_s", min_measured_s)
@@ -485,6 +523,12 @@ def tracking_reference(frequency_Hz, periods, amplitude_um=None, fs=paper.SAMPLI
         Time [s].
     v_r : ndarray
         Reference [V].
+
+    Examples
+    --------
+    >>> t, v_r = tracking_reference(10.0, periods=3)    # 12 um triangle = 4 V of v_r
+    >>> t.shape, float(v_r.max()), v_r.flags.writeable
+    ((3001,), 4.0, False)
     """
     amplitude_um = paper.TRACKING_TEST["amplitude_um"] if amplitude_um is None else amplitude_um
     return _table5_triangle(check_positive("frequency_Hz", frequency_Hz),
