@@ -18,7 +18,10 @@ weighting_findings notebook 04: the closing findings beyond the claim rows
 tracking_setup  notebook 06: what Sec. V's runs use, the loop's margins, the mu_RP certificate
 tracking_study  notebook 06: Sec. V's runs on one study, their checks, claims and findings
 fsm_findings notebook 10: the FSM benchmark's claim rows and closing findings
-your_stage   notebook 08: the pipeline on a user's own records, one call per stage with its checks
+your_stage   notebook 08: a user's records to the plant model, one call per stage with its checks
+your_stage_hysteresis  notebook 08: the loops, the hysteresis model chosen, the feedforward check
+your_stage_control  notebook 08: the mu controller at the loop rate, its verification, experiments
+your_stage_claims  notebook 08: the claim rows, every stage's and the known truth's checks
 case_comparison  Cases I-III with several Case III controllers side by side (notebook 09)
 sweep_spec   the sweep specs of ``sweep``: their TOML layout, checks and points
 """
@@ -26,4 +29,5 @@ sweep_spec   the sweep specs of ``sweep``: their TOML layout, checks and points
 __all__ = ["study", "pipeline", "loop", "experiments", "report", "style", "plotting", "figures",
            "reproduce", "cli", "outputs", "session", "interactive", "feedforward_cases",
            "weighting_findings", "tracking_setup", "tracking_study",
-           "case_comparison", "fsm_findings", "your_stage", "sweep_spec"]
+           "case_comparison", "fsm_findings", "your_stage",
+           "your_stage_hysteresis", "your_stage_control", "your_stage_claims", "sweep_spec"]

@@ -1,4 +1,5 @@
-"""The stages of notebook 08 (piezolib.workbook.your_stage) on small records of known plants.
+"""Notebook 08's stages from the records to the plant model (piezolib.workbook.your_stage) on
+small records of known plants.
 
 The full-size pipeline (the example records, the Dahl fit, the DK design, the experiments)
 is run by the notebook itself; here each stage's own logic: what it computes from a record
@@ -8,14 +9,11 @@ plant passes on when there is no identification record.
 
 import control as ct
 import numpy as np
-import pandas as pd
 import pytest
 
-from piezolib import hysteresis as hy
 from piezolib import identification as ident
 from piezolib.records import Record
 from piezolib.workbook import your_stage as own
-from piezolib.workbook.report import ClaimTable
 
 FS = 5000.0
 PLANT = ct.tf([800.0], [1.0, 1000.0])           # first order, DC gain 0.8, 159 Hz
@@ -27,15 +25,6 @@ def chirp_record(n=1500, seed=0):
     u = np.concatenate([np.zeros(200), np.ones(300), 1 + 0.3 * rng.standard_normal(n - 500)])
     y = ident.zoh_simulate(PLANT, u, FS)
     return Record(u, 3.0 * y, FS, "V", "um", "u_c", "x")
-
-
-def loop_pair(freq=1.0, amplitude=1.5, n=400):
-    t = np.arange(n) / 100.0
-    v = amplitude - amplitude * np.cos(2 * np.pi * freq * t)
-    return v, PI_TRUTH.simulate(v)
-
-
-PI_TRUTH = hy.PIModel((0.0, 0.3, 0.6, 0.9), (0.8, 0.2, 0.15, 0.1), x0=0.1)
 
 
 def write_csv(path, rec):
@@ -143,84 +132,10 @@ def test_the_uncertainty_weight_covers_its_set_and_the_truth_where_it_can():
     assert "covers E_m: True" in str(weight)
 
 
-# -- hysteresis --------------------------------------------------------------------------------
-
-def test_prepare_loops_starts_each_loop_at_a_minimum_and_scales_to_sensor_volts():
-    v, x = loop_pair(n=600)
-    rec = Record(v[50:], 3.0 * x[50:], FS)            # from a maximum: cut at the next minimum
-    loops = own.prepare_loops(own.OwnRecords(None, {"a": rec}, FS), 3.0, 1,
-                              skip_transient=False)
-    u, y = loops.data["a"]
-    assert u[0] == pytest.approx(v.min(), abs=1e-3) and loops.dropped == {}
-    assert y.max() == pytest.approx(x.max())
-
-
-def quick_fits(monkeypatch):
-    """fit_dahl replaced by a two-play PI fit: the choice logic without the slow Dahl fit."""
-    monkeypatch.setattr(hy, "fit_dahl",
-                        lambda data, gamma_a, **kw: hy.fit_pi(data, n_plays=2, offset=True))
-
-
-def test_fit_hysteresis_holds_out_the_second_half_when_nothing_else_validates(monkeypatch):
-    quick_fits(monkeypatch)
-    loops = own.HysteresisLoops({"raw": loop_pair()}, {})
-    choice = own.fit_hysteresis(loops, ["raw"], [], gamma_a=30.0, plays=4, ceiling_percent=5.0)
-    assert choice.held_out_in_time and choice.validation_names == ["raw (second half)"]
-    assert "validated on the second half (held out in time)" in str(choice)
-    assert choice.chosen_name == "PI"                     # four plays fit the four-play truth
-    assert all(choice.checks.values())
-    skipped = own.Skipped(own.NO_PLANT_NOTE)
-    records = own.OwnRecords(None, {"raw": Record(*loop_pair(), FS)}, FS)
-    claims = own.record_claims(ClaimTable("own_stage", "test"), records, skipped, skipped,
-                               choice, skipped, skipped, skipped)
-    frame = claims.frame()
-    assert frame.quantity.tolist() == ["record sampling rate",
-                                       "Dahl: validation RMS on raw (second half)",
-                                       "PI: validation RMS on raw (second half)",
-                                       "hysteresis model chosen by validation"]
-    assert frame.note.str.contains("held out in time").sum() == 2
-
-
-def test_fit_hysteresis_validates_on_the_records_not_fitted(monkeypatch):
-    quick_fits(monkeypatch)
-    loops = own.HysteresisLoops({"a": loop_pair(), "b": loop_pair(1.3, 1.2)}, {})
-    choice = own.fit_hysteresis(loops, ("a",), ("a", "b"), gamma_a=30.0, plays=4,
-                                ceiling_percent=5.0)
-    assert not choice.held_out_in_time and choice.validation_names == ["b"]
-    assert choice.validation_rms("PI") == choice.scores["pooled RMS %"].min()
-    ff = own.feedforward_cross_check(choice)
-    assert ff.checks == {"the chosen model's feedforward inverts it (RMS below 0.5 %)": True}
-    with pytest.raises(ValueError, match="fit_loops"):
-        own.fit_hysteresis(loops, ("c",), (), gamma_a=30.0, plays=4, ceiling_percent=5.0)
-
-
-# -- the plant's stages without a plant, and the checks ----------------------------------------
+# -- without a plant ----------------------------------------------------------------------------
 
 def test_the_stages_that_need_the_plant_pass_a_skip_on():
     skipped = own.Skipped(own.NO_PLANT_NOTE)
     assert own.known_truth(skipped, np.ones(3)) is skipped
     assert own.uncertainty_weight(skipped, 0.01, 2, 2, np.ones(3)) is skipped
-    assert own.design_for_loop(skipped, skipped, {}, {}, {}, order=6, d_order=2, iterations=1,
-                               fs=1e4, delay_samples=1) is skipped
-    assert own.verify_design(skipped, skipped, skipped) is skipped
-    assert own.run_experiments(skipped, None, seed=1, noise_rms_V=0.0, amplitudes_V=(1.0,),
-                               periods=2, frequencies_Hz=(1.0,), amplitude_um=1.0,
-                               delay_samples=1, loop_rate_Hz=1e4) is skipped
-    assert own.stage_checks(skipped, None) == {}
-    assert own.summary_lines(own.OwnRecords(None, {}, FS), 1.0)[0] == own.NO_PLANT_NOTE
-
-
-def test_design_for_loop_refuses_a_rolloff_above_the_loops_nyquist_frequency():
-    model = an_identification(PLANT)
-    H_e = dict(low_frequency_bound=0.003, high_frequency_bound=2.0, bandwidth_rad_s=1260.0)
-    H_y = dict(low_frequency_bound=1.5, high_frequency_bound=1e-4, bandwidth_rad_s=7500.0)
-    rolloff = dict(hf_gain=10.0, lf_gain=1e4, frequency=4e4, order=2)     # pi 1e4 = 31416
-    with pytest.raises(ValueError, match="rolloff"):
-        own.design_for_loop(model, None, H_e, H_y, rolloff, order=6, d_order=2, iterations=1,
-                            fs=1e4, delay_samples=1)
-
-
-def test_known_truth_checks_without_a_truth_state_the_hysteresis_choice_only():
-    choice = own.HysteresisChoice({}, pd.DataFrame(), "Dahl", [], [], False, (), (), {}, 5.0)
-    assert own.known_truth_checks(None, None, None, choice, None, None) == {
-        "PI chosen (the stage's hysteresis is made of plays)": False}
+    assert not own.ran(skipped) and not own.ran(None)

@@ -5,9 +5,11 @@ Every ``extra_own_stage_<what>`` function takes the computed arrays and models
 with their units spelled out by the caller (nothing here assumes the paper's
 3 um/V or x10 amplifier), draws one figure, names it ``extra_own_stage_<what>``
 and returns it.  Each ``own_stage_<what>`` function draws the same figure from
-the result of a stage of :mod:`piezolib.workbook.your_stage` (what the notebook
-calls); for a stage that did not run (:class:`~piezolib.workbook.your_stage.Skipped`,
-no identification record) it draws a figure of the same name that says why.
+the result of a stage of :mod:`piezolib.workbook.your_stage`,
+:mod:`~piezolib.workbook.your_stage_hysteresis` or
+:mod:`~piezolib.workbook.your_stage_control` (what the notebook calls); for a stage
+that did not run (:class:`~piezolib.workbook.your_stage.Skipped`, no identification
+record) it draws a figure of the same name that says why.
 """
 
 import numpy as np
@@ -383,7 +385,7 @@ def own_stage_hysteresis(choice, input_scale=1.0, output_scale=1.0, input_label=
 
     Parameters
     ----------
-    choice : piezolib.workbook.your_stage.HysteresisChoice
+    choice : piezolib.workbook.your_stage_hysteresis.HysteresisChoice
     input_scale, output_scale, input_label, output_label
         As :func:`extra_own_stage_hysteresis`.
     """

@@ -9,6 +9,7 @@ import pytest
 from piezolib.hysteresis import PIModel
 from piezolib.records import Record
 from piezolib.workbook import your_stage as own
+from piezolib.workbook import your_stage_hysteresis as own_hysteresis
 from piezolib.workbook.figures import own_stage as F
 
 SKIPPED = own.Skipped(own.NO_PLANT_NOTE)
@@ -46,8 +47,8 @@ def test_the_hysteresis_figure_shows_the_first_validation_record():
     scores = pd.DataFrame({"RMS %": [0.5]},
                           index=pd.MultiIndex.from_tuples([("PI", "b")], names=["model", "record"]))
     fit = type("Fit", (), {"model": model})()
-    choice = own.HysteresisChoice({"PI": fit}, scores, "PI", [(v, model.simulate(v))], ["b"],
-                                  False, ("a",), (), {}, 5.0)
+    choice = own_hysteresis.HysteresisChoice({"PI": fit}, scores, "PI", [(v, model.simulate(v))],
+                                             ["b"], False, ("a",), (), {}, 5.0)
     fig = F.own_stage_hysteresis(choice, 10.0, 3.0, "actuator voltage [V]", "x [um]")
     assert fig.get_label() == "extra_own_stage_hysteresis"
     assert fig.axes[0].get_xlabel() == "actuator voltage [V]"

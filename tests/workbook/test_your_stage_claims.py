@@ -1,0 +1,52 @@
+"""Notebook 08's claim rows and closing checks (piezolib.workbook.your_stage_claims): the rows
+of a run without a plant, the checks of stages not run, the known truth's checks."""
+
+import numpy as np
+import pandas as pd
+
+from piezolib import hysteresis as hy
+from piezolib.records import Record
+from piezolib.workbook import your_stage as own
+from piezolib.workbook import your_stage_claims as own_claims
+from piezolib.workbook import your_stage_hysteresis as own_hysteresis
+from piezolib.workbook.report import ClaimTable
+
+FS = 5000.0
+PI_TRUTH = hy.PIModel((0.0, 0.3, 0.6, 0.9), (0.8, 0.2, 0.15, 0.1), x0=0.1)
+
+
+def loop_pair(n=400):
+    v = 1.5 - 1.5 * np.cos(2 * np.pi * np.arange(n) / 100.0)
+    return v, PI_TRUTH.simulate(v)
+
+
+def test_without_a_plant_the_claims_are_the_rate_and_the_hysteresis_rows(monkeypatch):
+    # fit_dahl replaced by a two-play PI fit: the rows without the slow Dahl fit
+    monkeypatch.setattr(hy, "fit_dahl",
+                        lambda data, gamma_a, **kw: hy.fit_pi(data, n_plays=2, offset=True))
+    loops = own_hysteresis.HysteresisLoops({"raw": loop_pair()}, {})
+    choice = own_hysteresis.fit_hysteresis(loops, ["raw"], [], gamma_a=30.0, plays=4,
+                                           ceiling_percent=5.0)
+    skipped = own.Skipped(own.NO_PLANT_NOTE)
+    records = own.OwnRecords(None, {"raw": Record(*loop_pair(), FS)}, FS)
+    claims = own_claims.record_claims(ClaimTable("own_stage", "test"), records, skipped,
+                                      skipped, choice, skipped, skipped, skipped)
+    frame = claims.frame()
+    assert frame.quantity.tolist() == ["record sampling rate",
+                                       "Dahl: validation RMS on raw (second half)",
+                                       "PI: validation RMS on raw (second half)",
+                                       "hysteresis model chosen by validation"]
+    assert frame.note.str.contains("held out in time").sum() == 2
+
+
+def test_stages_not_run_have_no_checks_and_the_summary_says_why():
+    skipped = own.Skipped(own.NO_PLANT_NOTE)
+    assert own_claims.stage_checks(skipped, None) == {}
+    assert own_claims.summary_lines(own.OwnRecords(None, {}, FS), 1.0)[0] == own.NO_PLANT_NOTE
+
+
+def test_known_truth_checks_without_a_truth_state_the_hysteresis_choice_only():
+    choice = own_hysteresis.HysteresisChoice({}, pd.DataFrame(), "Dahl", [], [], False, (), (),
+                                             {}, 5.0)
+    assert own_claims.known_truth_checks(None, None, None, choice, None, None) == {
+        "PI chosen (the stage's hysteresis is made of plays)": False}
