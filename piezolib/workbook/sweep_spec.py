@@ -64,7 +64,16 @@ _CONTROLLER = "controller"
 
 
 class SweepError(ValueError):
-    """A sweep spec that cannot be run (names the file, the table and the parameter)."""
+    """A sweep spec that cannot be run (names the file, the table and the parameter).
+
+    Examples
+    --------
+    >>> try:
+    ...     spec_from_dict({"name": "demo", "grid": {"weights.omega_x": [1.0]}})
+    ... except SweepError as exc:
+    ...     print(exc)
+    [grid] unknown parameter 'weights.omega_x': [weights] has the fields ['M_e', 'M_y', 'eps_e', 'eps_y', 'omega_e', 'omega_y']
+    """
 
 
 @dataclass(frozen=True)
@@ -81,6 +90,15 @@ class SweepPoint:
         The point's whole study (base, ``[set]`` and ``params``).
     options : dict
         The evaluation's options (``{"controller": "fixed_order"}``).
+
+    Examples
+    --------
+    >>> spec = spec_from_dict({"name": "demo", "grid": {"weights.omega_e": [1000.0, 1260.0]}})
+    >>> point = spec.points()[0]
+    >>> point.index, point.params, point.options
+    (1, {'weights.omega_e': 1000.0}, {'controller': 'fixed_order'})
+    >>> point.study.weights.omega_e, len(point.key("evaluate_point"))
+    (1000.0, 16)
     """
 
     index: int
@@ -113,6 +131,15 @@ class SweepSpec:
         points drawn with ``seed``.
     samples, seed : int or None
     description : str
+
+    Examples
+    --------
+    >>> spec = spec_from_dict({"name": "demo", "random": {"samples": 5, "seed": 1,
+    ...                                                   "weights.omega_e": [800.0, 2500.0]}})
+    >>> spec.parameters, len(spec.points())
+    (('weights.omega_e',), 5)
+    >>> spec.directory.relative_to(outputs.project_root()).as_posix()
+    'runs/sweeps/demo'
     """
 
     name: str
@@ -173,7 +200,13 @@ class SweepSpec:
 
 # --------------------------------------------------------------------------- specs
 def specs_dir():
-    """``studies/sweeps/``: the sweep specs of the checkout."""
+    """``studies/sweeps/``: the sweep specs of the checkout.
+
+    Examples
+    --------
+    >>> specs_dir().relative_to(outputs.project_root()).as_posix()
+    'studies/sweeps'
+    """
     return studies.studies_dir() / "sweeps"
 
 
@@ -185,6 +218,12 @@ def load_spec(spec):
     SweepError
         Unknown name, missing file, TOML error, or anything :func:`spec_from_dict`
         refuses (the message names the file).
+
+    Examples
+    --------
+    >>> spec = load_spec("omega_spread_order")      # studies/sweeps/omega_spread_order.toml
+    >>> spec.parameters, len(spec.points()), spec.base.uncertainty.weight
+    (('weights.omega_e', 'uncertainty.spread', 'design.order'), 12, 'fitted')
     """
     if isinstance(spec, SweepSpec):
         return spec
@@ -230,6 +269,16 @@ def spec_from_dict(data, relative_to=None):
     SweepError
         Naming the key: an unknown key, table or parameter, an empty or
         repeated list of values, a bad range, or a value the study refuses.
+
+    Examples
+    --------
+    >>> spec = spec_from_dict({"name": "demo", "set": {"design": {"max_iter": 2}},
+    ...                        "grid": {"weights": {"omega_e": [1000.0, 1260.0]},
+    ...                                 "design": {"order": [4, 6]}}})
+    >>> len(spec.points()), spec.points()[-1].params              # nothing is evaluated
+    (4, {'weights.omega_e': 1260.0, 'design.order': 6})
+    >>> spec.base.design.max_iter
+    2
     """
     if not isinstance(data, dict):
         raise SweepError(f"data must be a sweep spec, a dict of keys, got {type(data).__name__}")
