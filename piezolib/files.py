@@ -26,7 +26,7 @@ Examples
 >>> verify_file(path, entry)
 Traceback (most recent call last):
 ...
-piezolib.records.RecordError: ...loop.csv, line 3: truncated: the file ends after line 2, ...
+piezolib.records...RecordError: ...loop.csv, line 3: truncated: the file ends after line 2, ...
 >>> folder.cleanup()
 """
 
@@ -318,7 +318,7 @@ def verify_file(path, entry, rows=None, fs=None):
     >>> verify_file(path, entry)
     Traceback (most recent call last):
     ...
-    piezolib.records.RecordError: ...r.csv, line 1: content differs from the manifest (SHA-256) in lines 1-3
+    piezolib.records...RecordError: ...r.csv, line 1: content differs from the manifest (SHA-256) in lines 1-3
     >>> folder.cleanup()
     """
     path = Path(path)
