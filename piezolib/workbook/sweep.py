@@ -78,6 +78,21 @@ class SweepResult:
         ``{"table": csv path, "parquet": path or None, "figure": png path or None}``.
     backend : str
         Where the points ran (``"1 local worker(s)"``, a scheduler's address).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from unittest import mock
+    >>> from piezolib.workbook.sweep_spec import spec_from_dict
+    >>> spec = spec_from_dict({"name": "demo", "grid": {"design.order": [4, 6]}})
+    >>> with (tempfile.TemporaryDirectory() as root,          # a dry run evaluates nothing
+    ...       mock.patch.dict(os.environ, {"PIEZOLIB_ROOT": root})):
+    ...     result = run_sweep(spec, jobs=1, dry_run=True)
+    [1/2] order=4  (to run, key ...)
+    [2/2] order=6  (to run, key ...)
+    sweep demo: 2 points, 0 stored, 2 to run; outputs in ...
+    >>> result.evaluated, result.reused, list(result.table.columns)
+    (0, 0, ['point', 'design.order', 'controller', 'stored', 'key'])
     """
 
     spec: specs.SweepSpec
@@ -339,6 +354,18 @@ def read_record(path, key=None):
     dict or None
         The record (``metrics``, ``seconds``, ``library``, ...) when it is
         intact (its SHA-256 matches), of this format and of ``key``.
+
+    Examples
+    --------
+    >>> import json, tempfile
+    >>> from piezolib import files
+    >>> doc = files.seal({"format": specs.RECORD_FORMAT, "key": "abc", "metrics": {"mu_RP": 0.9}})
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = Path(folder) / "abc.json"
+    ...     _ = path.write_text(json.dumps(doc))
+    ...     print(read_record(path, "abc")["metrics"], read_record(path, "other"),
+    ...           read_record(Path(folder) / "missing.json"))
+    {'mu_RP': 0.9} None None
     """
     path = Path(path) if isinstance(path, (str, os.PathLike)) else None
     if path is None:
@@ -382,6 +409,20 @@ def run_sweep(spec, jobs=None, scheduler=None, evaluate=evaluate_point, dry_run=
     Returns
     -------
     SweepResult
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from unittest import mock
+    >>> spec = specs.load_spec("omega_spread_order")    # studies/sweeps/omega_spread_order.toml
+    >>> with (tempfile.TemporaryDirectory() as root,
+    ...       mock.patch.dict(os.environ, {"PIEZOLIB_ROOT": root})):
+    ...     result = run_sweep(spec, jobs=1, dry_run=True)   # lists the points, runs nothing
+    [1/12] omega_e=1000  spread=0.02  order=4  (to run, key ...)
+    ...
+    sweep omega_spread_order: 12 points, 0 stored, 12 to run; outputs in ...
+    >>> len(result.table), result.evaluated
+    (12, 0)
     """
     stream = sys.stdout if stream is None else stream
     if not callable(evaluate):
@@ -480,7 +521,17 @@ def _client(scheduler):
 
 def check_scheduler_address(address):
     """Raise a ValueError naming ``scheduler`` unless ``address`` looks like
-    ``tcp://host:port`` (or another dask protocol)."""
+    ``tcp://host:port`` (or another dask protocol).
+
+    Examples
+    --------
+    >>> check_scheduler_address("tcp://127.0.0.1:8786")
+    'tcp://127.0.0.1:8786'
+    >>> check_scheduler_address("localhost")
+    Traceback (most recent call last):
+    ...
+    ValueError: scheduler must be a dask scheduler address such as 'tcp://127.0.0.1:8786' or a distributed.Client, got 'localhost'
+    """
     protocol, _, rest = address.partition("://") if isinstance(address, str) else ("", "", "")
     host, _, port = rest.rpartition(":")
     if protocol not in ("tcp", "tls", "inproc", "ws", "wss", "ucx") or not (
