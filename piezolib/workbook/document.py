@@ -97,12 +97,25 @@ def print_css(paper="A4"):
 
 
 def report_notebook():
-    """Path of the reproduction report notebook (``notebooks/07_*.ipynb``)."""
+    """Path of the reproduction report notebook (``notebooks/07_*.ipynb``).
+
+    Examples
+    --------
+    >>> report_notebook().name
+    '07_reproduction_report.ipynb'
+    """
     return reproduce.list_notebooks([REPORT_NOTEBOOK])[0]
 
 
 def default_output(study=studies.REFERENCE):
-    """``runs/report/<study>.html``: where the document of ``study`` goes by default."""
+    """``runs/report/<study>.html``: where the document of ``study`` goes by default.
+
+    Examples
+    --------
+    >>> from piezolib.workbook.outputs import project_root
+    >>> default_output("wide_error_weight").relative_to(project_root()).as_posix()
+    'runs/report/wide_error_weight.html'
+    """
     return report_dir() / f"{studies.load(study).name}.html"
 
 

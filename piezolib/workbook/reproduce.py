@@ -56,7 +56,14 @@ KERNEL_ENVIRONMENT = {"MPLBACKEND": "Agg", "OPENBLAS_NUM_THREADS": "1"}
 
 
 class NotebookFailure(RuntimeError):
-    """A notebook cell raised; carries the notebook name and the cell index."""
+    """A notebook cell raised; carries the notebook name and the cell index.
+
+    Examples
+    --------
+    >>> exc = NotebookFailure("05_mu_synthesis.ipynb", 3, "x = 1 / 0", "ZeroDivisionError")
+    >>> print(exc)
+    05_mu_synthesis.ipynb: cell 3 failed ('x = 1 / 0'): ZeroDivisionError
+    """
 
     def __init__(self, notebook, cell_index, source, error):
         self.notebook, self.cell_index, self.source, self.error = (
@@ -67,7 +74,13 @@ class NotebookFailure(RuntimeError):
 
 def list_notebooks(selection=None):
     """The numbered notebooks in pipeline order, optionally only those whose
-    name starts with one of the prefixes in ``selection`` (e.g. ``["00"]``)."""
+    name starts with one of the prefixes in ``selection`` (e.g. ``["00"]``).
+
+    Examples
+    --------
+    >>> [path.name for path in list_notebooks(["00", "07"])]
+    ['00_published_design_audit.ipynb', '07_reproduction_report.ipynb']
+    """
     paths = sorted(notebooks_dir().glob("[0-9][0-9]_*.ipynb"))
     selection = _prefixes(selection)
     if selection:
@@ -111,6 +124,12 @@ def notebook_waves(paths):
     the controllers come from the committed artifact or the study's disk
     cache) and may run side by side; the notebooks named in
     :data:`GATHERING` form a last wave.  Empty waves are left out.
+
+    Examples
+    --------
+    >>> waves = notebook_waves(list_notebooks(["05", "07"]))
+    >>> [[path.name for path in wave] for wave in waves]     # the report gathers, last
+    [['05_mu_synthesis.ipynb'], ['07_reproduction_report.ipynb']]
     """
     paths = _notebook_paths(paths, must_exist=False)
     first = [p for p in paths if not p.name.startswith(GATHERING)]
@@ -123,6 +142,11 @@ def default_jobs():
 
     Each kernel computes on one core (``OPENBLAS_NUM_THREADS=1``); more than
     two at once mostly adds memory.
+
+    Examples
+    --------
+    >>> default_jobs() in (1, 2)
+    True
     """
     return max(1, min(2, os.cpu_count() or 1))
 
@@ -135,6 +159,16 @@ def inject_study(nb, study):
     ------
     ValueError
         When the notebook has no cell tagged ``parameters``.
+
+    Examples
+    --------
+    >>> import nbformat
+    >>> nb = nbformat.v4.new_notebook()
+    >>> cell = nbformat.v4.new_code_cell('study = "reference"')
+    >>> cell.metadata["tags"] = ["parameters"]
+    >>> nb.cells = [cell]
+    >>> [c.source for c in inject_study(nb, "wide_error_weight").cells]
+    ['study = "reference"', "study = 'wide_error_weight'  # injected by reproduce"]
     """
     import nbformat
 
@@ -153,7 +187,15 @@ def inject_study(nb, study):
 
 def study_spec(study):
     """What :func:`inject_study` writes for ``study``: a name as it is, a TOML file as an
-    absolute path (the kernel runs in ``notebooks/``, where a relative path means another file)."""
+    absolute path (the kernel runs in ``notebooks/``, where a relative path means another file).
+
+    Examples
+    --------
+    >>> study_spec("wide_error_weight"), study_spec(None)
+    ('wide_error_weight', None)
+    >>> Path(study_spec("studies/wide_error_weight.toml")).is_absolute()
+    True
+    """
     if study is None:
         return None
     return str(Path(study).resolve()) if str(study).endswith(".toml") else str(study)
