@@ -14,7 +14,9 @@ every subcommand of ``python -m piezolib``.
 import argparse
 import importlib
 import inspect
+import pkgutil
 import re
+import types
 
 import control as ct
 import matplotlib.figure
@@ -30,14 +32,33 @@ from piezolib.problem.stage import VirtualStage
 from piezolib.problem.stage_batch import StageBatch
 from piezolib.workbook import cli
 
-LAYERS = {
-    "problem": ("paper", "genplant", "stage", "stage_batch", "stage_calibration", "stage_data",
-                "design", "analysis", "hysteresis_fits", "stage_hysteresis", "paths",
-                "fsm_benchmark"),
-    "workbook": ("study", "pipeline", "loop", "experiments", "report", "style", "plotting",
-                 "reproduce", "cli", "outputs", "session", "two_dof", "set_tracking", "sweep",
-                 "tables", "document"),
+#: Subpackages of the workbook left out of this sweep, with the reason.
+SKIPPED_SUBPACKAGES = {
+    "workbook.figures": "draws the figures of results the other layers compute and check; its "
+                        "functions take those results, and tests/workbook/figures checks them "
+                        "(its own bad-input sweep is still to be written)",
+    "workbook.interactive": "the notebook widgets' panels, built from the same checked functions; "
+                            "tests/workbook/interactive checks them",
 }
+
+
+def _public_modules(layer):
+    """Every public module (name not starting with ``_``) of ``piezolib.<layer>``, found on
+    disk: a module added tomorrow is swept without editing this file."""
+    package = importlib.import_module(f"piezolib.{layer}")
+    names = []
+    for info in pkgutil.iter_modules(package.__path__):
+        if info.name.startswith("_"):
+            continue
+        if info.ispkg:
+            assert f"{layer}.{info.name}" in SKIPPED_SUBPACKAGES, \
+                f"piezolib.{layer}.{info.name} is a subpackage this sweep does not cover"
+            continue
+        names.append(info.name)
+    return tuple(sorted(names))
+
+
+LAYERS = {layer: _public_modules(layer) for layer in ("problem", "workbook")}
 
 G, H_M, H_E, H_Y, K = paper.problem()
 S = ct.tf("s")
@@ -59,6 +80,51 @@ MEMBERS = importlib.import_module("piezolib.uncertainty").random_model_set(G, 0.
 AXIS_G = ct.tf([2e7], [1.0, 400.0, 4e7])             # a mirror-like resonance, V -> um
 SECTIONS_10K = importlib.import_module("piezolib.robust").controller_sos(
     ct.tf([1.0, -0.5], [1.0, -0.2], 1 / FS), name="other")
+
+
+def bare(cls):
+    """An instance of ``cls`` with none of its fields: passes a type check, holds nothing.
+
+    The filler of a result argument where the bad value of another argument must be refused
+    before the result is read."""
+    if issubclass(cls, tuple):                          # a namedtuple
+        return cls(*[None] * len(cls._fields))
+    return object.__new__(cls)
+
+
+class Fill(dict):
+    """The valid call is not run (a design or notebook-size run); these values fill its
+    required arguments beside ``FILLERS`` in the bad calls."""
+
+
+def _mod(name):
+    return importlib.import_module(f"piezolib.{name}")
+
+
+_CS, _CB, _HC = _mod("problem.coefficient_set"), _mod("problem.coefficient_box"), \
+    _mod("problem.hysteresis_choice")
+_VER, _WEI, _SI = _mod("problem.verification"), _mod("problem.weighting"), \
+    _mod("problem.stage_identification")
+_FM, _FC = _mod("problem.fsm_models"), _mod("problem.fsm_control")
+_FF, _FF_FIND = _mod("workbook.feedforward_cases"), _mod("workbook.fsm_findings")
+_TSET, _TSTUDY, _OWN = _mod("workbook.tracking_setup"), _mod("workbook.tracking_study"), \
+    _mod("workbook.your_stage")
+_OWN_H, _OWN_C = _mod("workbook.your_stage_hysteresis"), _mod("workbook.your_stage_control")
+P_DESIGN = importlib.import_module("piezolib.problem.genplant").generalized_plant(G, H_M, H_E, H_Y)
+M_CLOSED = importlib.import_module("piezolib.problem.genplant").closed_loop_matrix(
+    K, G, H_M, H_E, H_Y)
+P_ROLLOFF = importlib.import_module("piezolib.problem.genplant").design_plant(G, H_M, H_E, H_Y)
+SURVEY = _CS.survey_model_set(G, 0.05, 2)
+DISCRETE = ct.tf([1.0], [1.0, -0.5], 1 / FS)
+K_DISCRETE = ct.tf([1.0, -0.5], [1.0, -0.2], 1 / FS)
+FSM_MODEL = ct.ss(np.zeros((1, 1)), np.ones((1, 3)), np.ones((3, 1)), np.zeros((3, 3)), 1 / 6400)
+CONTROLLER_SET = types.SimpleNamespace(mu={"a": 1.0}, K_full=K, K_fixed=K)
+RESULT = {"text": "abc", "number": 3}            # where a result of an earlier step belongs
+CHIRP = bare(importlib.import_module("piezolib.problem.stage_data").ChirpExperiment)
+CHIRPS = {"text": "abc", "empty": {}, "not chirps": {"a": 1}}
+ORDERS = {"empty": [], "zero": [0], "text": "x"}
+PAIR = {"out of range": (3, 0), "negative": (-1, 0), "text": "x"}
+BAND = {"reversed": (50.0, 5.0), "negative": (-5.0, 50.0), "text": "x"}
 
 
 class InTmp(str):
@@ -481,6 +547,368 @@ CASES = {
     "reproduce.remove_stale_temporaries": (None, {"study": STUDY,
                                                   "older_than_s": {"negative": -1.0,
                                                                    "nan": np.nan}}),
+    # problem.published_audit
+    "published_audit.pole_table": (dict(sys=G), {"sys": {"text": "x", "discrete": DISCRETE,
+                                                         "two inputs": LTI["two inputs"]}}),
+    "published_audit.audit_nominal_loop": (None, {"G": {"text": "x", "two inputs":
+                                                        LTI["two inputs"]},
+                                                  "K": {"text": "x", "two inputs":
+                                                        LTI["two inputs"]},
+                                                  "H_m": {"text": "x"}, "omega": GRID}),
+    # problem.stage_identification
+    "stage_identification.case_I_calibration": (None, {"stage": STAGE_BAD,
+                                                       "loops": {"empty": {}, "text": "abc"}}),
+    "stage_identification.chirp_settings_table": (None, {"chirps": CHIRPS}),
+    "stage_identification.chirp_checks": (Fill(chirps={"a": CHIRP}),
+                                          {"chirps": CHIRPS, "stage": STAGE_BAD}),
+    "stage_identification.identify_chirp": (Fill(chirp=CHIRP), {"chirp": RESULT,
+                                                                "stage": STAGE_BAD,
+                                                                "fs": POSITIVE}),
+    "stage_identification.coefficient_table": (dict(G=G), {"G": {"text": "x",
+                                                                 "not a model": np.ones(2)}}),
+    "stage_identification.validate_on_chirp": (Fill(chirp=CHIRP),
+                                               {"model": {"text": "x", "not a model": np.ones(2)},
+                                                "chirp": RESULT, "stage": STAGE_BAD,
+                                                "fs": POSITIVE}),
+    "stage_identification.compare_with_truth": (dict(model=G, truth=G),
+                                                {"model": {"text": "x"}, "truth": {"text": "x"}}),
+    "stage_identification.pole_pair_frequencies_Hz": (dict(sys=G), {"sys": {"text": "x"}}),
+    # problem.coefficient_set
+    "coefficient_set.envelope_grid": (dict(points=50), {"points": POSITIVE_INT}),
+    "coefficient_set.covered_spreads": (None, {"H_m": {"text": "x"}, "G": {"text": "x"},
+                                               "omega": GRID, "levels": POSITIVE_INT}),
+    "coefficient_set.margin_gauges": (dict(G=G, K=K, omega=OMEGA),
+                                      {"G": {"text": "x"}, "K": {"text": "x"}, "omega": GRID}),
+    "coefficient_set.survey_model_set": (dict(G=G, spread=0.05, levels=2),
+                                         {"G": {"text": "x"}, "spread": POSITIVE,
+                                          "levels": POSITIVE_INT}),
+    "coefficient_set.envelope_peaks": (Fill(survey=SURVEY),
+                                       {"survey": RESULT, "omega": GRID,
+                                        "grid_sizes": {"empty": [], "zero": [0], "text": "x"}}),
+    "coefficient_set.cover_envelope": (Fill(survey=SURVEY),
+                                       {"survey": RESULT, "omega": GRID, "H_m": {"text": "x"},
+                                        "order": POSITIVE_INT}),
+    "coefficient_set.compare_spreads": (
+        Fill(survey=SURVEY, spreads=[0.05], cover=bare(_CS.EnvelopeCover),
+             peaks=bare(_CS.EnvelopePeaks)),
+        {"survey": RESULT, "cover": RESULT, "peaks": RESULT, "omega": GRID,
+         "spreads": {"negative": [-0.1], "nan": [np.nan], "text": "x"}, "order": POSITIVE_INT}),
+    "coefficient_set.loop_margins": (Fill(survey=SURVEY), {"survey": RESULT, "K": {"text": "x"},
+                                                           "omega": GRID}),
+    "coefficient_set.critical_offsets_kind": (dict(offsets=[1.0, -1.0, 1.0, -1.0, 1.0, -1.0]),
+                                              {"offsets": {"empty": [], "nan": [np.nan],
+                                                           "text": "ab", "2-D": np.ones((2, 2))}}),
+    "coefficient_set.findings": (Fill(peaks=bare(_CS.EnvelopePeaks),
+                                      cover=bare(_CS.EnvelopeCover),
+                                      margins=bare(_CS.LoopMargins), mu_RS_paper=0.5),
+                                 {"peaks": RESULT, "cover": RESULT, "margins": RESULT,
+                                  "mu_RS_paper": {"text": "x", "nan": np.nan, "negative": -1.0}}),
+    # problem.dahl_audit
+    "dahl_audit.steady_state_table": (dict(models={"bliman_sorine": DAHL}),
+                                      {"models": {"text": "abc", "empty": {},
+                                                  "not models": {"a": 1}}}),
+    "dahl_audit.audit_published": (None, {"models": {"text": "abc", "empty": {},
+                                                     "not models": {"a": 1}}}),
+    # problem.hysteresis_choice
+    "hysteresis_choice.candidate_label": (dict(key=("bliman_sorine", False, "rest")),
+                                          {"key": {"text": "x", "short": ("a", 1),
+                                                   "number form": (3, False, "rest")}}),
+    "hysteresis_choice.case_I_fits": (None, {"loops": {"text": "abc", "empty": {},
+                                                       "not records": {5.0: 1.0}}}),
+    "hysteresis_choice.lower_reversals": (None, {"case_I": RESULT}),
+    "hysteresis_choice.start_effect": (None, {"case_I": RESULT}),
+    "hysteresis_choice.implied_unit_scale": (None, {"case_I": RESULT}),
+    "hysteresis_choice.per_amplitude_fits": (None, {"case_I": RESULT}),
+    "hysteresis_choice.compare_models": (None, {"case_I": RESULT}),
+    # problem.weighting
+    "weighting.template_asymptotes": (dict(error_params=paper.ERROR_WEIGHT,
+                                           output_params=paper.OUTPUT_WEIGHT),
+                                      {"error_params": RESULT, "output_params": RESULT}),
+    "weighting.eq16_entries": (dict(P=P_DESIGN, G=G, H_m=H_M, H_e=H_E, H_y=H_Y, omega=OMEGA),
+                               {"P": {"text": "x", "not a model": np.ones((2, 2))},
+                                "G": {"text": "x"}, "H_e": {"text": "x"}, "omega": GRID}),
+    "weighting.eq18_error": (dict(M=M_CLOSED, K=K, G=G, H_m=H_M, H_e=H_E, H_y=H_Y, omega=OMEGA),
+                             {"M": {"text": "x"}, "K": {"text": "x"}, "G": {"text": "x"},
+                              "H_y": {"text": "x"}, "omega": GRID}),
+    "weighting.templates_met": (None, {"controllers": {"text": "abc", "empty": {},
+                                                       "not a model": {"K": 3.0}},
+                                       "G": {"text": "x"}, "omega": GRID,
+                                       "published": {"number": 3, "unknown": ["nope"]}}),
+    # problem.verification
+    "verification.regularisation_check": (None, {"G": PLANT, "omega": GRID}),
+    "verification.sampled_radii": (dict(G=G, K=K, fs=FS, delays=(0, 1)),
+                                   {"G": {"text": "x"}, "K": {"text": "x"}, "fs": POSITIVE,
+                                    "delays": {"negative": [-1], "fraction": [0.5],
+                                               "number": 3}}),
+    "verification.mu_on": (dict(P=P_ROLLOFF, K=K, omega=OMEGA),
+                           {"P": {"text": "x"}, "K": {"text": "x"}, "omega": GRID}),
+    "verification.delay_aware_problem": (
+        dict(G=G, H_m=H_M, H_e=H_E, H_y=H_Y, K_nodelay=K, K_deployed=K, fs=FS, delay_samples=1,
+             omega=OMEGA),
+        {"G": PLANT, "K_nodelay": {"text": "x"}, "K_deployed": {"text": "x"}, "fs": POSITIVE,
+         "delay_samples": {"negative": -1}, "omega": GRID}),
+    "verification.dk_iteration_checks": (None, {"run": RESULT}),
+    "verification.compare_rederived": (Fill(used=CONTROLLER_SET, rederived=CONTROLLER_SET),
+                                       {"used": RESULT, "rederived": RESULT, "rtol": POSITIVE}),
+    "verification.reduction_by_order": (Fill(P=P_DESIGN, orders=[4]),
+                                        {"K": {"text": "x"}, "G": {"text": "x"},
+                                         "P": {"text": "x"}, "orders": ORDERS, "omega": GRID}),
+    "verification.verify_delay_aware": (
+        Fill(K_full=K, K_reduced=K, K_fixed=K, plant=P_DESIGN, delay_samples=1),
+        {"K_full": {"text": "x"}, "K_reduced": {"text": "x"}, "K_fixed": {"text": "x"},
+         "plant": {"text": "x"}, "fs": POSITIVE, "delay_samples": {"negative": -1},
+         "fixed_mu": {"text": "x", "negative": -1.0}, "omega": GRID}),
+    "verification.delay_sweep": (Fill(d_order=1, grid=OMEGA),
+                                 {"G": PLANT, "fs": POSITIVE,
+                                  "d_order": {"negative": -1, "fraction": 0.5},
+                                  "grid": GRID, "delays": {"negative": [-1], "number": 3},
+                                  "known": {"text": "abc", "not pairs": {1: 3.0}}}),
+    "verification.tustin_check": (dict(K=K, G=G, fs=FS), {"K": {"text": "x"}, "G": {"text": "x"},
+                                                          "fs": POSITIVE}),
+    "verification.table3_study": (
+        Fill(published=K, nodelay_full=K, nodelay_reduced=K, delay_aware_full=K,
+             delay_aware_fixed=K, delay_samples=1, nodelay_mu=0.9),
+        {"published": {"text": "x"}, "nodelay_full": {"text": "x"},
+         "delay_aware_fixed": {"text": "x"}, "fs": POSITIVE, "delay_samples": {"negative": -1},
+         "nodelay_mu": {"text": "x", "nan": np.nan}, "omega": GRID}),
+    "verification.loop_table": (dict(G=G, controllers={"K": K}),
+                                {"G": {"text": "x"}, "controllers": {"text": "abc",
+                                                                     "not a model": {"K": 3.0}}}),
+    "verification.summary_lines": (
+        Fill(nodelay_radii=pd.Series({0: 0.5}), designs=bare(_VER.DesignVerification),
+             study=bare(_VER.Table3Study), paper_values={"mu_RP": 0.96}),
+        {"nodelay_radii": {"text": "abc", "number": 3}, "designs": RESULT, "study": RESULT,
+         "paper_values": {"text": "abc", "no mu_RP": {}}}),
+    # problem.coefficient_box
+    "coefficient_box.lft_exactness": (None, {"G": PLANT, "K": LTI_PROPER}),
+    "coefficient_box.stability_margins": (
+        Fill(controllers={"K": K}),
+        {"G": PLANT, "H_m": {"text": "x"},
+         "controllers": {"text": "abc", "empty": {}, "not a model": {"K": 3.0}},
+         "grid": {"text": "x", "reversed": (1e5, 1e2, 10)},
+         "certificate_grid": {"text": "x", "zero points": (1.0, 1e6, 0)},
+         "exact": {"text": "abc"}}),
+    "coefficient_box.spread_bounds": (
+        Fill(spread=0.05, critical=bare(_mod("uncertainty").ParametricMargin)),
+        {"G": PLANT, "K": LTI_PROPER, "spread": POSITIVE, "critical": RESULT,
+         "grid": {"text": "x", "reversed": (1e5, 1e2, 10)}, "peak_points": {"negative": -1},
+         "name": {"number": 3}}),
+    "coefficient_box.recomputed_tradeoff": (None, {"designs": {"text": "abc",
+                                                               "not designs": [1, 2]},
+                                                   "G": PLANT, "fs": POSITIVE}),
+    "coefficient_box.check_chosen_design": (
+        Fill(design=None, deployed=K, sections={_CB.DEPLOYED: SECTIONS_10K}),
+        {"design": {"text": "abc"}, "deployed": {"text": "x"},
+         "sections": {"text": "abc", "no deployed": {}}, "G": PLANT, "H_e": {"text": "x"},
+         "fs": POSITIVE, "grids": {"text": "x", "empty": [], "not triples": [(1.0, 2.0)]},
+         "spread": POSITIVE, "delay_samples": {"negative": -1, "fraction": 0.5}}),
+    "coefficient_box.mixed_claims": (Fill(chosen=bare(_CB.ChosenDesignCheck),
+                                          tracking=pd.DataFrame()),
+                                     {"chosen": RESULT, "tracking": RESULT}),
+    "coefficient_box.summary_lines": (
+        Fill(lft=bare(_CB.LFTExactness), margins=bare(_CB.BoxMargins),
+             bounds=bare(_CB.SpreadBounds), chosen=bare(_CB.ChosenDesignCheck),
+             tracking=pd.DataFrame()),
+        {"lft": RESULT, "margins": RESULT, "bounds": RESULT, "chosen": RESULT,
+         "tracking": RESULT, "published": {"number": 3}}),
+    # problem.fsm_models, fsm_control
+    "fsm_models.level_blas": (None, {"folder": {"number": 3, "no manifest": InTmp(".", None)}}),
+    "fsm_models.fit_linear_models": (Fill(blas=bare(_FM.LevelBLAs), orders=[4],
+                                          baseline_order=4),
+                                     {"blas": RESULT, "orders": ORDERS,
+                                      "baseline_order": POSITIVE_INT}),
+    "fsm_models.score_linear_models": (None, {"linear": RESULT}),
+    "fsm_models.level_change": (Fill(blas=bare(_FM.LevelBLAs)),
+                                {"blas": RESULT, "bands_Hz": {"text": "x", "empty": (),
+                                                              "reversed": ((600, 0),)}}),
+    "fsm_models.fit_nonlinear_models": (Fill(blas=bare(_FM.LevelBLAs),
+                                             linear=bare(_FM.LinearModels),
+                                             play_thresholds_V=[0.1]),
+                                        {"blas": RESULT, "linear": RESULT,
+                                         "play_thresholds_V": {"empty": [], "negative": [-1.0],
+                                                               "text": "x"}}),
+    "fsm_models.level_spread_weight": (Fill(blas=bare(_FM.LevelBLAs),
+                                            linear=bare(_FM.LinearModels)),
+                                       {"blas": RESULT, "linear": RESULT, "pair": PAIR,
+                                        "order": POSITIVE_INT}),
+    "fsm_models.level_label": (dict(level_mV=100), {"level_mV": {"other level": 150,
+                                                                 "text": "100"}}),
+    "fsm_control.axis_entry": (dict(model=FSM_MODEL, pair=(0, 0)),
+                               {"model": {"text": "x", "two inputs": LTI["two inputs"]},
+                                "pair": PAIR}),
+    "fsm_control.axis_nominal": (Fill(linear=bare(_FM.LinearModels), frequency_Hz=[10.0],
+                                      nominal_order=8),
+                                 {"linear": RESULT, "frequency_Hz": {"empty": [],
+                                                                     "negative": [-1.0],
+                                                                     "nan": [np.nan]},
+                                  "nominal_order": POSITIVE_INT, "pair": PAIR,
+                                  "orders": ORDERS}),
+    "fsm_control.design_axis": (
+        Fill(nominal=bare(_FC.AxisNominal), bandwidth_Hz=50.0, error_weight={},
+             output_weight={}, output_corner=2.0, rolloff={}, dk_iterations=2),
+        {"nominal": RESULT, "bandwidth_Hz": POSITIVE, "error_weight": {"text": "x"},
+         "output_weight": {"text": "x"}, "output_corner": POSITIVE, "rolloff": {"text": "x"},
+         "dk_iterations": POSITIVE_INT}),
+    "fsm_control.verify_axis": (Fill(nominal=bare(_FC.AxisNominal), design=bare(_FC.AxisDesign)),
+                                {"nominal": RESULT, "design": RESULT}),
+    "fsm_control.axis_coupling": (Fill(blas=bare(_FM.LevelBLAs), linear=bare(_FM.LinearModels),
+                                       design=bare(_FC.AxisDesign)),
+                                  {"blas": RESULT, "linear": RESULT, "design": RESULT,
+                                   "pair": PAIR, "band_Hz": BAND}),
+    "fsm_control.hz_of_w_plane": (dict(nu_rad_s=100.0), {"nu_rad_s": {"negative": -1.0,
+                                                                      "nan": np.nan,
+                                                                      "text": "x"},
+                                                         "fs": POSITIVE}),
+    "fsm_control.significant": (dict(x=1.2345), {"x": {"text": "x", "none": None},
+                                                 "digits": POSITIVE_INT}),
+    # workbook.case_comparison, feedforward_cases, weighting_findings, fsm_findings
+    "case_comparison.case_III_comparison": (
+        None, {"study": STUDY_GIVEN, "controllers": {"text": "abc", "empty": {},
+                                                     "all None": {"K": None}},
+               "model": {"text": "x", "number": 3}}),
+    "feedforward_cases.feedforward_on_model": (None, {"model": MODEL, "paper_form": MODEL}),
+    "feedforward_cases.case_II": (Fill(loops={5.0: None}, paper_form=DAHL),
+                                  {"loops": {"text": "abc", "empty": {},
+                                             "not records": {5.0: 1.0}},
+                                   "model": MODEL, "paper_form": MODEL,
+                                   "per_amplitude": {"text": "abc"}, "stage": STAGE_BAD}),
+    "feedforward_cases.cross_check_on_stage": (Fill(comparison=bare(_HC.ModelComparison),
+                                                    case=bare(_FF.CaseII)),
+                                               {"comparison": RESULT, "case": RESULT}),
+    "weighting_findings.findings": (
+        Fill(entries=bare(_WEI.Eq16Entries), lft_error=1e-9, templates=bare(_WEI.Templates),
+             error_params=paper.ERROR_WEIGHT, met=bare(_WEI.TemplatesMet)),
+        {"entries": RESULT, "lft_error": {"text": "x", "nan": np.nan, "negative": -1.0},
+         "templates": RESULT, "error_params": RESULT, "met": RESULT}),
+    "fsm_findings.claim_rows": (
+        Fill(scores=bare(_FM.LinearScores), nonlinear=bare(_FM.NonlinearModels),
+             weight=bare(_FM.LevelSpreadWeight), nominal=bare(_FC.AxisNominal),
+             verified=bare(_FC.AxisVerification), design=bare(_FC.AxisDesign)),
+        {name: RESULT for name in ("scores", "nonlinear", "weight", "nominal", "verified",
+                                   "design")}),
+    "fsm_findings.summary_lines": (
+        Fill(blas=bare(_FM.LevelBLAs), scores=bare(_FM.LinearScores),
+             change=bare(_FM.LevelChange), nonlinear=bare(_FM.NonlinearModels),
+             weight=bare(_FM.LevelSpreadWeight), nominal=bare(_FC.AxisNominal),
+             design=bare(_FC.AxisDesign), verified=bare(_FC.AxisVerification),
+             coupling=bare(_FC.AxisCoupling)),
+        {name: RESULT for name in ("blas", "scores", "change", "nonlinear", "weight", "nominal",
+                                   "design", "verified", "coupling")}),
+    "fsm_findings.slashed": (dict(values=[1.0, 2.0]), {"values": {"text": "x", "number": 3,
+                                                                  "not numbers": ["a"]}}),
+    # workbook.tracking_setup, tracking_study
+    "tracking_setup.ingredients": (None, {"study": STUDY_GIVEN}),
+    "tracking_setup.sections_error": (dict(Kd=K_DISCRETE, sections=SECTIONS_10K, fs=FS),
+                                      {"Kd": {"text": "x", "continuous": K},
+                                       "sections": {"text": "x", "number": 3}, "fs": POSITIVE}),
+    "tracking_setup.loop_margins": (None, {"ing": RESULT}),
+    "tracking_setup.mu_certificate": (None, {"ing": RESULT}),
+    "tracking_setup.error_definition_evidence": (None, {"ing": RESULT}),
+    "tracking_study.run_experiments": (None, {"ing": RESULT}),
+    "tracking_study.case_I_gain": (None, {"ing": RESULT}),
+    "tracking_study.case_IV": (Fill(ing=bare(_TSET.Ingredients), runs=bare(_TSTUDY.Experiments)),
+                               {"ing": RESULT, "runs": RESULT}),
+    "tracking_study.saturation": (None, {"runs": RESULT}),
+    "tracking_study.add_claims": (
+        Fill(mu=bare(_TSET.MuCertificate), runs=bare(_TSTUDY.Experiments),
+             case_iv=bare(_TSTUDY.CaseIV)),
+        {"claims": RESULT, "mu": RESULT, "runs": RESULT, "case_iv": RESULT}),
+    "tracking_study.summary": (
+        Fill(reference=True, mu=bare(_TSET.MuCertificate), runs=bare(_TSTUDY.Experiments),
+             case_iv=bare(_TSTUDY.CaseIV)),
+        {"claims": RESULT, "reference": {"text": "yes", "number": 3}, "mu": RESULT,
+         "runs": RESULT, "case_iv": RESULT}),
+    # workbook.your_stage
+    "your_stage.analysis_grid": (dict(low_rad_s=1.0, high_rad_s=1e3, points=10),
+                                 {"low_rad_s": POSITIVE, "high_rad_s": {"below low": 0.5,
+                                                                        "text": "x"},
+                                  "points": POSITIVE_INT}),
+    "your_stage.load_records": (
+        Fill(folder=InTmp(".", None), chirp_file="chirp.csv", loop_files={"a": "a.csv"},
+             columns={"time": 0, "input": 1, "output": 2}, fs=1000.0),
+        {"folder": {"number": 3, "a file": InTmp("plain.txt", "x")},
+         "chirp_file": {"number": 3}, "loop_files": {"text": "abc", "empty": {}},
+         "columns": {"text": "abc", "missing keys": {"time": 0}}, "fs": POSITIVE,
+         "time_scale": POSITIVE, "delimiter": {"number": 3, "empty": ""},
+         "input": {"text": "u", "short": ("u", "V")},
+         "output": {"text": "y", "zero scale": ("y", "V", 0.0)}}),
+    "your_stage.prepare_identification": (
+        Fill(records=bare(_OWN.OwnRecords), window_s=(0.0, 1.0), um_per_volt=3.0, hold_out=0.3,
+             band_Hz=(1.0, 100.0)),
+        {"records": RESULT, "window_s": {"text": "x", "reversed": (1.0, 0.0)},
+         "um_per_volt": POSITIVE, "hold_out": {"zero": 0.0, "one": 1.0, "text": "x"},
+         "band_Hz": BAND}),
+    "your_stage.identify": (
+        Fill(data=bare(_OWN.IdentificationData), n_poles=2, n_zeros=0, nb=1, nk=1,
+             floor_percent=1.0),
+        {"data": RESULT, "n_poles": POSITIVE_INT, "n_zeros": {"negative": -1, "fraction": 0.5},
+         "nb": POSITIVE_INT, "nk": {"negative": -1}, "floor_percent": POSITIVE,
+         "coherence": {"above one": 2.0, "negative": -0.5, "text": "x"},
+         "nperseg": POSITIVE_INT}),
+    "your_stage.known_truth": (Fill(identification=bare(_OWN.Identification), omega=OMEGA),
+                               {"identification": RESULT, "omega": GRID}),
+    "your_stage.uncertainty_weight": (
+        Fill(identification=bare(_OWN.Identification), spread=0.05, levels=3, order=4,
+             omega=OMEGA),
+        {"identification": RESULT, "spread": POSITIVE, "levels": POSITIVE_INT,
+         "order": POSITIVE_INT, "omega": GRID, "truth": RESULT}),
+    "your_stage_hysteresis.prepare_loops": (Fill(records=bare(_OWN.OwnRecords), um_per_volt=3.0,
+                                      decimation=1),
+                                 {"records": RESULT, "um_per_volt": POSITIVE,
+                                  "decimation": POSITIVE_INT,
+                                  "skip_transient": {"text": "yes", "number": 3}}),
+    "your_stage_hysteresis.fit_hysteresis": (
+        Fill(loops=bare(_OWN_H.HysteresisLoops), fit_loops=["a"], validation_loops=["a"],
+             gamma_a=30.0, plays=4, ceiling_percent=5.0),
+        {"loops": RESULT, "fit_loops": {"number": 3}, "validation_loops": {"number": 3},
+         "gamma_a": POSITIVE, "plays": POSITIVE_INT, "ceiling_percent": POSITIVE}),
+    "your_stage_control.design_for_loop": (
+        Fill(identification=bare(_OWN.Identification), weight=bare(_OWN.UncertaintyWeight),
+             error_weight={}, output_weight={}, rolloff={}, order=4, d_order=1, iterations=2,
+             delay_samples=1),
+        {"identification": RESULT, "weight": RESULT, "error_weight": {"text": "x"},
+         "output_weight": {"text": "x"}, "rolloff": {"text": "x"}, "order": POSITIVE_INT,
+         "d_order": {"negative": -1, "fraction": 0.5}, "iterations": POSITIVE_INT,
+         "fs": POSITIVE, "delay_samples": {"negative": -1, "fraction": 0.5}}),
+    "your_stage_control.verify_design": (
+        Fill(loop=bare(_OWN_C.LoopDesign), identification=bare(_OWN.Identification),
+             weight=bare(_OWN.UncertaintyWeight)),
+        {"loop": RESULT, "identification": RESULT, "weight": RESULT, "truth": RESULT}),
+    "your_stage_hysteresis.feedforward_cross_check": (None, {"choice": RESULT}),
+    "your_stage_control.run_experiments": (
+        Fill(loop=bare(_OWN_C.LoopDesign), choice=bare(_OWN_H.HysteresisChoice), seed=0,
+             noise_rms_V=1e-3, amplitudes_V=[1.0], periods=2, frequencies_Hz=[10.0],
+             amplitude_um=5.0, delay_samples=1, loop_rate_Hz=FS),
+        {"loop": RESULT, "choice": RESULT, "seed": {"negative": -1, "text": "x"},
+         "noise_rms_V": {"negative": -1.0, "nan": np.nan}, "amplitudes_V": {"empty": [],
+                                                                            "negative": [-1.0]},
+         "periods": POSITIVE_INT, "frequencies_Hz": {"empty": [], "negative": [-1.0]},
+         "amplitude_um": POSITIVE, "delay_samples": {"negative": -1},
+         "loop_rate_Hz": {**POSITIVE, "other rate": 5000.0}}),
+    "your_stage_claims.record_claims": (
+        Fill(records=bare(_OWN.OwnRecords), identification=None, weight=None, choice=None,
+             loop=None, verification=None, experiments=None),
+        {"claims": RESULT, "records": RESULT, "identification": RESULT, "weight": RESULT,
+         "choice": RESULT, "loop": RESULT, "verification": RESULT, "experiments": RESULT,
+         "truth": RESULT}),
+    "your_stage_claims.stage_checks": (dict(results=None), {"results": {"text": "abc",
+                                                                 "number": 3}}),
+    "your_stage_claims.known_truth_checks": (
+        Fill(truth=None, identification=None, weight=None, choice=bare(_OWN_H.HysteresisChoice),
+             verification=None, experiments=None),
+        {"truth": RESULT, "choice": RESULT, "identification": RESULT, "weight": RESULT,
+         "verification": RESULT, "experiments": RESULT}),
+    "your_stage_claims.summary_lines": (Fill(records=bare(_OWN.OwnRecords), seconds=1.0),
+                                 {"records": RESULT, "seconds": {"negative": -1.0,
+                                                                 "nan": np.nan, "text": "x"}}),
+    # workbook.report, document, session
+    "report.findings": (Fill(name="mixed_mu"), {"name": {"unknown": "nope", "number": 3},
+                                                 "study": STUDY}),
+    "report.figure_path": (None, {"name": {"number": 3, "with a slash": "../x.png",
+                                           "empty": ""}, "study": STUDY}),
+    "document.print_css": (dict(), {"paper": {"unknown": "B7", "number": 3}}),
+    "session.claim_lines": (dict(rows=[]), {"rows": {"text": "abc", "number": 3,
+                                                     "not rows": [1, 2]}}),
 }
 
 #: Public functions without an argument a user could get wrong.
@@ -495,7 +923,7 @@ EXEMPT = {
     "fsm_benchmark.data_folder": "no arguments",
     "fsm_benchmark.write_manifest": "writes the committed data's manifest; its folder is checked "
                                     "by paths.check_directory (a valid call needs the 21 MB data)",
-    "study.list_studies": "no arguments", "study.study_files": "no arguments",
+    "study.study_files": "no arguments",
     "study.studies_dir": "no arguments", "study.section_fields": "no arguments",
     "sweep_spec.specs_dir": "no arguments",
     "pipeline.memory": "no arguments (its location comes from PIEZOLIB_CACHE)",
@@ -512,6 +940,11 @@ EXEMPT = {
     "document.report_notebook": "no arguments", "document.find_chromium": "no arguments",
     "tables.format_number": "any value is a cell: non-numbers are shown as they are",
     "reproduce.study_spec": "formats the study for inject_study, which loads (checks) it",
+    "published_audit.units_table": "no arguments",
+    "published_audit.table_consistency": "no arguments",
+    "dahl_audit.unit_conventions": "no arguments", "dahl_audit.published_models": "no arguments",
+    "hysteresis_choice.case_I_loops": "no arguments",
+    "your_stage.ran": "any value: it says whether the value is a result (not None or Skipped)",
 }
 
 
@@ -526,6 +959,7 @@ def public_functions():
     for layer, modules in LAYERS.items():
         for module in modules:
             mod = importlib.import_module(f"piezolib.{layer}.{module}")
+            assert hasattr(mod, "__all__"), f"{mod.__name__} has no __all__ to list its API"
             names |= {f"{module}.{n}" for n in getattr(mod, "__all__", ())
                       if callable(getattr(mod, n)) and not inspect.isclass(getattr(mod, n))}
     return names
@@ -544,7 +978,8 @@ def call(qualname, kwargs):
 
 def test_every_public_function_is_covered():
     public = public_functions()
-    assert not (set(CASES) | set(EXEMPT)) - public, "entries for names that are not public"
+    stale = (set(CASES) | set(EXEMPT)) - public
+    assert not stale, f"entries for names that are not public: {sorted(stale)}"
     missing = public - set(CASES) - set(EXEMPT)
     assert not missing, f"public functions with no bad-input cases: {sorted(missing)}"
     # every named argument exists: a renamed parameter must not leave a case testing nothing
@@ -554,23 +989,26 @@ def test_every_public_function_is_covered():
             assert set(corrupt) <= set(params), (qualname, set(corrupt) - set(params))
 
 
-@pytest.mark.parametrize("qualname", sorted(q for q, (v, _) in CASES.items() if v is not None))
+@pytest.mark.parametrize("qualname", sorted(q for q, (v, _) in CASES.items()
+                                      if v is not None and not isinstance(v, Fill)))
 def test_the_valid_call_works(qualname, tmp_path):
     call(qualname, resolve(CASES[qualname][0], tmp_path))
 
 
 def _filled(qualname, valid, argument, value):
     """The bad call: the valid one with ``argument`` replaced, or, where the valid call is
-    too costly to run, every required argument filled with a harmless valid value."""
-    if valid is not None:
+    too costly to run, every required argument filled with a harmless valid value (the case's
+    ``Fill``, else ``FILLERS``)."""
+    if valid is not None and not isinstance(valid, Fill):
         return {**valid, argument: value}
+    fillers = {**FILLERS, **(valid or {})}
     params = inspect.signature(function(qualname)).parameters
     kwargs = {}
     for name, p in params.items():
         if name == argument or p.default is not inspect.Parameter.empty \
                 or p.kind in (p.VAR_POSITIONAL, p.VAR_KEYWORD):
             continue
-        kwargs[name] = FILLERS[name]
+        kwargs[name] = fillers[name]
     return {**kwargs, argument: value}
 
 
@@ -599,7 +1037,319 @@ STUDY_ARGUMENTS = ("study", "spec", "first", "second", "data")
 ALIASES = {("loop.discrete_controller", "K"): r"\bcontroller\b|\bK\b"}
 
 
-@pytest.mark.parametrize("qualname, valid, argument, value", list(bad_calls(CASES)))
+def _bad_calls():
+    """``bad_calls(CASES)``, those listed in ``PENDING`` marked as expected to fail (strict:
+    one that is fixed fails until its entry is removed)."""
+    for param in bad_calls(CASES):
+        qualname, _, argument, _ = param.values
+        kind = param.id[len(f"{qualname}-{argument}-"):]
+        if kind in PENDING.get(qualname, {}).get(argument, ()):
+            param = pytest.param(*param.values, id=param.id, marks=pytest.mark.xfail(
+                strict=True, reason="no clear error naming the argument yet: a fix is pending"))
+        yield param
+
+
+#: {name: {argument: bad kinds}} that do not yet raise a ValueError/TypeError naming the
+#: argument (an AttributeError or KeyError from deep inside, or no error): each is a bug of
+#: that function, listed here so that the sweep stays complete while the fixes are pending.
+PENDING = {
+    "stage_identification.case_I_calibration": {
+        "stage": ("not a stage", "text", "model"),
+    },
+    "stage_identification.coefficient_table": {
+        "G": ("text", "not a model"),
+    },
+    "stage_identification.validate_on_chirp": {
+        "chirp": ("text", "number"),
+        "stage": ("not a stage", "text", "model"),
+        "fs": ("zero", "negative", "nan", "inf", "text"),
+    },
+    "stage_identification.compare_with_truth": {
+        "model": ("text",),
+        "truth": ("text",),
+    },
+    "coefficient_set.envelope_grid": {
+        "points": ("zero", "negative", "fraction", "text"),
+    },
+    "coefficient_set.covered_spreads": {
+        "H_m": ("text",),
+    },
+    "coefficient_set.envelope_peaks": {
+        "grid_sizes": ("empty", "zero", "text"),
+    },
+    "coefficient_set.compare_spreads": {
+        "spreads": ("negative", "nan", "text"),
+        "order": ("zero", "negative", "fraction", "text"),
+    },
+    "weighting.eq16_entries": {
+        "G": ("text",),
+        "H_e": ("text",),
+        "omega": ("nan", "negative", "empty", "complex", "text"),
+    },
+    "weighting.eq18_error": {
+        "H_y": ("text",),
+        "omega": ("nan", "negative", "empty", "complex", "text"),
+    },
+    "weighting.templates_met": {
+        "controllers": ("not a model",),
+        "published": ("number", "unknown"),
+    },
+    "verification.sampled_radii": {
+        "delays": ("number",),
+    },
+    "verification.delay_aware_problem": {
+        "K_nodelay": ("text",),
+        "K_deployed": ("text",),
+    },
+    "verification.dk_iteration_checks": {
+        "run": ("text", "number"),
+    },
+    "verification.compare_rederived": {
+        "used": ("text", "number"),
+        "rederived": ("text", "number"),
+    },
+    "verification.reduction_by_order": {
+        "orders": ("zero", "text"),
+    },
+    "verification.loop_table": {
+        "controllers": ("text", "not a model"),
+    },
+    "verification.summary_lines": {
+        "nodelay_radii": ("text", "number"),
+        "paper_values": ("text", "no mu_RP"),
+    },
+    "coefficient_box.stability_margins": {
+        "grid": ("reversed",),
+    },
+    "coefficient_box.spread_bounds": {
+        "G": ("two inputs",),
+        "K": ("two inputs",),
+        "grid": ("reversed",),
+        "name": ("number",),
+    },
+    "coefficient_box.check_chosen_design": {
+        "H_e": ("text",),
+        "delay_samples": ("negative", "fraction"),
+    },
+    "coefficient_box.mixed_claims": {
+        "tracking": ("text", "number"),
+    },
+    "coefficient_box.summary_lines": {
+        "tracking": ("text", "number"),
+        "published": ("number",),
+    },
+    "fsm_models.fit_linear_models": {
+        "orders": ("empty", "zero", "text"),
+        "baseline_order": ("zero", "negative", "fraction", "text"),
+    },
+    "fsm_models.level_change": {
+        "bands_Hz": ("text", "empty", "reversed"),
+    },
+    "fsm_models.fit_nonlinear_models": {
+        "play_thresholds_V": ("empty", "negative", "text"),
+    },
+    "fsm_models.level_spread_weight": {
+        "pair": ("out of range", "negative", "text"),
+        "order": ("zero", "negative", "fraction", "text"),
+    },
+    "fsm_models.level_label": {
+        "level_mV": ("other level", "text"),
+    },
+    "fsm_control.axis_entry": {
+        "model": ("text", "two inputs"),
+        "pair": ("out of range", "negative", "text"),
+    },
+    "fsm_control.axis_nominal": {
+        "linear": ("text", "number"),
+        "frequency_Hz": ("empty", "negative", "nan"),
+        "pair": ("out of range", "negative", "text"),
+        "orders": ("empty", "zero", "text"),
+    },
+    "fsm_control.design_axis": {
+        "bandwidth_Hz": ("zero", "negative", "nan", "inf", "text"),
+        "error_weight": ("text",),
+        "output_weight": ("text",),
+        "output_corner": ("zero", "negative", "nan", "inf", "text"),
+        "rolloff": ("text",),
+        "dk_iterations": ("zero", "negative", "fraction", "text"),
+    },
+    "fsm_control.axis_coupling": {
+        "blas": ("text", "number"),
+        "linear": ("text", "number"),
+        "pair": ("out of range", "negative", "text"),
+        "band_Hz": ("reversed", "negative", "text"),
+    },
+    "feedforward_cases.feedforward_on_model": {
+        "model": ("not a model", "text", "parameters"),
+    },
+    "feedforward_cases.case_II": {
+        "loops": ("empty", "not records"),
+        "model": ("not a model", "text", "parameters"),
+        "paper_form": ("not a model", "text", "parameters"),
+        "per_amplitude": ("text",),
+    },
+    "weighting_findings.findings": {
+        "lft_error": ("text", "nan", "negative"),
+    },
+    "fsm_findings.claim_rows": {
+        "scores": ("text", "number"),
+        "nonlinear": ("text", "number"),
+        "weight": ("text", "number"),
+        "nominal": ("text", "number"),
+        "verified": ("text", "number"),
+        "design": ("text", "number"),
+    },
+    "fsm_findings.summary_lines": {
+        "blas": ("text", "number"),
+        "scores": ("text", "number"),
+        "change": ("text", "number"),
+        "nonlinear": ("text", "number"),
+        "weight": ("text", "number"),
+        "nominal": ("text", "number"),
+        "design": ("text", "number"),
+        "verified": ("text", "number"),
+        "coupling": ("text", "number"),
+    },
+    "tracking_setup.sections_error": {
+        "Kd": ("text", "continuous"),
+        "sections": ("text", "number"),
+        "fs": ("zero", "negative", "nan", "inf", "text"),
+    },
+    "tracking_setup.loop_margins": {
+        "ing": ("text", "number"),
+    },
+    "tracking_setup.mu_certificate": {
+        "ing": ("text", "number"),
+    },
+    "tracking_setup.error_definition_evidence": {
+        "ing": ("text", "number"),
+    },
+    "tracking_study.run_experiments": {
+        "ing": ("text", "number"),
+    },
+    "tracking_study.case_I_gain": {
+        "ing": ("text", "number"),
+    },
+    "tracking_study.case_IV": {
+        "ing": ("text", "number"),
+        "runs": ("text", "number"),
+    },
+    "tracking_study.saturation": {
+        "runs": ("text", "number"),
+    },
+    "tracking_study.add_claims": {
+        "claims": ("text", "number"),
+        "mu": ("text", "number"),
+        "runs": ("text", "number"),
+        "case_iv": ("text", "number"),
+    },
+    "tracking_study.summary": {
+        "claims": ("text", "number"),
+        "reference": ("text", "number"),
+        "mu": ("text", "number"),
+        "runs": ("text", "number"),
+        "case_iv": ("text", "number"),
+    },
+    "your_stage.analysis_grid": {
+        "low_rad_s": ("zero", "negative", "nan", "inf", "text"),
+        "high_rad_s": ("below low", "text"),
+        "points": ("zero", "negative", "fraction", "text"),
+    },
+    "your_stage.load_records": {
+        "folder": ("number",),
+        "chirp_file": ("number",),
+        "output": ("zero scale",),
+    },
+    "your_stage.prepare_identification": {
+        "window_s": ("text", "reversed"),
+        "um_per_volt": ("zero", "negative", "nan", "inf", "text"),
+        "hold_out": ("zero", "one", "text"),
+        "band_Hz": ("reversed", "negative", "text"),
+    },
+    "your_stage.identify": {
+        "n_poles": ("zero", "negative", "fraction", "text"),
+        "n_zeros": ("negative", "fraction"),
+        "nb": ("zero", "negative", "fraction", "text"),
+        "nk": ("negative",),
+        "floor_percent": ("zero", "negative", "nan", "inf", "text"),
+        "coherence": ("above one", "negative", "text"),
+        "nperseg": ("zero", "negative", "fraction", "text"),
+    },
+    "your_stage.known_truth": {
+        "omega": ("nan", "negative", "empty", "complex", "text"),
+    },
+    "your_stage.uncertainty_weight": {
+        "identification": ("text", "number"),
+        "levels": ("zero", "negative", "fraction", "text"),
+        "order": ("zero", "negative", "fraction", "text"),
+        "omega": ("nan", "negative", "empty", "complex", "text"),
+        "truth": ("text", "number"),
+    },
+    "your_stage_hysteresis.prepare_loops": {
+        "skip_transient": ("text", "number"),
+    },
+    "your_stage_hysteresis.fit_hysteresis": {
+        "fit_loops": ("number",),
+        "validation_loops": ("number",),
+        "gamma_a": ("zero", "negative", "nan", "inf", "text"),
+        "plays": ("zero", "negative", "fraction", "text"),
+        "ceiling_percent": ("zero", "negative", "nan", "inf", "text"),
+    },
+    "your_stage_control.design_for_loop": {
+        "identification": ("text", "number"),
+        "weight": ("text", "number"),
+        "error_weight": ("text",),
+        "output_weight": ("text",),
+        "rolloff": ("text",),
+        "order": ("zero", "negative", "fraction", "text"),
+        "d_order": ("negative", "fraction"),
+        "iterations": ("zero", "negative", "fraction", "text"),
+        "delay_samples": ("negative", "fraction"),
+    },
+    "your_stage_control.verify_design": {
+        "identification": ("text", "number"),
+        "weight": ("text", "number"),
+        "truth": ("text", "number"),
+    },
+    "your_stage_control.run_experiments": {
+        "loop": ("text", "number"),
+        "amplitudes_V": ("empty", "negative"),
+        "periods": ("zero", "negative", "fraction", "text"),
+        "frequencies_Hz": ("empty", "negative"),
+        "amplitude_um": ("zero", "negative", "nan", "inf", "text"),
+        "delay_samples": ("negative",),
+        "loop_rate_Hz": ("text",),
+    },
+    "your_stage_claims.record_claims": {
+        "claims": ("text", "number"),
+        "records": ("text", "number"),
+        "identification": ("text", "number"),
+        "weight": ("text", "number"),
+        "choice": ("text", "number"),
+        "loop": ("text", "number"),
+        "verification": ("text", "number"),
+        "experiments": ("text", "number"),
+        "truth": ("text", "number"),
+    },
+    "your_stage_claims.stage_checks": {
+        "results": ("text", "number"),
+    },
+    "your_stage_claims.known_truth_checks": {
+        "truth": ("text", "number"),
+        "choice": ("text", "number"),
+        "identification": ("text", "number"),
+        "weight": ("text", "number"),
+        "verification": ("text", "number"),
+        "experiments": ("text", "number"),
+    },
+    "your_stage_claims.summary_lines": {
+        "records": ("text", "number"),
+        "seconds": ("negative", "nan", "text"),
+    },
+}
+
+
+@pytest.mark.parametrize("qualname, valid, argument, value", list(_bad_calls()))
 def test_bad_input_raises_naming_the_argument(qualname, valid, argument, value, tmp_path):
     kwargs = resolve(_filled(qualname, valid, argument, value), tmp_path)
     with pytest.raises((ValueError, TypeError, OSError)) as info:
@@ -666,6 +1416,8 @@ CLI_CASES = {
     ("report", "executed"): [(["report", "--executed", "/nonexistent.ipynb"], 2, "executed")],
     ("report", "output"): [(["report", "--output"], 2, "output")],
     ("report", "pdf"): [(["report", "--pdf=1"], 2, "pdf")],
+    ("report", "paper"): [(["report", "--paper", "B7"], 2, "paper"),
+                          (["report", "--paper"], 2, "paper")],
 }
 
 

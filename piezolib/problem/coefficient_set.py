@@ -30,7 +30,8 @@ import numpy as np
 import pandas as pd
 
 from piezolib import uncertainty as unc
-from piezolib._checks import check_frequency_grid, check_siso, check_type
+from piezolib._checks import (check_finite_array, check_frequency_grid, check_positive,
+                              check_siso, check_type)
 from piezolib.robust.lti import closed_loop_poles, frequency_grid
 
 __all__ = ["GRID_SIZES", "COVER_ORDER", "KHARITONOV_SIGNS", "envelope_grid", "CoveredSpreads",
@@ -587,9 +588,7 @@ def critical_offsets_kind(offsets):
     >>> critical_offsets_kind([1, 1, -1, -1, 1, 1]), critical_offsets_kind([1, 0.5, 1])
     ('a Kharitonov polynomial', 'not a corner')
     """
-    offsets = np.asarray(offsets, dtype=float)
-    if offsets.ndim != 1 or offsets.size == 0 or not np.all(np.isfinite(offsets)):
-        raise ValueError(f"offsets must be a finite 1-D array, got {offsets!r}")
+    offsets = check_finite_array("offsets", offsets, ndim=1, min_length=1, real=True)
     q = np.round(offsets).astype(int)
     corner = np.allclose(np.abs(offsets), 1, atol=1e-6)
     if corner and any(np.array_equal(q, np.resize(k, q.size)) for k in KHARITONOV_SIGNS):
@@ -617,6 +616,7 @@ def findings(peaks, cover, margins, mu_RS_paper):
     check_type("peaks", peaks, EnvelopePeaks, "an EnvelopePeaks")
     check_type("cover", cover, EnvelopeCover, "an EnvelopeCover")
     check_type("margins", margins, LoopMargins, "a LoopMargins")
+    mu_RS_paper = check_positive("mu_RS_paper", mu_RS_paper)
     grid_max = np.array(list(peaks.grid_maxima.values()))
     yes = "yes" if cover.fit.covers else "no"
     return [

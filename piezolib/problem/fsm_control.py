@@ -31,7 +31,7 @@ import pandas as pd
 from piezolib import identification as ident
 from piezolib import robust
 from piezolib import uncertainty as unc
-from piezolib._checks import check_integer, check_type
+from piezolib._checks import check_integer, check_nonnegative, check_positive, check_type
 from piezolib.problem import fsm_benchmark as fsm
 from piezolib.problem import genplant
 
@@ -61,6 +61,9 @@ def significant(x, digits=3):
     >>> significant(0.76218)
     0.762
     """
+    digits = check_integer("digits", digits, minimum=1)
+    if isinstance(x, (bool, np.bool_)) or not isinstance(x, (int, float, np.integer, np.floating)):
+        raise TypeError(f"x must be a number, got {type(x).__name__}")
     return float(f"{x:.{digits}g}")
 
 
@@ -72,7 +75,8 @@ def hz_of_w_plane(nu_rad_s, fs=fsm.SAMPLING_FREQUENCY_HZ):
     >>> round(hz_of_w_plane(2 * 6400 * np.tan(np.pi * 100 / 6400)), 6)
     100.0
     """
-    T_s = 1 / fs
+    nu_rad_s = check_nonnegative("nu_rad_s", nu_rad_s)
+    T_s = 1 / check_positive("fs", fs)
     return float(np.arctan(nu_rad_s * T_s / 2) * 2 / T_s / (2 * np.pi))
 
 

@@ -56,7 +56,8 @@ def candidate_label(key):
     >>> candidate_label(("printed", False, "virgin"))
     'printed, no offset, virgin'
     """
-    if not (isinstance(key, tuple) and len(key) == 3):
+    if not (isinstance(key, tuple) and len(key) == 3 and isinstance(key[0], str)
+            and isinstance(key[2], str)):
         raise TypeError(f"key must be a (form, offset, start) tuple, got {key!r}")
     form, offset, start_state = key
     return f"{form.replace('_', '-')}, {'offset' if offset else 'no offset'}, {start_state}"
@@ -175,6 +176,11 @@ def case_I_fits(loops=None):
     """
     loops = case_I_loops() if loops is None else check_type("loops", loops, dict,
                                                             "a dict {amplitude: StageRecord}")
+    if not loops:
+        raise ValueError("loops must hold at least one Case I loop, got an empty dict")
+    for A, rec in loops.items():
+        if not hasattr(rec, "v_y_V"):
+            raise TypeError(f"loops[{A!r}] must be a StageRecord, got {type(rec).__name__}")
     fits = {key: fit_case_I_loops(*key) for key in CASE_I_CANDIDATES}
     return CaseIFits(loops, fits, choose_fit(fits), workbook_dahl_fit())
 

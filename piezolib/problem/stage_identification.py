@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from piezolib._checks import check_type
+from piezolib._checks import check_lti, check_positive, check_type
 from piezolib.hysteresis import hysteresis_measure
 from piezolib.identification import (identify, monic_coefficients, pole_pairs, whiteness,
                                      zoh_coefficients, zoh_simulate, fit_percent)
@@ -253,6 +253,7 @@ def identify_chirp(chirp, stage, fs=paper.SAMPLING_FREQUENCY_HZ):
     """
     _check_chirp("chirp", chirp)
     _check_stage(stage)
+    fs = check_positive("fs", fs)
     u, y, sweep_start = chirp.deviations()       # from the hold, at rest
     start = time.perf_counter()
     result = identify(u, y, fs)
@@ -346,8 +347,10 @@ def validate_on_chirp(model, chirp, stage, fs=paper.SAMPLING_FREQUENCY_HZ):
     -------
     ChirpValidation
     """
+    check_lti("model", model)
     _check_chirp("chirp", chirp)
     _check_stage(stage)
+    fs = check_positive("fs", fs)
     u, y, start = chirp.deviations()
     y_sim = zoh_simulate(model, u, fs)
     sweep = slice(start, None)

@@ -34,7 +34,8 @@ import control as ct
 import numpy as np
 import pandas as pd
 
-from piezolib._checks import check_frequency_grid, check_integer, check_positive, check_siso
+from piezolib._checks import (check_frequency_grid, check_integer, check_nonnegative,
+                              check_positive, check_siso)
 from piezolib.problem.analysis import RobustnessAnalysis, analyze, table3, table3_peaks
 from piezolib.problem.genplant import (BLOCK_STRUCTURE, DESIGN_BLOCK_STRUCTURE, DESIGN_ROLLOFF,
                                        check_models, delay_aware_plant,
@@ -442,6 +443,14 @@ def verify_delay_aware(K_full, K_reduced, K_fixed, G, H_m, H_e, H_y, *, plant, f
     -------
     DesignVerification
     """
+    for name, K in (("K_full", K_full), ("K_reduced", K_reduced), ("K_fixed", K_fixed)):
+        check_siso(name, K)
+    if not isinstance(plant, ct.StateSpace):
+        raise TypeError(f"plant must be a control.StateSpace (the delay-aware design plant), "
+                        f"got {type(plant).__name__}")
+    effective_delay(check_positive("fs", fs), delay_samples)
+    if fixed_mu is not None:
+        fixed_mu = check_positive("fixed_mu", fixed_mu)
     omega = check_frequency_grid("omega", omega, min_length=2)
     designs = {f"DK full order ({_order(K_full)})": K_full,
                f"DK reduced ({_order(K_reduced)})": K_reduced,
@@ -514,6 +523,20 @@ def delay_sweep(G, H_m, H_e, H_y, *, fs, d_order, grid, delays=(0, 1, 2), known=
         ``table`` indexed by ``delay [samples]``; where the H-inf search of the
         lower bound fails the bound is NaN and ``text`` says why.
     """
+    G, H_m, H_e, H_y = check_models(G, H_m, H_e, H_y)
+    fs = check_positive("fs", fs)
+    d_order = check_integer("d_order", d_order, minimum=0)
+    grid = check_frequency_grid("grid", grid, min_length=2)
+    if isinstance(delays, (str, bytes)) or not hasattr(delays, "__iter__"):
+        raise TypeError(f"delays must be a sequence of sample delays, got {delays!r}")
+    delays = [check_integer("delays", d, minimum=0) for d in delays]
+    if known is not None and not isinstance(known, dict):
+        raise TypeError(f"known must be a dict {{delay: (mu peak, lower bound)}}, got "
+                        f"{type(known).__name__}")
+    for d, pair in (known or {}).items():
+        check_integer("known", d, minimum=0)
+        if not (isinstance(pair, tuple) and len(pair) == 2):
+            raise TypeError(f"known[{d!r}] must be a (mu peak, lower bound) pair, got {pair!r}")
     known = dict(known or {})
     rows, notes = {}, []
     for d in sorted(set(delays) | set(known)):
@@ -707,6 +730,12 @@ def table3_study(G, H_m, H_e, H_y, *, published, nodelay_full, nodelay_reduced,
     -------
     Table3Study
     """
+    for name, K in (("published", published), ("nodelay_full", nodelay_full),
+                    ("nodelay_reduced", nodelay_reduced), ("delay_aware_full", delay_aware_full),
+                    ("delay_aware_fixed", delay_aware_fixed)):
+        check_siso(name, K)
+    effective_delay(check_positive("fs", fs), delay_samples)
+    nodelay_mu = check_positive("nodelay_mu", nodelay_mu)
     omega = check_frequency_grid("omega", omega, min_length=2)
     controllers = {"published K (eq. 24)": published,
                    f"our full K ({nodelay_full.nstates})": nodelay_full,

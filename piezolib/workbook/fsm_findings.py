@@ -25,6 +25,11 @@ def slashed(values):
     >>> slashed([8.381, 7.95, 5.6])
     '8.38 / 7.95 / 5.60'
     """
+    if isinstance(values, (str, bytes)) or not hasattr(values, "__iter__"):
+        raise TypeError(f"values must be a sequence of numbers, got {values!r}")
+    values = list(values)
+    if not all(isinstance(x, (int, float, np.integer, np.floating)) for x in values):
+        raise TypeError(f"values must hold numbers only, got {values!r}"[:200])
     return " / ".join(f"{x:.2f}" for x in values)
 
 

@@ -425,8 +425,9 @@ def findings(name, study=REFERENCE_STUDY):
     >>> list(rows.columns)
     ['quantity', 'unit', 'paper', 'ours', 'note']
     """
-    if name not in FINDINGS:
+    if not isinstance(name, str) or name not in FINDINGS:
         raise ValueError(f"name must be one of {list(FINDINGS)}, got {name!r}")
+    _check_study_exists(study)
     table = "tracking_over_set" if name == "case_iv" else name
     rows = load_claims([table], study=study)
     words = FINDINGS[name][2]

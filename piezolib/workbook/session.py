@@ -346,6 +346,13 @@ def claim_lines(rows):
     """
     if isinstance(rows, pd.DataFrame):
         rows = rows.to_dict("records")
+    if isinstance(rows, (str, bytes)) or not hasattr(rows, "__iter__"):
+        raise TypeError(f"rows must be a DataFrame or a list of claim rows, got "
+                        f"{type(rows).__name__}")
+    rows = list(rows)
+    if not all(isinstance(row, dict) for row in rows):
+        raise TypeError("rows must hold claim rows (dicts with 'ours'), got "
+                        f"{[type(r).__name__ for r in rows][:5]}")
     out = []
     for row in rows:
         value = tables.format_number(row["ours"])
