@@ -71,7 +71,20 @@ _CONTROLLERS = ("K_full", "K_reduced", "K_fixed", "K_nodelay_full", "K_nodelay_r
 
 class ArtifactError(ValueError):
     """A committed or cached artifact that does not fit the study asking for it (a
-    ValueError: the file's content is the bad input)."""
+    ValueError: the file's content is the bad input).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = Path(folder) / "K.json"
+    ...     _ = path.write_text("{}")
+    ...     try:
+    ...         read_controllers(path)
+    ...     except ArtifactError as exc:
+    ...         print(type(exc).__name__, isinstance(exc, ValueError))
+    ArtifactError True
+    """
 
 
 @dataclass(frozen=True)
@@ -97,6 +110,14 @@ class StudyControllers:
     design, nodelay : piezolib.problem.design.ControllerDesign or None
         The full design records (DK history, D-fits, reduction) when derived
         in this process or read from the cache; None when read from a file.
+
+    Examples
+    --------
+    >>> controllers = read_controllers(reference_design_path())     # the committed ones
+    >>> controllers.study, controllers.K_deployed is controllers.K_fixed
+    ('reference', True)
+    >>> controllers.K_fixed.nstates, sorted(controllers.mu)
+    (6, ['delay-aware DK', 'fixed order', 'no-delay DK'])
     """
 
     study: str
@@ -139,6 +160,12 @@ def study_problem(study):
     Returns
     -------
     piezolib.problem.paper.DesignProblem
+
+    Examples
+    --------
+    >>> G, H_m, H_e, H_y, K = study_problem("wide_error_weight")   # omega_e = 2000 rad/s
+    >>> print(f"{1 / abs(H_e(2000j)):.2f}")                # the S template near 1 at omega_e
+    0.89
     """
     study = studies.load(study)
     published = paper.problem()
@@ -156,6 +183,11 @@ def study_uncertainty_weight(study):
     members of the study's model set (spread, levels) around the published
     G, on the log-spaced ``weight_grid`` [rad/s]
     (:func:`piezolib.uncertainty.fit_covering_weight`).
+
+    Examples
+    --------
+    >>> study_uncertainty_weight("reference").name                   # the paper's eq. 8
+    'H_m'
     """
     return _uncertainty_weight(studies.load(study).uncertainty)
 
@@ -174,20 +206,41 @@ def _uncertainty_weight(choice):
 
 def design_choices(study):
     """Every choice a controller design of ``study`` depends on: the weights,
-    design and loop sections, and what its H_m depends on."""
+    design and loop sections, and what its H_m depends on.
+
+    Examples
+    --------
+    >>> sorted(design_choices("reference"))
+    ['design', 'loop', 'uncertainty_weight', 'weights']
+    """
     study = studies.load(study)
     return {**study.choices(*_DESIGN_SECTIONS),
             "uncertainty_weight": study.uncertainty.weight_choices()}
 
 
 def design_digest(study):
-    """Digest of :func:`design_choices`: two studies with the same digest share controllers."""
+    """Digest of :func:`design_choices`: two studies with the same digest share controllers.
+
+    Examples
+    --------
+    >>> seeds = studies.Study().replace(name="more_seeds", experiments={"noise_seeds": 4})
+    >>> design_digest(seeds) == design_digest("reference")     # experiments: same controllers
+    True
+    >>> design_digest("wide_error_weight") == design_digest("reference")
+    False
+    """
     return studies.choices_digest(design_choices(study))
 
 
 def library_fingerprint():
     """SHA-256 (16 hex digits) of every ``piezolib`` source file: part of each cache key,
-    so a change anywhere in the library invalidates the cached products."""
+    so a change anywhere in the library invalidates the cached products.
+
+    Examples
+    --------
+    >>> len(library_fingerprint())
+    16
+    """
     root = Path(__file__).resolve().parents[1]
     h = hashlib.sha256()
     for path in sorted(root.rglob("*.py")):
@@ -357,7 +410,13 @@ def derive_controllers(study, cache=True):
 
 
 def reference_design_path():
-    """``data/controllers/reference_design.json``: the committed reference controllers."""
+    """``data/controllers/reference_design.json``: the committed reference controllers.
+
+    Examples
+    --------
+    >>> reference_design_path().relative_to(outputs.project_root()).as_posix()
+    'data/controllers/reference_design.json'
+    """
     return outputs.study_controllers_dir(studies.REFERENCE) / "reference_design.json"
 
 
@@ -583,6 +642,12 @@ def read_controllers(path):
     ArtifactError
         Naming the file: not a controller file of this format, or its content
         fails its checksum (edited or corrupted).
+
+    Examples
+    --------
+    >>> K = read_controllers(reference_design_path()).K_fixed
+    >>> K.input_labels, K.output_labels, K.isctime()
+    (['v_e'], ['u_b'], True)
     """
     path = check_path("path", path)
     doc = _read_artifact(path, "controller")
@@ -674,7 +739,13 @@ class MixedDesigns:
 
 
 def mixed_design_path():
-    """``data/controllers/mixed_design.json``: the committed mixed-mu designs."""
+    """``data/controllers/mixed_design.json``: the committed mixed-mu designs.
+
+    Examples
+    --------
+    >>> mixed_design_path().relative_to(outputs.project_root()).as_posix()
+    'data/controllers/mixed_design.json'
+    """
     return outputs.study_controllers_dir(studies.REFERENCE) / MIXED_FILE
 
 
