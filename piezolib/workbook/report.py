@@ -344,7 +344,7 @@ def _same_number(a, b, precision_a, precision_b):
         return str(a) == str(b)
     if not (np.isfinite(x) and np.isfinite(y)):
         return str(a) == str(b)
-    stated = [float(p) for p in (precision_a, precision_b) if str(p) not in ("", "nan")]
+    stated = [float(p) for p in (precision_a, precision_b) if str(p) not in ("", "nan", "None")]
     big = max(abs(x), abs(y))
     unit = 10.0 ** (np.floor(np.log10(big)) - (SIGNIFICANT_DIGITS - 1)) if big > 0 else 0.0
     # the printed digits themselves: one unit of the last kept digit (a rounding boundary)

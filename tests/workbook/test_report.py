@@ -231,3 +231,13 @@ def test_summary_names_unexplained_differences_and_borrowed_rows():
     assert "- 1 row comes from the reference study's tables" in text
     with pytest.raises(ValueError, match="reason"):
         report.summary(table.drop(columns="reason"))
+
+
+def test_rows_of_a_claim_table_compare_as_their_csv_rows_do():
+    # ClaimTable.frame() holds None where a precision is not stated (the CSV holds "")
+    table = report.ClaimTable("x", "reference")
+    table.add("s", "q", 1.0, 1.00001)
+    table.add("s", "q", 1.0, 1.002)
+    rows = table.frame()
+    assert report.same_result(rows.iloc[0], rows.iloc[0])
+    assert not report.same_result(rows.iloc[0], rows.iloc[1])
