@@ -4,7 +4,7 @@ paper            the published numbers, the units table, ``problem()`` -> G, H_m
 genplant         generalized plant of Fig. 9 / eq. 16
 stage            virtual P-752.21 stage (the hardware stand-in): one stage, one run
 stage_batch      N virtual stages run at once (noise seeds, members of a model set)
-stage_hysteresis the virtual stage's hysteresis truth (play operators)
+stage_hysteresis  the virtual stage's hysteresis truth (play operators)
 stage_data       its experiment files (chirps, Table 4 Case I loops): definitions, CSV I/O
 stage_calibration  the Table 4 Case I experiment and the hysteresis law calibrated on it
 design           the workbook's mu controller in one call
@@ -12,7 +12,7 @@ analysis         Table 3: NS, NP, RS, RP of any controller
 verification     independent checks of the mu designs (notebook 05), with ``checks`` dicts
 hysteresis_fits  the paper's Dahl model and the workbook's Dahl fit to the Case I loops
 dahl_audit       the published Dahl parameters audited (units, steady state, loops), with checks
-hysteresis_choice the Dahl candidates fitted to Case I and the one chosen; Dahl and PI models
+hysteresis_choice  the Dahl candidates fitted to Case I and the one chosen; Dahl and PI models
                  compared on unseen records, with checks
 weighting        notebook 04: templates of eq. 15, P against eq. 16, M against eq. 18, Fig. 11
 fsm_benchmark    the CubeSpec fine steering mirror benchmark: data, metric, baselines
