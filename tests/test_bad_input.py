@@ -274,6 +274,9 @@ CASES = {
                                  {"v": SIGNAL}),
     "hysteresis.feedforward": (dict(model=DAHL, x_r=3 * np.sin(np.linspace(0, 13, 400))),
                                {"x_r": SIGNAL}),
+    "hysteresis.check_hysteresis_model": (dict(name="model", model=DAHL),
+                                          {"model": {"number": 2.0, "text": "dahl",
+                                                     "a class": _hy.DahlModel, "none": None}}),
     # fourth batch
     "robust.scaled_coefficients": (dict(num=[1.0, 2.0], den=[1.0, 3.0, 2.0], omega_s=10.0),
                                    {"omega_s": POSITIVE}),

@@ -75,6 +75,9 @@ def check_hysteresis_model(name, model):
     ...
     TypeError: model must be a hysteresis model: an object with simulate(v) and feedforward(x_r) (piezolib.hysteresis.HysteresisModel; DahlModel, PIModel and HammersteinModel are three), got float
     """
+    if isinstance(model, type):          # the class passes the protocol check: its methods
+        raise TypeError(f"{name} must be {MODEL_REQUIREMENT}, got the class "
+                        f"{model.__name__} itself: pass an instance (a fitted model)")
     if not isinstance(model, HysteresisModel):
         raise TypeError(f"{name} must be {MODEL_REQUIREMENT}, got {type(model).__name__}")
     return model

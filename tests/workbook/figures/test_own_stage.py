@@ -10,6 +10,7 @@ from figure_checks import text_overlaps
 from piezolib import robust
 from piezolib.hysteresis import PIModel
 from piezolib.records import Record
+from piezolib.workbook import plotting
 from piezolib.workbook.figures import own_stage as F
 
 
