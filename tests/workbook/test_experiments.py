@@ -124,7 +124,7 @@ def test_a_PI_model_runs_through_the_cases(stage):
 def test_the_model_argument_is_checked_by_name(stage):
     v = reference()
     for bad in (object(), (1.0, 0.0), "dahl"):
-        with pytest.raises(TypeError, match=r"^model must be a hysteresis model .* got "):
+        with pytest.raises(TypeError, match=r"^model must be a hysteresis model.* got "):
             ex.run_case("II", stage, v, bad)
     with pytest.raises(TypeError, match="^model must be"):
         ex.hysteresis_test(stage, object(), paper.controller(), amplitudes_V=[20.0])
