@@ -49,7 +49,7 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
-from piezolib._checks import check_finite_array, check_integer, check_positive
+from piezolib._checks import check_finite_array, check_positive
 
 __all__ = ["BLA", "excited_lines", "bla_periodic"]
 

@@ -37,7 +37,7 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
-from piezolib._checks import check_finite_array, check_positive, check_type
+from piezolib._checks import check_finite_array, check_type
 from piezolib.hysteresis.pi import play_outputs
 from piezolib.identification.freqfit import simulate_discrete
 

@@ -30,14 +30,14 @@ import control as ct
 import numpy as np
 
 from piezolib import metrics
-from piezolib._checks import (check_finite_array, check_integer, check_positive, check_proper,
-                              check_siso, check_type)
+from piezolib._checks import (check_integer, check_positive, check_proper, check_siso,
+                              check_type)
 from piezolib.identification import freqfit
 from piezolib.robust.lti import balance
 from piezolib.problem import paths
 from piezolib.problem.genplant import effective_delay
 
-__all__ = ["axis_design_plant", "axis_loop_response", "SAMPLING_FREQUENCY_HZ", "LEVELS_MV", "SPLITS", "SAMPLES_PER_PERIOD", "N_INIT",
+__all__ = ["axis_design_plant", "SAMPLING_FREQUENCY_HZ", "LEVELS_MV", "SPLITS", "SAMPLES_PER_PERIOD", "N_INIT",
            "INPUT_LABELS", "OUTPUT_LABELS", "PUBLISHED_NRMSE_PERCENT", "PUBLISHED_RMSE_UM",
            "BASELINE_SOURCE", "data_folder", "file_name", "load", "check_files",
            "write_manifest", "Score", "score", "score_simulation", "noise_floor"]
@@ -458,56 +458,3 @@ def axis_design_plant(G, W_m, W_S, W_T, W_u, *, fs, delay_samples=1, pade_order=
     return balance(ct.interconnect(blocks, inputs=["u_Delta", "v_r", "u_b"],
                                    outputs=["y_Delta", "y1", "y2", "y_u", "v_e"],
                                    name="P_axis"))
-
-
-def axis_loop_response(K, G, W_m, W_S, W_T, W_u, omega, *, fs, delay_samples=1):
-    """Frequency response of F_l(P, K) of :func:`axis_design_plant` with the exact delay.
-
-    The delay is e^{-j omega tau}, tau = (d + 1/2) / fs (the hold as half a
-    sample) instead of its Pade approximation; a discrete ``K`` is evaluated
-    at z = e^{j omega / fs}, so the response is that of the controller that is
-    implemented (up to the hold's approximation).
-
-    Parameters
-    ----------
-    K : control.LTI
-        SISO controller v_e [um] -> u_b [V], continuous or discrete (sample
-        time 1 / ``fs``).
-    G, W_m, W_S, W_T, W_u : control.LTI
-        As in :func:`axis_design_plant`.
-    omega : array_like
-        Frequencies [rad/s] (below pi ``fs`` for a discrete K).
-    fs : float
-        Loop rate [Hz].
-    delay_samples : int
-        Computation delay [samples].
-
-    Returns
-    -------
-    ndarray, shape (len(omega), 4, 2)
-        Outputs ``y_Delta, y1, y2, y_u``; inputs ``u_Delta, v_r``; block
-        structure ((1, 1), (1, 3)).
-
-    Examples
-    --------
-    >>> import control as ct
-    >>> from piezolib.problem import paper, genplant
-    >>> R = axis_loop_response(paper.controller(), paper.plant(), ct.tf([0.1], [1]),
-    ...                        paper.error_weight(), paper.output_weight(),
-    ...                        genplant.rolloff_weight(), [1e2, 1e3], fs=10e3)
-    >>> R.shape                           # (frequencies, y_Delta y1 y2 y_u, u_Delta v_r)
-    (2, 4, 2)
-    """
-    check_siso("K", K)
-    check_proper("K", K)
-    omega = check_finite_array("omega", omega, ndim=1, min_length=1, real=True)
-    if np.any(omega <= 0):
-        raise ValueError("omega must be positive [rad/s]")
-    delay_samples = check_integer("delay_samples", delay_samples, minimum=0)
-    P = axis_design_plant(G, W_m, W_S, W_T, W_u, fs=fs, delay_samples=None)
-    R = np.moveaxis(P(1j * omega, squeeze=False), -1, 0)
-    R[:, :, 2] *= np.exp(-1j * omega * effective_delay(fs, delay_samples))[:, None]
-    s = np.exp(1j * omega / fs) if K.isdtime(strict=True) else 1j * omega
-    k = np.ravel(K(s))
-    f = k / (1 - R[:, -1, 2] * k)
-    return R[:, :-1, :2] + f[:, None, None] * R[:, :-1, 2][:, :, None] * R[:, -1, :2][:, None, :]

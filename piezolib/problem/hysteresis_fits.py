@@ -29,7 +29,7 @@ from piezolib.hysteresis.pi import fit_pi
 
 __all__ = ["published_dahl", "CASE_I_CANDIDATES", "WORKBOOK_DAHL", "fit_case_I_loops",
            "workbook_dahl_fit", "workbook_dahl_path", "read_dahl_model", "write_dahl_model",
-           "write_workbook_dahl", "clear_cache", "PI_PLAYS", "workbook_pi_fit",
+           "write_workbook_dahl", "PI_PLAYS", "workbook_pi_fit",
            "VALIDATION_AMPLITUDES_V", "validation_loops"]
 
 #: Play operators of the workbook's Prandtl-Ishlinskii model (linear one included).
@@ -83,7 +83,7 @@ def fit_case_I_loops(form, offset, start, directory=None, stride=10):
     (v = u_c [V], x = v_y [V]), the first period left out of the residuals
     (the model still runs through it), every ``stride``-th sample used in the
     fit, gamma_a held at the published 30.  The result is cached per argument
-    set (:func:`clear_cache` empties the cache): treat it as read-only.
+    set (:func:`_clear_cache` empties the cache): treat it as read-only.
 
     Parameters
     ----------
@@ -126,7 +126,7 @@ def _directory_key(directory):
     return None if directory is None else str(check_directory(directory))
 
 
-def clear_cache():
+def _clear_cache():
     """Forget every cached :func:`fit_case_I_loops` / :func:`workbook_pi_fit` result."""
     _fit_case_I_loops.cache_clear()
     _stored_fit.cache_clear()
@@ -382,7 +382,7 @@ def write_dahl_model(model, path, about=""):
 
 def write_workbook_dahl():
     """Refit the workbook model to the Case I loops and write :func:`workbook_dahl_path`."""
-    clear_cache()
+    _clear_cache()
     fit = fit_case_I_loops(*WORKBOOK_DAHL)
     return write_dahl_model(fit.model, workbook_dahl_path(),
                             about="the workbook's Dahl feedforward model "

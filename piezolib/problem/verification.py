@@ -34,9 +34,8 @@ import control as ct
 import numpy as np
 import pandas as pd
 
-from piezolib._checks import (check_frequency_grid, check_integer, check_nonnegative,
-                              check_positive, check_siso)
-from piezolib.problem.analysis import RobustnessAnalysis, analyze, table3, table3_peaks
+from piezolib._checks import check_frequency_grid, check_integer, check_positive, check_siso
+from piezolib.problem.analysis import analyze, table3, table3_peaks
 from piezolib.problem.genplant import (BLOCK_STRUCTURE, DESIGN_BLOCK_STRUCTURE, DESIGN_ROLLOFF,
                                        check_models, delay_aware_plant,
                                        delayed_closed_loop_response, effective_delay,
@@ -52,7 +51,7 @@ from piezolib.robust.mu import mussv
 from piezolib.robust.reduction import reduce_controller
 
 __all__ = ["Verification", "DesignVerification", "Table3Study", "FINE_GRID", "SAMPLED_DELAYS",
-           "RE_DERIVATION_RTOL", "regularisation_check", "sampled_radii", "mu_on",
+           "RE_DERIVATION_RTOL", "regularisation_check", "sampled_radii",
            "delay_aware_problem", "dk_iteration_checks", "compare_rederived",
            "reduction_by_order", "verify_delay_aware", "delay_sweep", "tustin_check",
            "table3_study", "loop_table", "summary_lines"]
@@ -89,7 +88,7 @@ class Verification:
     text: str = ""
 
 
-def mu_on(P, K, omega=FINE_GRID, blk=DESIGN_BLOCK_STRUCTURE):
+def _mu_on(P, K, omega=FINE_GRID, blk=DESIGN_BLOCK_STRUCTURE):
     """Upper and lower bounds of mu of F_l(P, K) on a grid.
 
     Parameters
@@ -340,9 +339,9 @@ def reduction_by_order(K, G, P, orders, omega=FINE_GRID):
         weighted = reduce_controller(K, order, weight, method="residualize")
         hsv = weighted.hsv
         rows.append({"order": order,
-                     "mu_RP, plain truncation": mu_on(P, plain.K, omega).upper.max()
+                     "mu_RP, plain truncation": _mu_on(P, plain.K, omega).upper.max()
                      if is_stable(G, plain.K) else np.inf,
-                     "mu_RP, G S-weighted residualisation": mu_on(P, weighted.K, omega).upper.max(),
+                     "mu_RP, G S-weighted residualisation": _mu_on(P, weighted.K, omega).upper.max(),
                      "||(K - K_r) G S||": weighted.weighted_error})
     if hsv is None:
         raise ValueError("orders must name at least one order")
@@ -455,7 +454,7 @@ def verify_delay_aware(K_full, K_reduced, K_fixed, G, H_m, H_e, H_y, *, plant, f
     designs = {f"DK full order ({_order(K_full)})": K_full,
                f"DK reduced ({_order(K_reduced)})": K_reduced,
                f"fixed-order mu ({_order(K_fixed)})": K_fixed}
-    mu = {name: mu_on(plant, K, omega) for name, K in designs.items()}
+    mu = {name: _mu_on(plant, K, omega) for name, K in designs.items()}
     lower, per_block = structured_lower_bound(plant, DESIGN_BLOCK_STRUCTURE, 1, 1)
     rows = {}
     for name, K in designs.items():

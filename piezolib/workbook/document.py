@@ -27,7 +27,7 @@ from piezolib.workbook import study as studies
 from piezolib.workbook.outputs import project_root, report_dir
 
 __all__ = ["REPORT_NOTEBOOK", "INLINE_BACKEND", "CHROMIUM_NAMES", "PAPER_SIZES", "print_css",
-           "report_notebook", "default_output", "execute_report", "read_executed", "export_html",
+           "report_notebook", "default_output", "export_html",
            "find_chromium", "print_pdf", "build"]
 
 #: Name prefix of the reproduction report among the numbered notebooks.
@@ -119,7 +119,7 @@ def default_output(study=studies.REFERENCE):
     return report_dir() / f"{studies.load(study).name}.html"
 
 
-def execute_report(study=None, timeout=600):
+def _execute_report(study=None, timeout=600):
     """Execute the reproduction report for ``study`` with figures drawn inline.
 
     Like ``python -m piezolib reproduce 07`` (the study injected after the
@@ -151,7 +151,7 @@ def execute_report(study=None, timeout=600):
                                   study=reproduce.study_spec(study), env=env)
 
 
-def read_executed(path):
+def _read_executed(path):
     """An executed notebook read from ``path`` (e.g. one saved from JupyterLab).
 
     Raises
@@ -295,8 +295,8 @@ def build(study=None, executed=None, output=None, pdf=False, timeout=600, paper=
     print_css(paper)                      # a bad paper size fails before the execution
     chosen = studies.load(studies.REFERENCE if study is None else study)
     output = default_output(chosen) if output is None else check_path("output", output)
-    nb = (read_executed(check_path("executed", executed)) if executed is not None
-          else execute_report(study, timeout))
+    nb = (_read_executed(check_path("executed", executed)) if executed is not None
+          else _execute_report(study, timeout))
     heading = _first_heading(nb)
     title = heading if chosen.is_reference else f"{heading} (study {chosen.name})"
     written = [export_html(nb, output, title=title, paper=paper)]

@@ -31,8 +31,7 @@ from piezolib.workbook import study as studies
 from piezolib.workbook.outputs import (data_dir, notebooks_dir, project_root,
                                        study_figures_dir, study_results_dir)
 
-__all__ = ["DATA_STEPS", "DATA_CHECKS", "GATHERING", "KERNEL_ENVIRONMENT", "check_data",
-           "list_notebooks", "notebook_waves", "default_jobs", "inject_study", "study_spec",
+__all__ = ["DATA_STEPS", "DATA_CHECKS", "GATHERING", "KERNEL_ENVIRONMENT", "list_notebooks", "notebook_waves", "default_jobs", "inject_study", "study_spec",
            "run_notebook", "run", "remove_stale_temporaries", "NotebookFailure"]
 
 #: Data-generating steps run before the notebooks, as "module:function" names
@@ -338,7 +337,7 @@ class _Counter:
 def _run_data_steps(steps, counter, stream):
     """Checks, then the data steps; returns the number of failures (stops at the first)."""
     if steps:
-        for path, problem in check_data().items():
+        for path, problem in _check_data().items():
             print(f"regenerating {path}: it failed its check ({problem})", file=stream,
                   flush=True)
     for step in steps:
@@ -398,7 +397,7 @@ def _report(counter, stream, name, seconds, error):
         print("\n".join("      " + line for line in detail), file=stream, flush=True)
 
 
-def check_data():
+def _check_data():
     """Run :data:`DATA_CHECKS`; return ``{path: problem}`` of the files that fail."""
     problems = {}
     for check in DATA_CHECKS:

@@ -65,7 +65,7 @@ def test_workbook_fit_is_shared_and_deterministic():
     form, offset, start = ph.WORKBOOK_DAHL
     assert (first.model.form, first.offset, first.model.start) == (form, offset, start)
     assert first.model.gamma_a == paper.DAHL.gamma_a          # held at the published value
-    ph.clear_cache()
+    ph._clear_cache()
     again = ph.workbook_dahl_fit()
     assert again is not first and again.model == first.model  # refitted, same stored model
     np.testing.assert_array_equal(again.rms_percent, first.rms_percent)

@@ -62,7 +62,7 @@ def test_sampled_radii_refuse_a_negative_delay(small):
 def test_mu_on_a_small_grid_bounds_are_ordered(small):
     G, H_m, H_e, H_y, K = small
     P = genplant.delay_aware_plant(G, H_m, H_e, H_y, fs=FS)
-    res = verification.mu_on(P, K, omega=np.logspace(1, 5, 12))
+    res = verification._mu_on(P, K, omega=np.logspace(1, 5, 12))
     assert res.upper.shape == (12,) and np.all(res.lower <= res.upper * (1 + 1e-9))
 
 

@@ -4,7 +4,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from piezolib.workbook import outputs, report
+from piezolib.workbook import report
 
 
 def test_verdict_relative_and_absolute():

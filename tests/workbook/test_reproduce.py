@@ -128,14 +128,14 @@ def test_reproduce_says_when_it_regenerates_a_file_that_failed_its_check(workboo
         shutil.copy(real / name, workbook / "data" / name)
     broken = workbook / "data" / "chirp_validation.csv"
     broken.write_text("".join(broken.read_text().splitlines(keepends=True)[:500]))
-    assert list(reproduce.check_data()) == [broken]
+    assert list(reproduce._check_data()) == [broken]
     out = io.StringIO()
     assert reproduce.run(data=True, stream=out) == 0            # no notebooks in this workbook
     lines = out.getvalue().splitlines()
     regenerated = [line for line in lines if line.startswith("regenerating")]
     assert len(regenerated) == 1 and "chirp_validation.csv" in regenerated[0]
     assert "line 501" in regenerated[0]
-    assert reproduce.check_data() == {}                          # regenerated and intact again
+    assert reproduce._check_data() == {}                          # regenerated and intact again
 
 
 def test_study_is_injected_after_the_parameters_cell(workbook):

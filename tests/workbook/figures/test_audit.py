@@ -6,6 +6,7 @@ import pytest
 
 from figure_checks import text_overlaps
 from piezolib import paper, robust
+from piezolib.workbook import plotting
 from piezolib.workbook.figures import audit as F
 from piezolib.workbook.style import unit_text
 

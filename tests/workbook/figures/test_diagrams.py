@@ -4,6 +4,7 @@ import matplotlib.pyplot as plt
 import pytest
 
 from figure_checks import text_overlaps
+from piezolib.workbook import plotting
 from piezolib.workbook.figures import diagrams as F
 
 
