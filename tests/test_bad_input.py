@@ -428,7 +428,8 @@ CASES = {
     "hysteresis.choose_fit": (dict(fits={"a": FIT}), {"fits": {"empty": {}, "text": "abc",
                                                                  "list": [FIT], "not fits": {"a": DAHL}}}),
     "hysteresis.play_outputs": (dict(v=V, thresholds=np.array([0.0, 0.5]), y0=np.zeros(2)),
-                                {"v": SIGNAL,
+                                {"v": {**{k: v for k, v in SIGNAL.items() if k != "2-D"},
+                                       "3-D": np.zeros((4, 2, 2))},   # (N, m): m records
                                  "thresholds": {"nan": [0.0, np.nan], "negative": [-1.0, 0.5],
                                                 "empty": [], "2-D": np.zeros((2, 2)), "text": "ab"},
                                  "y0": {"nan": [np.nan, 0.0], "wrong length": [0.0], "text": "ab"}}),

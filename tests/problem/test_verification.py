@@ -117,16 +117,18 @@ def test_reduction_by_order_gives_mu_and_errors_per_order(small):
         verification.reduction_by_order(K, G, P, orders=())
 
 
-def test_delay_sweep_reuses_known_delays_and_checks_the_bound():
+def test_delay_sweep_reuses_known_delays_and_checks_the_bound(small):
+    # every delay known: nothing is designed (the models are only checked)
+    G, H_m, H_e, H_y, _ = small
     known = {0: (0.80, 0.70), 1: (0.90, 0.85), 2: (0.95, np.nan)}
-    sweep = verification.delay_sweep(None, None, None, None, fs=FS, d_order=4, grid=None,
+    sweep = verification.delay_sweep(G, H_m, H_e, H_y, fs=FS, d_order=4, grid=np.logspace(1, 5, 20),
                                      delays=(0, 2), known=known)
     assert list(sweep.table.index) == [0, 1, 2] and sweep.table.index.name == "delay [samples]"
     assert sweep.table["tau [us]"].tolist() == pytest.approx([50.0, 150.0, 250.0])
     assert not sweep.checks["lower bound computed at the design delays"]   # d = 2 has none
     assert sweep.checks["lower bound <= DK mu_RP"]
     assert sweep.reference_checks == {"more delay, larger mu_RP": True}
-    above = verification.delay_sweep(None, None, None, None, fs=FS, d_order=4, grid=None,
+    above = verification.delay_sweep(G, H_m, H_e, H_y, fs=FS, d_order=4, grid=np.logspace(1, 5, 20),
                                      delays=(), known={0: (0.9, 0.95), 1: (0.8, 0.7)})
     assert not above.checks["lower bound <= DK mu_RP"]
     assert not above.reference_checks["more delay, larger mu_RP"]
