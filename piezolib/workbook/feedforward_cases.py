@@ -26,7 +26,7 @@ from piezolib.problem.hysteresis_choice import DAHL_NAME, PI_NAME, ModelComparis
 from piezolib.problem.stage import VirtualStage
 from piezolib.workbook import experiments, loop
 
-__all__ = ["WORKBOOK_MODEL", "PRINTED_MODEL", "PER_AMPLITUDE", "FeedforwardOnModel",
+__all__ = ["WORKBOOK_MODEL", "PRINTED_MODEL", "PER_AMPLITUDE", "ROUND_OFF_V", "FeedforwardOnModel",
            "feedforward_on_model", "CaseII", "case_II", "CrossCheck", "cross_check_on_stage"]
 
 #: Names of the feedforward models of :func:`case_II` (keys of its ``runs`` and ``percent``).
@@ -38,6 +38,10 @@ PER_AMPLITUDE = "fit per amplitude"
 def _period():
     """Samples per 10 Hz period of the Table 4 triangle at the DAQ rate."""
     return int(paper.SAMPLING_FREQUENCY_HZ / paper.HYSTERESIS_TEST["frequency_Hz"])
+
+
+#: An error below this [V] is round-off: the claim table states the bound, not the digits.
+ROUND_OFF_V = 1e-12
 
 
 @dataclass(frozen=True)
@@ -78,9 +82,12 @@ class FeedforwardOnModel:
 
     @property
     def note(self):
-        """One line for the claim table."""
-        return (f"max |x - x_r| = {max(self.error_V, self.error_paper_form_V):.1e} V, "
-                "workbook model and eq. 10-13 fit")
+        """One line for the claim table: the error as a bound when it is round-off (its
+        digits differ between machines; the committed table must not)."""
+        error = max(self.error_V, self.error_paper_form_V)
+        size = (f"< {ROUND_OFF_V:.0e} V (round-off)" if error < ROUND_OFF_V
+                else f"= {error:.1e} V")
+        return f"max |x - x_r| {size}, workbook model and eq. 10-13 fit"
 
     @property
     def numbers(self):
