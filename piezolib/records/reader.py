@@ -260,6 +260,9 @@ def _cell_value(cell, decimal=".", thousands=None):
         except ValueError:
             return None
     if _number_pattern(decimal, thousands).fullmatch(cell):
+        if thousands is not None and thousands in cell \
+                and not _number_pattern(decimal, thousands, grouped=True).fullmatch(cell):
+            return None      # a separator that does not group thousands: not this number
         text = cell.strip() if thousands is None else cell.strip().replace(thousands, "")
         return float(text.replace(decimal, "."))
     word = cell.strip().lstrip("+-").lower()
@@ -335,7 +338,9 @@ def _every_column(index, head):
 def _read_fast(path, codec, head, index, survey, delimiter, decimal, thousands):
     """``(data, lines)`` read by pandas' C parser, or None where the slow reader must decide."""
     needed, every = sorted(set(index.values())), _every_column(index, head)
-    if len(delimiter) != 1 or survey.comment_seen:
+    # pandas takes a thousands separator anywhere in a number ('1234.35' read as 123435 with
+    # thousands='.'); the slow reader accepts it only between groups of three digits
+    if len(delimiter) != 1 or survey.comment_seen or thousands is not None:
         return None
     # pandas checks the length of every row when it reads every column; reading some, it
     # ignores extra fields: then every line must have as many delimiters as a full row

@@ -290,3 +290,25 @@ def test_line_numbers_count_comment_lines_among_the_data(tmp_path):
     with pytest.raises(R.RecordError, match="uneven sampling") as info:
         R.load_csv(write(tmp_path / "n.csv", lines), **LOAD)
     assert info.value.line == 33
+
+
+@pytest.mark.parametrize("row, thousands, decimal", [
+    ("0.001000;0.031411;1234.352240", ".", ","),     # '.' amid digits not grouped in threes
+    ("0;1,2,3.5;1.0", ",", "."),                      # ',' between single digits
+])
+def test_a_thousands_separator_that_groups_no_thousands_is_refused(tmp_path, row, thousands,
+                                                                   decimal):
+    # pandas reads both (y = 1234352240 and fs = 0.001 Hz; 123.5) without a word
+    path = tmp_path / "rec.csv"
+    path.write_text("t;u;y\n" + "\n".join([row] * 40) + "\n")
+    with pytest.raises(R.RecordError, match="is not a number"):
+        R.load_csv(path, time=0, input=1, output=2, header=True, delimiter=";",
+                         decimal=decimal, thousands=thousands)
+
+
+def test_numbers_grouped_in_thousands_read_as_written(tmp_path):
+    path = tmp_path / "rec.csv"
+    path.write_text("t;u;y\n" + "".join(f"{k},0;1.234,5;-2.000.000,25\n" for k in range(40)))
+    rec = R.load_csv(path, time=0, input=1, output=2, header=True, delimiter=";",
+                           decimal=",", thousands=".")
+    assert rec.fs == 1.0 and set(rec.input) == {1234.5} and set(rec.output) == {-2000000.25}
