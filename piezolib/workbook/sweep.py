@@ -19,6 +19,7 @@ the Pareto figure (``extra_sweep_pareto.png``) are written under
 
 import functools
 import json
+import math
 import os
 import socket
 import sys
@@ -321,6 +322,16 @@ def _check_metrics(metrics):
             isinstance(k, str) and (v is None or isinstance(v, (int, float, bool, str)))
             for k, v in metrics.items()):
         raise TypeError(f"an evaluation must return a dict of named numbers, got {metrics!r}")
+    bad = _non_finite(metrics)
+    if bad:
+        # a NaN or inf metric is a failed evaluation: reported, not stored, run again next time
+        raise ValueError(f"the evaluation returned non-finite metrics: {bad}")
+
+
+def _non_finite(metrics):
+    """The metrics of a point that are NaN or infinite, {name: value}."""
+    return {k: v for k, v in metrics.items()
+            if isinstance(v, float) and not math.isfinite(v)}
 
 
 # --------------------------------------------------------------------------- records
@@ -377,6 +388,8 @@ def read_record(path, key=None):
     if not isinstance(doc, dict) or doc.get("format") != specs.RECORD_FORMAT \
             or files.seal_problem(doc) is not None or (key is not None and doc.get("key") != key):
         return None
+    if not isinstance(doc.get("metrics"), dict) or _non_finite(doc["metrics"]):
+        return None          # written before non-finite metrics counted as failures: rerun
     return doc
 
 

@@ -16,7 +16,7 @@ REPOSITORY = Path(__file__).resolve().parents[2]
 
 #: What the fake evaluation does: ``calls`` counts them, ``stop_after`` interrupts the
 #: sweep like Ctrl-C after that many calls, ``fail`` makes those omega_e values fail.
-FAKE = {"calls": 0, "stop_after": None, "fail": ()}
+FAKE = {"calls": 0, "stop_after": None, "fail": (), "nan": ()}
 
 
 def fake_evaluate(study, controller="fixed_order"):
@@ -28,6 +28,8 @@ def fake_evaluate(study, controller="fixed_order"):
     if omega_e in FAKE["fail"]:
         raise RuntimeError(f"no design for omega_e {omega_e}")
     order = study.design.order if controller == "fixed_order" else 20
+    if omega_e in FAKE["nan"]:
+        return {"mu_RP": float("nan"), "controller_states": order}
     return {"mu_RP": omega_e / 1000 + 0.01 * order, "controller_states": order,
             "tracking_error_50Hz_percent": 5000 / omega_e + 0.1 * study.uncertainty.spread,
             "tracking_error_50Hz_low_percent": 5000 / omega_e - 0.01,
@@ -41,6 +43,7 @@ def checkout(tmp_path, monkeypatch):
     monkeypatch.setitem(FAKE, "calls", 0)
     monkeypatch.setitem(FAKE, "stop_after", None)
     monkeypatch.setitem(FAKE, "fail", ())
+    monkeypatch.setitem(FAKE, "nan", ())
     return tmp_path
 
 
@@ -138,6 +141,17 @@ def test_a_failing_point_is_reported_not_stored_and_retried(checkout):
     assert "FAILED: RuntimeError: no design for omega_e 1260.0" in said
     assert not failed.pareto.any()
     FAKE.update(calls=0, fail=())
+    again, _ = run(grid_spec(), jobs=1)
+    assert FAKE["calls"] == 2 and again.failed == 0
+
+
+def test_a_point_with_a_non_finite_metric_is_a_failure_not_a_stored_success(checkout):
+    # stored as sealed successes before, and reused on every rerun
+    FAKE["nan"] = (1600.0,)
+    result, said = run(grid_spec(), jobs=1)
+    assert result.failed == 2 and "non-finite metrics: {'mu_RP': nan}" in said
+    assert len(list((checkout / "runs" / "sweeps" / "small" / "points").glob("*.json"))) == 4
+    FAKE.update(calls=0, nan=())
     again, _ = run(grid_spec(), jobs=1)
     assert FAKE["calls"] == 2 and again.failed == 0
 
