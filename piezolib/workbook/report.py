@@ -386,14 +386,15 @@ OTHER_TABLES = {
 
 
 #: The workbook's findings beyond the paper, in notebook order: the result table of each
-#: section of the report, the notebook that writes it, the one figure the report shows and
-#: (optionally) the words a row's quantity must contain to belong to the section.
+#: section of the report, the notebook that writes it, the one figure the report shows (None:
+#: the section shares its notebook's figure) and (optionally) the words a row's quantity must
+#: contain to belong to the section.
 FINDINGS = {
     "own_stage": ("08_your_own_stage", "extra_own_stage_mu.png", ""),
     "mixed_mu": ("09_mixed_mu", "extra_mixed_tradeoff.png", ""),
     "real_benchmark": ("10_real_piezo_benchmark", "extra_fsm_scores.png", ""),
     "tracking_over_set": ("12_tracking_over_the_set", "extra_tracking_over_set.png", ""),
-    "case_iv": ("12_tracking_over_the_set", "fig15_tracking_error.png", "Case IV"),
+    "case_iv": ("12_tracking_over_the_set", None, "Case IV"),
 }
 
 #: The columns of a findings table the report shows (most rows publish no number).
