@@ -283,6 +283,7 @@ def coefficient_table(G):
     >>> bool((table["relative error"].abs() < 1e-9).all())
     True
     """
+    check_lti("G", G)
     a, b = monic_coefficients(G)
     ours = np.r_[a, b]
     published = np.r_[paper.PLANT.a, paper.PLANT.b]
@@ -450,6 +451,8 @@ def compare_with_truth(model, truth):
     >>> all(comparison.checks.values())
     True
     """
+    check_lti("model", model)
+    check_lti("truth", truth)
     wn, zeta = pole_pairs(model)
     wn_truth, zeta_truth = pole_pairs(truth)
     if wn.shape != wn_truth.shape:
