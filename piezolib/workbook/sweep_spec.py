@@ -37,6 +37,8 @@ dict layout; :meth:`SweepSpec.points` gives the points
 (:mod:`piezolib.workbook.sweep` runs them).
 """
 
+import collections
+import functools
 import itertools
 import math
 import os
@@ -51,7 +53,7 @@ from piezolib._checks import check_path
 from piezolib.workbook import outputs
 from piezolib.workbook import study as studies
 
-__all__ = ["SweepSpec", "SweepPoint", "SweepError", "CONTROLLERS", "RECORD_FORMAT",
+__all__ = ["SweepSpec", "SweepPoint", "SweepError", "CONTROLLERS", "RECORD_FORMAT", "MAX_POINTS",
            "specs_dir", "load_spec", "spec_from_dict"]
 
 #: Controllers a point can report: the deployed fixed-order one or the full-order DK one.
@@ -59,6 +61,12 @@ CONTROLLERS = ("fixed_order", "full_order")
 
 #: Format version of the per-point records (part of each point's key).
 RECORD_FORMAT = 1
+
+#: Most points one sweep may hold (a grid's combinations, a random sample's ``samples``).
+#: A point is a design of seconds to minutes, so 10,000 points are days of work on a
+#: small cluster; setting them up (one study each, about 0.4 ms) takes a few seconds.
+#: Larger sweeps are refused before any study is built, naming the key and this limit.
+MAX_POINTS = 10_000
 _TOP_KEYS = {"name", "description", "study", "set", "grid", "random"}
 _CONTROLLER = "controller"
 
@@ -176,6 +184,11 @@ class SweepSpec:
         SweepError
             A combination of values that the study refuses (naming the point).
         """
+        return list(self._points)
+
+    @functools.cached_property
+    def _points(self):
+        # built once: a spec is immutable and a large one takes seconds to set up
         rows = (self._grid_rows() if self.grid is not None else self._random_rows())
         points, seen = [], set()
         for params in rows:
@@ -184,7 +197,7 @@ class SweepSpec:
             if digest not in seen:          # a random draw can repeat an earlier point
                 seen.add(digest)
                 points.append(point)
-        return points
+        return tuple(points)
 
     def _grid_rows(self):
         names = list(self.grid)
@@ -391,21 +404,34 @@ def _check_value(base, table, key, value):
 
 
 def _grid(base, table):
-    grid = {}
-    for key, values in _flat("grid", table).items():
+    flat = _flat("grid", table)
+    for key, values in flat.items():
         if not isinstance(values, list) or not values:
             raise SweepError(f"[grid] {key} must be a non-empty list of values, got {values!r}")
+    if not flat:
+        raise SweepError("[grid] names no parameter")
+    _check_grid_size(flat)              # before any value is checked (each builds a study)
+    grid = {}
+    for key, values in flat.items():
         canonical = [studies.choices_digest({"value": v}) for v in values]
-        repeated = sorted({v for v in canonical if canonical.count(v) > 1})
+        repeated = [c for c, n in collections.Counter(canonical).items() if n > 1]
         if repeated:
             twice = next(v for v, c in zip(values, canonical) if c == repeated[0])
             raise SweepError(f"[grid] {key} lists the value {twice!r} more than once")
         for value in values:
             _check_value(base, "grid", key, value)
         grid[key] = tuple(values)
-    if not grid:
-        raise SweepError("[grid] names no parameter")
     return grid
+
+
+def _check_grid_size(grid):
+    """Raise a SweepError naming [grid] and :data:`MAX_POINTS` when the grid has more points."""
+    count = math.prod(len(values) for values in grid.values())
+    if count > MAX_POINTS:
+        sizes = " x ".join(f"{len(values)} ({key})" for key, values in grid.items())
+        raise SweepError(f"[grid] gives {count} points ({sizes}); a sweep holds at most "
+                         f"{MAX_POINTS} points (sweep_spec.MAX_POINTS): split it into "
+                         "smaller sweeps")
 
 
 def _random(base, table):
@@ -413,8 +439,11 @@ def _random(base, table):
         raise SweepError(f"[random] must be a table, got {table!r}")
     table = dict(table)
     samples, seed = table.pop("samples", None), table.pop("seed", None)
-    if isinstance(samples, bool) or not isinstance(samples, int) or not 1 <= samples <= 100_000:
-        raise SweepError(f"[random] samples must be an integer in [1, 100000], got {samples!r}")
+    if isinstance(samples, bool) or not isinstance(samples, int) \
+            or not 1 <= samples <= MAX_POINTS:
+        raise SweepError(f"[random] samples must be an integer in [1, {MAX_POINTS}] (a sweep "
+                         f"holds at most {MAX_POINTS} points, sweep_spec.MAX_POINTS), got "
+                         f"{samples!r}")
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise SweepError(f"[random] seed must be a non-negative integer, got {seed!r}")
     ranges = {key: _range(base, key, value) for key, value in _flat("random", table).items()}

@@ -151,3 +151,31 @@ def test_a_spec_file_whose_name_differs_from_its_file_is_refused(checkout):
     path = write(checkout / "one.toml", 'name = "two"\n[grid]\ndesign.order = [4]\n')
     with pytest.raises(sweep_spec.SweepError, match="one.toml"):
         sweep_spec.load_spec(path)
+
+
+# --------------------------------------------------------------------------- limits
+def test_a_grid_of_more_points_than_the_limit_is_refused_before_any_study_is_built():
+    # 73 x 137 = 10001 points: one more than MAX_POINTS (accepted before, after ~8 s of set-up)
+    assert sweep_spec.MAX_POINTS == 10_000
+    grid = {"weights.omega_e": [500.0 + k for k in range(73)],
+            "weights.omega_y": [1e5 + k for k in range(137)]}
+    with pytest.raises(sweep_spec.SweepError) as info:
+        sweep_spec.spec_from_dict({"name": "big", "grid": grid})
+    said = str(info.value)
+    assert "[grid] gives 10001 points" in said and "at most 10000 points" in said
+    assert "73 (weights.omega_e) x 137 (weights.omega_y)" in said
+
+
+def test_a_random_sample_of_more_points_than_the_limit_is_refused():
+    # 100000 was the documented maximum (and took minutes to set up)
+    with pytest.raises(sweep_spec.SweepError, match=r"samples must be an integer in "
+                                                    r"\[1, 10000\].*got 100000"):
+        sweep_spec.spec_from_dict({"name": "big", "random": {
+            "samples": 100_000, "seed": 0, "weights.omega_e": [800.0, 2500.0]}})
+
+
+def test_a_spec_builds_its_points_once():
+    spec = grid_spec()
+    first, again = spec.points(), spec.points()
+    assert first == again and first is not again            # a fresh list each call
+    assert all(a is b for a, b in zip(first, again))        # of the same points
