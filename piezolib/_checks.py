@@ -7,6 +7,7 @@ scipy or SLICOT as a silent NaN or a deep traceback.
 
 import numbers
 import os
+from collections.abc import Mapping
 from pathlib import Path
 
 import control as ct
@@ -16,7 +17,9 @@ __all__ = [
     "check_positive", "check_nonnegative", "check_finite_array", "check_siso",
     "check_lti", "check_stable", "check_proper", "check_same_length",
     "check_integer", "check_continuous", "check_finite_lti", "check_signals",
-    "check_frequency_grid", "check_type", "check_path",
+    "check_frequency_grid", "check_type", "check_path", "check_count", "check_bool",
+    "check_positive_values", "check_integers", "check_band", "check_index_pair",
+    "check_mapping",
 ]
 
 
@@ -32,6 +35,22 @@ def check_type(name, value, types, what=None):
             names = [t.__name__ for t in (types if isinstance(types, tuple) else (types,))]
             what = " or ".join(names)
         raise TypeError(f"{name} must be {what}, got {type(value).__name__}")
+    return value
+
+
+def check_bool(name, value):
+    """Return ``value`` after checking it is a bool (``"yes"`` or ``3`` is no flag)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name} must be True or False, got {value!r}")
+    return bool(value)
+
+
+def check_mapping(name, value, what="a dict", empty=False):
+    """Return ``value`` after checking it is a mapping (and, unless ``empty``, not empty)."""
+    if not isinstance(value, Mapping):
+        raise TypeError(f"{name} must be {what}, got {type(value).__name__}")
+    if not empty and not value:
+        raise ValueError(f"{name} must not be empty")
     return value
 
 
@@ -78,6 +97,98 @@ def check_integer(name, value, minimum=None):
     if minimum is not None and value < minimum:
         raise ValueError(f"{name} must be >= {minimum}, got {value}")
     return value
+
+
+def check_count(name, value, maximum, minimum=1, why=None):
+    """Return ``value`` as an int after checking ``minimum <= value <= maximum``.
+
+    A size that comes from the user (rows, plays, members, samples) is bounded before
+    any work starts: past ``maximum`` the computation would take minutes or gigabytes
+    instead of failing clearly. ``why`` says what the limit protects (in the message).
+
+    Examples
+    --------
+    >>> check_count("n_rows", 12, maximum=1000)
+    12
+    """
+    value = check_integer(name, value, minimum=minimum)
+    if value > maximum:
+        reason = f" ({why})" if why else ""
+        raise ValueError(f"{name} must be at most {maximum:,}{reason}, got {value:,}")
+    return value
+
+
+def check_positive_values(name, values, upper=None):
+    """Return a non-empty 1-D float array of finite values > 0 (and < ``upper``, if given).
+
+    Examples
+    --------
+    >>> check_positive_values("spreads", [0.02, 0.1], upper=1.0)
+    array([0.02, 0.1 ])
+    """
+    if isinstance(values, (str, bytes)) or isinstance(values, numbers.Number):
+        raise TypeError(f"{name} must be a sequence of positive numbers, got {values!r}")
+    arr = check_finite_array(name, values, ndim=1, min_length=1, real=True)
+    if np.any(arr <= 0):
+        raise ValueError(f"{name} must be positive, got {arr[arr <= 0][0]!r}")
+    if upper is not None and np.any(arr >= upper):
+        raise ValueError(f"{name} must be below {upper}, got {arr[arr >= upper][0]!r}")
+    return arr
+
+
+def check_integers(name, values, minimum=None):
+    """Return a non-empty list of ints, each >= ``minimum`` (orders, delays, sizes).
+
+    Examples
+    --------
+    >>> check_integers("orders", (4, 6), minimum=1)
+    [4, 6]
+    """
+    if isinstance(values, (str, bytes)) or isinstance(values, numbers.Number):
+        raise TypeError(f"{name} must be a sequence of integers, got {values!r}")
+    try:
+        items = list(values)
+    except TypeError:
+        raise TypeError(f"{name} must be a sequence of integers, got "
+                        f"{type(values).__name__}") from None
+    if not items:
+        raise ValueError(f"{name} must hold at least one integer, got none")
+    return [check_integer(f"{name}[{i}]", v, minimum=minimum) for i, v in enumerate(items)]
+
+
+def check_band(name, band):
+    """Return a frequency band ``(low, high)`` as floats, 0 <= low < high, both finite.
+
+    Examples
+    --------
+    >>> check_band("band_Hz", (5, 50))
+    (5.0, 50.0)
+    """
+    if isinstance(band, (str, bytes)):
+        raise TypeError(f"{name} must be a pair (low, high), got {band!r}")
+    arr = check_finite_array(name, band, shape=(2,), real=True)
+    low, high = float(arr[0]), float(arr[1])
+    if low < 0 or high <= low:
+        raise ValueError(f"{name} must be (low, high) with 0 <= low < high, got {tuple(arr)}")
+    return low, high
+
+
+def check_index_pair(name, pair, shape):
+    """Return ``(i, j)`` as ints after checking 0 <= i < shape[0] and 0 <= j < shape[1].
+
+    Examples
+    --------
+    >>> check_index_pair("pair", (0, 2), (3, 3))
+    (0, 2)
+    """
+    if isinstance(pair, (str, bytes)) or not hasattr(pair, "__len__") or len(pair) != 2:
+        raise TypeError(f"{name} must be a pair (output, input) of indices, got {pair!r}")
+    i = check_integer(f"{name}[0]", pair[0], minimum=0)
+    j = check_integer(f"{name}[1]", pair[1], minimum=0)
+    if i >= shape[0] or j >= shape[1]:
+        raise ValueError(f"{name} must index a {shape[0]} x {shape[1]} (outputs x inputs) "
+                         f"model, got {(i, j)}")
+    return i, j
 
 
 def check_finite_array(name, x, ndim=None, min_length=None, shape=None, real=False):

@@ -1042,19 +1042,6 @@ def _bad_calls():
 #: argument (an AttributeError or KeyError from deep inside, or no error): each is a bug of
 #: that function, listed here so that the sweep stays complete while the fixes are pending.
 PENDING = {
-    "coefficient_set.envelope_grid": {
-        "points": ("zero", "negative", "fraction", "text"),
-    },
-    "coefficient_set.covered_spreads": {
-        "H_m": ("text",),
-    },
-    "coefficient_set.envelope_peaks": {
-        "grid_sizes": ("empty", "zero", "text"),
-    },
-    "coefficient_set.compare_spreads": {
-        "spreads": ("negative", "nan", "text"),
-        "order": ("zero", "negative", "fraction", "text"),
-    },
     "weighting.eq16_entries": {
         "G": ("text",),
         "H_e": ("text",),

@@ -30,7 +30,8 @@ import numpy as np
 import pandas as pd
 
 from piezolib import uncertainty as unc
-from piezolib._checks import (check_finite_array, check_frequency_grid, check_positive,
+from piezolib._checks import (check_finite_array, check_frequency_grid, check_integer,
+                              check_integers, check_lti, check_positive, check_positive_values,
                               check_siso, check_type)
 from piezolib.robust.lti import closed_loop_poles, frequency_grid
 
@@ -57,7 +58,7 @@ def envelope_grid(points=2000):
     >>> float(w[0]), float(w[-1]), w.size
     (1.0, 1000000.0, 5)
     """
-    return frequency_grid(1.0, 1e6, points)
+    return frequency_grid(1.0, 1e6, check_integer("points", points, minimum=2))
 
 
 def _pct(spread):
@@ -224,6 +225,7 @@ def envelope_peaks(survey, omega, grid_sizes=GRID_SIZES):
     """
     _check_survey(survey)
     omega = check_frequency_grid("omega", omega, min_length=16)
+    grid_sizes = check_integers("grid_sizes", grid_sizes, minimum=2)
     mset = survey.mset
     stable = unc.envelope_peak(mset, omega, "stable")
     everyone = unc.envelope_peak(mset, omega, "all")
@@ -353,6 +355,8 @@ def compare_spreads(G, H_m, omega, spreads, survey, cover, peaks, order=COVER_OR
     check_type("cover", cover, EnvelopeCover, "an EnvelopeCover (cover_envelope)")
     check_type("peaks", peaks, EnvelopePeaks, "an EnvelopePeaks (envelope_peaks)")
     omega = check_frequency_grid("omega", omega, min_length=16)
+    spreads = check_positive_values("spreads", spreads, upper=1.0).tolist()
+    order = check_integer("order", order, minimum=1)
     study_spread, levels = survey.mset.spread, survey.mset.levels
     rows, fits = [], {}
     for spread in sorted(set(spreads) | {study_spread}):
@@ -542,6 +546,7 @@ def covered_spreads(H_m, G, omega, levels=3):
     CoveredSpreads
         By :func:`piezolib.uncertainty.largest_covered_spread`.
     """
+    check_lti("H_m", H_m)
     omega = check_frequency_grid("omega", omega, min_length=16)
     return CoveredSpreads(
         set=unc.largest_covered_spread(H_m, G, omega, levels=levels, members="stable"),
