@@ -310,18 +310,29 @@ def _column_index(spec, names, what, path, line):
     return check_integer(what, spec, minimum=0)
 
 
-def _columns_of(columns, head, header, path, decimal, thousands):
+def _columns_of(columns, head, header, path, decimal, thousands, distinct):
     """``{key: column number}`` and ``{key: label for messages}``, checking the header."""
     if header and head.names is None:
         raise RecordError("no header line and no data", path)
-    if head.names is not None and all(_looks_numeric(n, decimal, thousands) for n in head.names):
-        shown = ", ".join(repr(n) for n in head.names[:4]) + (", ..." if len(head.names) > 4
-                                                             else "")
+    # empty fields (a trailing delimiter, runs of spaces) are no names: a row of numbers
+    # with them is still data
+    named = [n for n in head.names or () if n != ""]
+    if named and all(_looks_numeric(n, decimal, thousands) for n in named):
+        shown = ", ".join(repr(n) for n in named[:4]) + (", ..." if len(named) > 4 else "")
         raise RecordError(f"the header line holds only numbers ({shown}): it looks like data; "
                           "pass header=False (and the columns by number)", path,
                           head.header_line)
     index = {key: _column_index(spec, head.names, f"columns[{key!r}]", path, head.header_line)
              for key, spec in columns.items()}
+    taken = {}
+    for key, col in index.items():
+        if distinct and col in taken:
+            # one signal in two roles would fit x against itself without a word
+            shown = f"{col} ({head.names[col]!r})" if head.names and col < len(head.names) \
+                else f"{col}"
+            raise ValueError(f"{taken[col]} and {key} name the same column {shown}: each "
+                             "signal needs a column of its own")
+        taken[col] = key
     labels = {}
     for key, col in index.items():
         # (a column number past the header's names is reported by the rows that lack it)
@@ -427,7 +438,7 @@ def _read_slow(stream, path, head, index, labels, delimiter, comment, decimal, t
 
 
 def read_table(path, columns, header=False, delimiter=",", comment="#", *, encoding=None,
-               decimal=".", thousands=None):
+               decimal=".", thousands=None, distinct=False):
     """Read numeric columns of a delimited text file, checking every line.
 
     A clean file is read by pandas' C parser (about the time and memory of
@@ -459,6 +470,9 @@ def read_table(path, columns, header=False, delimiter=",", comment="#", *, encod
     thousands : str, optional
         Thousands separator inside numbers, e.g. ``","`` for ``1,234.5``
         (default: none allowed).
+    distinct : bool, optional
+        Every key must name a column of its own (as the signals of
+        :func:`load_csv`); default False: a column may be read under two keys.
 
     Returns
     -------
@@ -484,7 +498,8 @@ def read_table(path, columns, header=False, delimiter=",", comment="#", *, encod
         the line and the column.
     ValueError
         Bad arguments (an unknown encoding, a delimiter equal to the decimal
-        mark, names without ``header``).
+        mark, names without ``header``, two keys naming one column with
+        ``distinct``).
 
     Examples
     --------
@@ -502,7 +517,8 @@ def read_table(path, columns, header=False, delimiter=",", comment="#", *, encod
     try:
         with open(path, encoding=codec, newline=None) as stream:
             head = _read_head(stream, path, header, delimiter, comment)
-            index, labels = _columns_of(columns, head, header, path, decimal, thousands)
+            index, labels = _columns_of(columns, head, header, path, decimal, thousands,
+                                        distinct)
             if head.first_line is None:
                 return ({key: np.empty(0) for key in index}, head.metadata,
                         np.empty(0, dtype=np.int64))
@@ -586,8 +602,9 @@ def load_csv(path, *, input, output, time=None, fs=None, header=False, delimiter
         separators and decimal commas), non-increasing or uneven time, too
         few rows: the message names the file and the line.
     ValueError
-        Contradictory arguments (no rate, names without a header, an unknown
-        encoding, a delimiter equal to the decimal mark).
+        Contradictory arguments (no rate, names without a header, one column
+        for two signals, an unknown encoding, a delimiter equal to the
+        decimal mark).
 
     Examples
     --------
@@ -613,7 +630,8 @@ def load_csv(path, *, input, output, time=None, fs=None, header=False, delimiter
     if time is not None:
         columns["time"] = time
     data, meta, lines = read_table(path, columns, header, delimiter, comment,
-                                   encoding=encoding, decimal=decimal, thousands=thousands)
+                                   encoding=encoding, decimal=decimal, thousands=thousands,
+                                   distinct=True)
     if len(lines) < min_samples:
         raise RecordError(f"too short: {len(lines)} data row(s), need at least {min_samples}",
                           path, int(lines[-1]) if len(lines) else None)

@@ -46,6 +46,19 @@ def test_decimate_filters_before_keeping_samples():
         R.decimate(R.Record(np.arange(50.0), np.arange(50.0), fs), 5)
 
 
+@pytest.mark.parametrize("factor", [2, 5, 8])
+def test_decimate_keeps_a_sines_amplitude_to_the_first_and_last_sample(factor):
+    # a raw record's +-150 V, 1 Hz sine over 6.7 periods at 5 kHz: zero padding made it
+    # swing +-162.7 V and start at -90 V
+    t = np.arange(int(6.7 * FS)) / FS
+    u = -150.0 * np.cos(2 * np.pi * t + 0.3)
+    dec = R.decimate(R.Record(u, 0.25 * u, FS), factor)
+    error = np.abs(dec.input - u[::factor])
+    assert len(dec) == len(u[::factor])
+    assert error[0] < 0.15 and error[-1] < 0.15 and error.max() < 0.15     # 0.1 % of 150 V
+    assert np.max(np.abs(dec.output - 0.25 * u[::factor])) < 0.25 * 0.15
+
+
 def test_split_and_detrend():
     rec = loop_record()
     first, second = R.split(rec, 0.25)

@@ -183,6 +183,27 @@ def test_header_true_on_a_file_without_header(tmp_path):
     assert len(R.load_csv(path, time=0, input=1, output=2)) == 40
 
 
+@pytest.mark.parametrize("ending, delimiter", [(",", ","), ("", " ")])
+def test_header_true_on_data_with_empty_fields_is_refused(tmp_path, ending, delimiter):
+    # a trailing delimiter, or runs of spaces, gave the first data row an empty "name":
+    # header=True then dropped that row without a word
+    rows = [f"{np.sin(k / 5):.5f}{delimiter}{np.cos(k / 5):.5f}{ending}" for k in range(40)]
+    rows = [" " + row.replace(" ", "  ") for row in rows] if delimiter == " " else rows
+    path = write(tmp_path / "data.csv", rows)
+    with pytest.raises(R.RecordError, match=r"line 1: the header line holds only numbers "
+                                            r"\('0.00000', '1.00000'\): it looks like data"):
+        R.load_csv(path, input=0, output=1, fs=FS, header=True, delimiter=delimiter)
+
+
+def test_one_column_for_two_signals_is_refused(tmp_path):
+    path = write(tmp_path / "a.csv", good_lines())
+    with pytest.raises(ValueError, match=r"input and output name the same column 1 \('v'\)"):
+        R.load_csv(path, time="t", input="v", output=1, header=True)
+    with pytest.raises(ValueError, match=r"input and time name the same column 0"):
+        R.load_csv(write(tmp_path / "b.csv", good_lines(header=False)), time=0, input=0,
+                   output=1)
+
+
 @pytest.mark.parametrize("codec, encoding", [
     ("utf-8-sig", None), ("utf-16", None), ("utf-16-be", None), ("utf-32", None),
     ("latin-1", "latin-1"), ("cp1252", "cp1252"), ("utf-8-sig", "utf-8")])
