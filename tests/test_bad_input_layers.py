@@ -1042,19 +1042,6 @@ def _bad_calls():
 #: argument (an AttributeError or KeyError from deep inside, or no error): each is a bug of
 #: that function, listed here so that the sweep stays complete while the fixes are pending.
 PENDING = {
-    "weighting.eq16_entries": {
-        "G": ("text",),
-        "H_e": ("text",),
-        "omega": ("nan", "negative", "empty", "complex", "text"),
-    },
-    "weighting.eq18_error": {
-        "H_y": ("text",),
-        "omega": ("nan", "negative", "empty", "complex", "text"),
-    },
-    "weighting.templates_met": {
-        "controllers": ("not a model",),
-        "published": ("number", "unknown"),
-    },
     "verification.sampled_radii": {
         "delays": ("number",),
     },
@@ -1148,9 +1135,6 @@ PENDING = {
         "model": ("not a model", "text", "parameters"),
         "paper_form": ("not a model", "text", "parameters"),
         "per_amplitude": ("text",),
-    },
-    "weighting_findings.findings": {
-        "lft_error": ("text", "nan", "negative"),
     },
     "fsm_findings.claim_rows": {
         "scores": ("text", "number"),

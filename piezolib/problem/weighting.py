@@ -9,13 +9,14 @@ peaks of Sec. IV-B, with the claim rows.  Notebook 04; each result has the
 ``checks`` the notebook states.
 """
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import control as ct
 import numpy as np
 import pandas as pd
 
-from piezolib._checks import check_type
+from piezolib._checks import check_frequency_grid, check_siso, check_type
 from piezolib.problem import analysis, genplant, paper
 from piezolib.robust.lti import bandwidth, frequency_grid, hinf_norm, loop_functions
 
@@ -24,6 +25,11 @@ __all__ = ["EQ16_GRID", "Templates", "template_asymptotes", "Eq16Entries", "eq16
 
 #: The frequencies [rad/s] at which P and M are compared with eq. 16 and 18.
 EQ16_GRID = np.logspace(0, 6, 200)
+
+
+def _check_models(**models):
+    for name, sys in models.items():
+        check_siso(name, sys)
 
 
 def _response(f, omega):
@@ -144,7 +150,8 @@ def eq16_entries(P, G, H_m, H_e, H_y, omega=EQ16_GRID):
     True
     """
     check_type("P", P, ct.StateSpace, "a control.StateSpace (genplant.generalized_plant)")
-    omega = np.asarray(omega, dtype=float)
+    _check_models(G=G, H_m=H_m, H_e=H_e, H_y=H_y)
+    omega = check_frequency_grid("omega", omega)
     sc = 1j * omega
     g, hm, he, hy = (np.ravel(f(sc)) for f in (G, H_m, H_e, H_y))
     eq16 = {("y_Delta", "u_b"): hm,
@@ -193,7 +200,8 @@ def eq18_error(M, K, G, H_m, H_e, H_y, omega=EQ16_GRID):
     True
     """
     check_type("M", M, ct.StateSpace, "a control.StateSpace (genplant.closed_loop_matrix)")
-    omega = np.asarray(omega, dtype=float)
+    _check_models(K=K, G=G, H_m=H_m, H_e=H_e, H_y=H_y)
+    omega = check_frequency_grid("omega", omega)
     sc = 1j * omega
     hm, he, hy = (np.ravel(f(sc)) for f in (H_m, H_e, H_y))
     S, T, KS, GS = (np.ravel(f(sc)) for f in loop_functions(G, K))
@@ -300,6 +308,15 @@ def templates_met(controllers, G, H_m, H_e, H_y, published=(), omega=None):
     controllers = check_type("controllers", controllers, dict, "a dict {name: controller}")
     if not controllers:
         raise ValueError("controllers must hold at least one controller")
+    for name, K in controllers.items():
+        check_siso(f"controllers[{name!r}]", K)
+    if isinstance(published, (str, bytes)) or not isinstance(published, Iterable):
+        raise TypeError(f"published must be a sequence of controller names, got {published!r}")
+    published = tuple(published)
+    unknown = [name for name in published if name not in controllers]
+    if unknown:
+        raise ValueError(f"published names {unknown} that are not in controllers "
+                         f"({sorted(controllers)})")
     loops = {name: loop_functions(G, K) for name, K in controllers.items()}
     rows, stable = [], {}
     for name, loop in loops.items():
@@ -313,4 +330,4 @@ def templates_met(controllers, G, H_m, H_e, H_y, published=(), omega=None):
         rows.append((name, bool(nominal.norm_He_S < 1), bool(nominal.norm_Hy_T < 1), *peaks))
     table = pd.DataFrame(rows, columns=["controller", "|S| < 1/|H_e|", "|T| < 1/|H_y|",
                                         "||S|| [dB]", "||T|| [dB]", "bandwidth of T [Hz]"])
-    return TemplatesMet(loops, table, stable, tuple(published))
+    return TemplatesMet(loops, table, stable, published)

@@ -4,7 +4,7 @@
 the lines of :meth:`piezolib.workbook.session.Session.summary`.
 """
 
-from piezolib._checks import check_type
+from piezolib._checks import check_nonnegative, check_type
 from piezolib.problem import paper
 from piezolib.problem.weighting import Eq16Entries, Templates, TemplatesMet
 
@@ -57,6 +57,7 @@ def findings(entries, lft_error, templates, error_params, met):
     e = check_type("error_params", error_params, paper.ErrorWeightParameters,
                    "a paper.ErrorWeightParameters")
     check_type("met", met, TemplatesMet, "a TemplatesMet (weighting.templates_met)")
+    check_nonnegative("lft_error", lft_error)
     S_max, T_max = paper.DESIGN_GOALS["S_peak_dB_max"], paper.DESIGN_GOALS["T_peak_dB_max"]
     lines = [f"**Eq. 16.** Our P reproduces every entry of eq. 16 to a relative error of "
              f"{entries.worst:.0e} ({entries.omega.size} frequencies); F_l(P, K) of the published K "
