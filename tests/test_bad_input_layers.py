@@ -1042,30 +1042,6 @@ def _bad_calls():
 #: argument (an AttributeError or KeyError from deep inside, or no error): each is a bug of
 #: that function, listed here so that the sweep stays complete while the fixes are pending.
 PENDING = {
-    "verification.sampled_radii": {
-        "delays": ("number",),
-    },
-    "verification.delay_aware_problem": {
-        "K_nodelay": ("text",),
-        "K_deployed": ("text",),
-    },
-    "verification.dk_iteration_checks": {
-        "run": ("text", "number"),
-    },
-    "verification.compare_rederived": {
-        "used": ("text", "number"),
-        "rederived": ("text", "number"),
-    },
-    "verification.reduction_by_order": {
-        "orders": ("zero", "text"),
-    },
-    "verification.loop_table": {
-        "controllers": ("text", "not a model"),
-    },
-    "verification.summary_lines": {
-        "nodelay_radii": ("text", "number"),
-        "paper_values": ("text", "no mu_RP"),
-    },
     "coefficient_box.stability_margins": {
         "grid": ("reversed",),
     },

@@ -34,7 +34,8 @@ import control as ct
 import numpy as np
 import pandas as pd
 
-from piezolib._checks import check_frequency_grid, check_integer, check_positive, check_siso
+from piezolib._checks import (check_frequency_grid, check_integer, check_integers,
+                              check_mapping, check_positive, check_siso, check_type)
 from piezolib.problem.analysis import analyze, table3, table3_peaks
 from piezolib.problem.genplant import (BLOCK_STRUCTURE, DESIGN_BLOCK_STRUCTURE, DESIGN_ROLLOFF,
                                        check_models, delay_aware_plant,
@@ -186,7 +187,7 @@ def sampled_radii(G, K, fs, delays=SAMPLED_DELAYS):
     check_siso("G", G)
     check_siso("K", K)
     Kd = discretize(K, check_positive("fs", fs)).K
-    delays = [check_integer("delays", d, minimum=0) for d in delays]
+    delays = check_integers("delays", delays, minimum=0)
     return pd.Series({d: sampled_loop_radius(G, Kd, d) for d in delays},
                      name="spectral radius").rename_axis("delay [samples]")
 
@@ -219,6 +220,8 @@ def delay_aware_problem(G, H_m, H_e, H_y, K_nodelay, K_deployed, *, fs, delay_sa
         Named by the rate and the delay.
     """
     G, H_m, H_e, H_y = check_models(G, H_m, H_e, H_y)
+    check_siso("K_nodelay", K_nodelay)
+    check_siso("K_deployed", K_deployed)
     omega = check_frequency_grid("omega", omega, min_length=2)
     tau = effective_delay(fs, delay_samples)
     poles = ct.poles(G)
@@ -255,6 +258,10 @@ def dk_iteration_checks(run):
         ``table``: the per-iteration history; ``text``: the largest
         mu / gamma - 1 over the iterations.
     """
+    if not isinstance(getattr(run, "history", None), pd.DataFrame) \
+            or not all(hasattr(run, a) for a in ("mu_peak", "mu_lower_peak")):
+        raise TypeError("run must be a DK-iteration result with history, mu_peak and "
+                        f"mu_lower_peak (piezolib.robust.musyn), got {type(run).__name__}")
     history = run.history
     excess = float((history.mu_upper / history.gamma - 1).max())
     return Verification(
@@ -266,6 +273,17 @@ def dk_iteration_checks(run):
              bool(history.mu_upper.iloc[0] > 1.2),
          "robust performance met (mu_RP < 1)": bool(run.mu_peak < 1)},
         text=f"largest mu / gamma - 1 over the iterations: {excess:.1e}")
+
+
+def _check_controller_set(name, controllers):
+    """A set of designs with ``mu`` (a dict) and the controllers ``K_full`` and ``K_fixed``."""
+    missing = [a for a in ("mu", "K_full", "K_fixed") if not hasattr(controllers, a)]
+    if missing or not isinstance(controllers.mu, dict):
+        raise TypeError(f"{name} must be a controller set with mu (a dict), K_full and K_fixed "
+                        f"(e.g. pipeline.StudyControllers), got {type(controllers).__name__}")
+    check_siso(f"{name}.K_full", controllers.K_full)
+    check_siso(f"{name}.K_fixed", controllers.K_fixed)
+    return controllers
 
 
 def compare_rederived(used, rederived, rtol=RE_DERIVATION_RTOL):
@@ -284,6 +302,8 @@ def compare_rederived(used, rederived, rtol=RE_DERIVATION_RTOL):
     Verification
         ``table``: both mu values per design and their relative difference.
     """
+    _check_controller_set("used", used)
+    _check_controller_set("rederived", rederived)
     rtol = check_positive("rtol", rtol)
     table = pd.DataFrame({"used by the notebooks": used.mu, "re-derived here": rederived.mu})
     table["relative difference"] = table["re-derived here"] / table["used by the notebooks"] - 1
@@ -332,6 +352,10 @@ def reduction_by_order(K, G, P, orders, omega=FINE_GRID):
     -------
     ReductionByOrder
     """
+    check_siso("K", K)
+    check_siso("G", G)
+    check_type("P", P, ct.StateSpace, "a control.StateSpace (the synthesis plant)")
+    orders = check_integers("orders", orders, minimum=1)
     weight = loop_functions(G, K).GS
     rows, hsv = [], None
     for order in orders:
@@ -772,6 +796,10 @@ def loop_table(G, controllers):
     >>> loop_table(ct.tf([1.0], [1.0, 1.0]), {"P": ct.tf([2.0], [1.0])})["stable"].tolist()
     [True]
     """
+    check_siso("G", G)
+    check_mapping("controllers", controllers, "a dict {name: controller}")
+    for name, K in controllers.items():
+        check_siso(f"controllers[{name!r}]", K)
     return pd.DataFrame({
         "stable": {name: is_stable(G, K) for name, K in controllers.items()},
         "|K(inf)| [V/V]": {name: abs(realize(K).D[0, 0]) for name, K in controllers.items()},
@@ -800,6 +828,11 @@ def summary_lines(nodelay_radii, designs, study, paper_values):
     if not isinstance(designs, DesignVerification) or not isinstance(study, Table3Study):
         raise TypeError("designs and study must be the results of verify_delay_aware and "
                         "table3_study")
+    check_type("nodelay_radii", nodelay_radii, pd.Series, "a pandas.Series (sampled_radii)")
+    check_mapping("paper_values", paper_values, "a dict with mu_RP and mu_RS", empty=True)
+    missing = {"mu_RP", "mu_RS"} - set(paper_values)
+    if missing:
+        raise ValueError(f"paper_values must hold mu_RP and mu_RS, missing {sorted(missing)}")
     pub, full, red, _, _ = study._roles()
     nd_mu = study.nodelay_mu
     unstable = [d for d, r in nodelay_radii.items() if r >= 1]
