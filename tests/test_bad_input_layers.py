@@ -1042,26 +1042,6 @@ def _bad_calls():
 #: argument (an AttributeError or KeyError from deep inside, or no error): each is a bug of
 #: that function, listed here so that the sweep stays complete while the fixes are pending.
 PENDING = {
-    "coefficient_box.stability_margins": {
-        "grid": ("reversed",),
-    },
-    "coefficient_box.spread_bounds": {
-        "G": ("two inputs",),
-        "K": ("two inputs",),
-        "grid": ("reversed",),
-        "name": ("number",),
-    },
-    "coefficient_box.check_chosen_design": {
-        "H_e": ("text",),
-        "delay_samples": ("negative", "fraction"),
-    },
-    "coefficient_box.mixed_claims": {
-        "tracking": ("text", "number"),
-    },
-    "coefficient_box.summary_lines": {
-        "tracking": ("text", "number"),
-        "published": ("number",),
-    },
     "fsm_models.fit_linear_models": {
         "orders": ("empty", "zero", "text"),
         "baseline_order": ("zero", "negative", "fraction", "text"),

@@ -25,7 +25,7 @@ import numpy as np
 import pandas as pd
 
 from piezolib import uncertainty as unc
-from piezolib._checks import check_integer, check_model, check_positive, check_type
+from piezolib._checks import check_integer, check_model, check_positive, check_siso, check_type
 from piezolib.problem import paper
 from piezolib.problem.analysis import MARGIN_DELAYS, box_stability_table, margins_table
 from piezolib.problem.design import MixedDesign, choose_mixed_design, tradeoff_table
@@ -70,7 +70,12 @@ def _grid(name, grid):
     if not (isinstance(grid, (tuple, list)) and len(grid) == 3):
         raise TypeError(f"{name} must be a tuple (omega_min, omega_max, points) [rad/s], "
                         f"got {grid!r}"[:200])
-    return frequency_grid(grid[0], grid[1], check_integer(f"{name} points", grid[2], minimum=3))
+    low = check_positive(f"{name} omega_min", grid[0])
+    high = check_positive(f"{name} omega_max", grid[1])
+    if high <= low:
+        raise ValueError(f"{name} must run upwards: omega_max {high:g} <= omega_min {low:g} "
+                         "[rad/s]")
+    return frequency_grid(low, high, check_integer(f"{name} points", grid[2], minimum=3))
 
 
 def _controllers(controllers):
@@ -443,10 +448,11 @@ def spread_bounds(G, K, spread, critical, grid=FIGURE_GRID, peak_points=PEAK_POI
     -------
     SpreadBounds
     """
-    check_model("G", G, proper=True)
-    check_model("K", K, proper=True)
+    check_siso("G", check_model("G", G, proper=True))
+    check_siso("K", check_model("K", K, proper=True))
     spread = check_positive("spread", spread)
     check_type("critical", critical, unc.ParametricMargin, "a ParametricMargin")
+    check_type("name", name, str, "a str (the controller's name)")
     peak_points = check_integer("peak_points", peak_points, minimum=0)
     omega = np.union1d(_grid("grid", grid),
                        critical.omega * np.linspace(0.85, 1.15, peak_points))
@@ -626,6 +632,9 @@ def check_chosen_design(design, deployed, sections, G, H_e, H_y, fs, grids=CHECK
     if design is not None and not isinstance(sections.get(MIXED), SOSController):
         raise TypeError(f"sections[{MIXED!r}] must be the chosen design's SOSController")
     spread = paper.UNCERTAINTY_SPREAD if spread is None else check_positive("spread", spread)
+    for label, sys in (("G", G), ("H_e", H_e), ("H_y", H_y)):
+        check_siso(label, check_model(label, sys, proper=True))
+    delay_samples = check_integer("delay_samples", delay_samples, minimum=0)
     if isinstance(grids, str) or not hasattr(grids, "__len__") or len(grids) == 0:
         raise TypeError(f"grids must be a non-empty sequence of (omega_min, omega_max, points), "
                         f"got {grids!r}"[:200])
@@ -672,9 +681,9 @@ def mixed_claims(chosen, tracking):
         Keyword arguments of ``ClaimTable.add``.
     """
     check_type("chosen", chosen, ChosenDesignCheck, "a ChosenDesignCheck")
+    check_type("tracking", tracking, pd.DataFrame, "a pandas DataFrame")
     if chosen.design is None:
         return []
-    check_type("tracking", tracking, pd.DataFrame, "a pandas DataFrame")
     rows = []
     for d in MARGIN_DELAYS:
         members, unstable = chosen.unstable(d)
@@ -716,6 +725,11 @@ def summary_lines(lft, margins, bounds, chosen, tracking, published="published K
     check_type("margins", margins, BoxMargins, "a BoxMargins")
     check_type("bounds", bounds, SpreadBounds, "a SpreadBounds")
     check_type("chosen", chosen, ChosenDesignCheck, "a ChosenDesignCheck")
+    check_type("tracking", tracking, pd.DataFrame, "a pandas DataFrame")
+    check_type("published", published, str, "a str (the published controller's name)")
+    if published not in margins.controllers:
+        raise ValueError(f"published {published!r} is not a controller of margins "
+                         f"({sorted(margins.controllers)})")
     pub = margins.controllers[published]
     real, exact, stated = pub.real, pub.exact, paper.UNCERTAINTY_SPREAD
     lines = [
