@@ -1042,23 +1042,6 @@ def _bad_calls():
 #: argument (an AttributeError or KeyError from deep inside, or no error): each is a bug of
 #: that function, listed here so that the sweep stays complete while the fixes are pending.
 PENDING = {
-    "fsm_models.fit_linear_models": {
-        "orders": ("empty", "zero", "text"),
-        "baseline_order": ("zero", "negative", "fraction", "text"),
-    },
-    "fsm_models.level_change": {
-        "bands_Hz": ("text", "empty", "reversed"),
-    },
-    "fsm_models.fit_nonlinear_models": {
-        "play_thresholds_V": ("empty", "negative", "text"),
-    },
-    "fsm_models.level_spread_weight": {
-        "pair": ("out of range", "negative", "text"),
-        "order": ("zero", "negative", "fraction", "text"),
-    },
-    "fsm_models.level_label": {
-        "level_mV": ("other level", "text"),
-    },
     "fsm_control.axis_entry": {
         "model": ("text", "two inputs"),
         "pair": ("out of range", "negative", "text"),

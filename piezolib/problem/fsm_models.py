@@ -26,7 +26,8 @@ import pandas as pd
 
 from piezolib import identification as ident
 from piezolib import uncertainty as unc
-from piezolib._checks import check_type
+from piezolib._checks import (check_band, check_finite_array, check_index_pair, check_integer,
+                              check_integers, check_type)
 from piezolib.problem import fsm_benchmark as fsm
 
 __all__ = ["LevelBLAs", "level_blas", "LinearModels", "fit_linear_models", "LinearScores",
@@ -54,7 +55,7 @@ def level_label(level_mV):
     >>> level_label(200)
     '200 mV'
     """
-    return f"{level_mV} mV"
+    return f"{fsm._level(level_mV)} mV"
 
 
 def _power(x):
@@ -213,6 +214,8 @@ def fit_linear_models(blas, orders, baseline_order):
     LinearModels
     """
     check_type("blas", blas, LevelBLAs, "a LevelBLAs (level_blas)")
+    orders = check_integers("orders", orders, minimum=1)
+    baseline_order = check_integer("baseline_order", baseline_order, minimum=1)
     fs = fsm.SAMPLING_FREQUENCY_HZ
     common = dict(input_labels=fsm.INPUT_LABELS, output_labels=fsm.OUTPUT_LABELS)
     models, selections = {}, {}
@@ -388,6 +391,16 @@ class LevelChange:
             self.table.loc["share of the change's power [%]", "0-600 Hz"] < 5)}
 
 
+def _check_bands(bands_Hz):
+    if isinstance(bands_Hz, (str, bytes)) or not hasattr(bands_Hz, "__len__"):
+        raise TypeError(f"bands_Hz must be a sequence of (low, high) bands [Hz], got "
+                        f"{bands_Hz!r}")
+    if not len(bands_Hz):
+        raise ValueError("bands_Hz must hold at least one band")
+    for i, band in enumerate(bands_Hz):
+        check_band(f"bands_Hz[{i}]", band)
+
+
 def level_change(blas, bands_Hz=BANDS_HZ):
     """The BLA's change from 100 to 300 mV split by frequency band.
 
@@ -402,6 +415,7 @@ def level_change(blas, bands_Hz=BANDS_HZ):
     LevelChange
     """
     check_type("blas", blas, LevelBLAs, "a LevelBLAs (level_blas)")
+    _check_bands(bands_Hz)
     f = blas.frequency_Hz
     G = blas.blas
     change = G[300].G - G[100].G
@@ -514,6 +528,11 @@ def fit_nonlinear_models(blas, linear, play_thresholds_V):
     """
     check_type("blas", blas, LevelBLAs, "a LevelBLAs (level_blas)")
     check_type("linear", linear, LinearModels, "a LinearModels (fit_linear_models)")
+    thresholds = check_finite_array("play_thresholds_V", play_thresholds_V, ndim=1,
+                                    min_length=1, real=True)
+    if thresholds[0] < 0 or np.any(np.diff(thresholds) <= 0):
+        raise ValueError(f"play_thresholds_V must be >= 0 and strictly increasing [V], got "
+                         f"{thresholds}")
     levels = fsm.LEVELS_MV
     lines = blas.blas[levels[0]].lines
     hammerstein = ident.fit_play_weights(linear.model(linear.all_name),
@@ -618,6 +637,8 @@ def level_spread_weight(blas, linear, pair=(2, 2), order=4):
     """
     check_type("blas", blas, LevelBLAs, "a LevelBLAs (level_blas)")
     check_type("linear", linear, LinearModels, "a LinearModels (fit_linear_models)")
+    pair = check_index_pair("pair", pair, (len(fsm.OUTPUT_LABELS), len(fsm.INPUT_LABELS)))
+    order = check_integer("order", order, minimum=1)
     f = blas.frequency_Hz
     peak_um_V = 1e6 * np.abs(blas.blas[200].G).max(axis=2)              # (3, 3) peak |G| [um/V]
     coupling = pd.DataFrame(peak_um_V / np.diag(peak_um_V)[:, None], index=fsm.OUTPUT_LABELS,
