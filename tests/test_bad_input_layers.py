@@ -1042,30 +1042,6 @@ def _bad_calls():
 #: argument (an AttributeError or KeyError from deep inside, or no error): each is a bug of
 #: that function, listed here so that the sweep stays complete while the fixes are pending.
 PENDING = {
-    "fsm_control.axis_entry": {
-        "model": ("text", "two inputs"),
-        "pair": ("out of range", "negative", "text"),
-    },
-    "fsm_control.axis_nominal": {
-        "linear": ("text", "number"),
-        "frequency_Hz": ("empty", "negative", "nan"),
-        "pair": ("out of range", "negative", "text"),
-        "orders": ("empty", "zero", "text"),
-    },
-    "fsm_control.design_axis": {
-        "bandwidth_Hz": ("zero", "negative", "nan", "inf", "text"),
-        "error_weight": ("text",),
-        "output_weight": ("text",),
-        "output_corner": ("zero", "negative", "nan", "inf", "text"),
-        "rolloff": ("text",),
-        "dk_iterations": ("zero", "negative", "fraction", "text"),
-    },
-    "fsm_control.axis_coupling": {
-        "blas": ("text", "number"),
-        "linear": ("text", "number"),
-        "pair": ("out of range", "negative", "text"),
-        "band_Hz": ("reversed", "negative", "text"),
-    },
     "feedforward_cases.feedforward_on_model": {
         "model": ("not a model", "text", "parameters"),
     },

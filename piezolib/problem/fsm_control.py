@@ -31,9 +31,12 @@ import pandas as pd
 from piezolib import identification as ident
 from piezolib import robust
 from piezolib import uncertainty as unc
-from piezolib._checks import check_integer, check_nonnegative, check_positive, check_type
+from piezolib._checks import (check_band, check_index_pair, check_integer, check_integers,
+                              check_lti, check_mapping, check_nonnegative, check_positive,
+                              check_positive_values, check_type)
 from piezolib.problem import fsm_benchmark as fsm
 from piezolib.problem import genplant
+from piezolib.problem.fsm_models import LevelBLAs, LinearModels
 
 __all__ = ["UM_PER_M", "REDUCTION_ORDERS", "BLOCKS", "axis_entry", "AxisNominal", "axis_nominal",
            "AxisDesign", "design_axis", "AxisVerification", "verify_axis", "AxisCoupling",
@@ -102,7 +105,11 @@ def axis_entry(model, pair):
     >>> float(g.B[0, 0]), float(g.C[0, 0]), float(g.D[0, 0])
     (2.0, 3.0, 1.0)
     """
-    o, i = pair
+    check_type("model", check_lti("model", model), ct.StateSpace, "a control.StateSpace")
+    if not model.isdtime(strict=True):
+        raise ValueError("model must be a discrete-time model (the FSM's sampled model), got "
+                         "a continuous-time one")
+    o, i = check_index_pair("pair", pair, (model.noutputs, model.ninputs))
     return ct.ss(model.A, model.B[:, [i]] * UM_PER_M, model.C[[o]],
                  model.D[[o]][:, [i]] * UM_PER_M, model.dt)
 
@@ -205,7 +212,10 @@ def axis_nominal(linear, frequency_Hz, nominal_order, pair=(2, 2),
     AxisNominal
     """
     nominal_order = check_integer("nominal_order", nominal_order, minimum=1)
-    f = np.asarray(frequency_Hz, dtype=float)
+    check_type("linear", linear, LinearModels, "a LinearModels (fsm_models.fit_linear_models)")
+    f = check_positive_values("frequency_Hz", frequency_Hz)
+    pair = check_index_pair("pair", pair, (len(fsm.OUTPUT_LABELS), len(fsm.INPUT_LABELS)))
+    orders = check_integers("orders", orders, minimum=1)
     T_s = 1 / fsm.SAMPLING_FREQUENCY_HZ
     zl = np.exp(2j * np.pi * f / fsm.SAMPLING_FREQUENCY_HZ)
     g_full = axis_entry(linear.model(linear.all_name), pair)
@@ -336,6 +346,12 @@ def design_axis(nominal, *, bandwidth_Hz, error_weight, output_weight, output_co
     AxisDesign
     """
     check_type("nominal", nominal, AxisNominal, "an AxisNominal (axis_nominal)")
+    bandwidth_Hz = check_positive("bandwidth_Hz", bandwidth_Hz)
+    for name, fields in (("error_weight", error_weight), ("output_weight", output_weight),
+                         ("rolloff", rolloff)):
+        check_mapping(name, fields, "a dict of keyword arguments", empty=True)
+    output_corner = check_positive("output_corner", output_corner)
+    dk_iterations = check_integer("dk_iterations", dk_iterations, minimum=1)
     fs = fsm.SAMPLING_FREQUENCY_HZ
     T_s = 1 / fs
     omega_rad_s = 2 * np.pi * nominal.frequency_Hz
@@ -512,10 +528,13 @@ def axis_coupling(blas, linear, design, pair=(2, 2), band_Hz=(5, 50)):
     -------
     AxisCoupling
     """
+    check_type("blas", blas, LevelBLAs, "a LevelBLAs (fsm_models.level_blas)")
+    check_type("linear", linear, LinearModels, "a LinearModels (fsm_models.fit_linear_models)")
     check_type("design", design, AxisDesign, "an AxisDesign (design_axis)")
+    o, i = check_index_pair("pair", pair, (len(fsm.OUTPUT_LABELS), len(fsm.INPUT_LABELS)))
+    low, high = check_band("band_Hz", band_Hz)
     f = blas.frequency_Hz
-    o, i = pair
-    band = (f >= band_Hz[0]) & (f <= band_Hz[1])
+    band = (f >= low) & (f <= high)
     G200 = blas.blas[200].G
     rms = np.sqrt(np.mean(np.abs(G200[..., band]) ** 2, axis=2))
     coupling = pd.DataFrame(rms / rms.diagonal()[:, None], index=fsm.OUTPUT_LABELS,
