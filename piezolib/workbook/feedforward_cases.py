@@ -17,13 +17,13 @@ import numpy as np
 import pandas as pd
 
 from piezolib import metrics
-from piezolib._checks import check_type
+from piezolib._checks import check_mapping, check_type
 from piezolib.hysteresis.compensator import DahlFeedforward
 from piezolib.hysteresis.dahl import DahlModel, feedforward, simulate_dahl
 from piezolib.hysteresis.select import cross_check
 from piezolib.problem import paper
 from piezolib.problem.hysteresis_choice import DAHL_NAME, PI_NAME, ModelComparison
-from piezolib.problem.stage import VirtualStage
+from piezolib.problem.stage import StageRecord, VirtualStage
 from piezolib.workbook import experiments, loop
 
 __all__ = ["WORKBOOK_MODEL", "PRINTED_MODEL", "PER_AMPLITUDE", "ROUND_OFF_V", "FeedforwardOnModel",
@@ -214,9 +214,17 @@ def case_II(loops, model, paper_form, per_amplitude=None, stage=None):
     -------
     CaseII
     """
-    loops = check_type("loops", loops, dict, "a dict {amplitude: StageRecord}")
+    check_type("model", model, DahlModel, "a DahlModel")
+    check_type("paper_form", paper_form, DahlModel, "a DahlModel")
+    if per_amplitude is not None:
+        check_mapping("per_amplitude", per_amplitude, "a dict {amplitude: DahlModel}")
+        for A, m in per_amplitude.items():
+            check_type(f"per_amplitude[{A!r}]", m, DahlModel, "a DahlModel")
     stage = VirtualStage(seed=0) if stage is None else check_type("stage", stage, VirtualStage,
                                                                   "a VirtualStage")
+    check_mapping("loops", loops, "a dict {amplitude: StageRecord}")
+    for A, rec in loops.items():
+        check_type(f"loops[{A!r}]", rec, StageRecord, "a StageRecord (a Case I loop)")
     amplitudes = paper.HYSTERESIS_TEST["actuator_amplitudes_V"]
     case_I = {A: experiments.table4_measure(rec.u_c_V, rec.v_y_V).percent
               for A, rec in loops.items()}
