@@ -1043,25 +1043,6 @@ def _bad_calls():
 #: argument (an AttributeError or KeyError from deep inside, or no error): each is a bug of
 #: that function, listed here so that the sweep stays complete while the fixes are pending.
 PENDING = {
-    "fsm_findings.claim_rows": {
-        "scores": ("text", "number"),
-        "nonlinear": ("text", "number"),
-        "weight": ("text", "number"),
-        "nominal": ("text", "number"),
-        "verified": ("text", "number"),
-        "design": ("text", "number"),
-    },
-    "fsm_findings.summary_lines": {
-        "blas": ("text", "number"),
-        "scores": ("text", "number"),
-        "change": ("text", "number"),
-        "nonlinear": ("text", "number"),
-        "weight": ("text", "number"),
-        "nominal": ("text", "number"),
-        "design": ("text", "number"),
-        "verified": ("text", "number"),
-        "coupling": ("text", "number"),
-    },
     "tracking_setup.sections_error": {
         "Kd": ("text", "continuous"),
         "sections": ("text", "number"),

@@ -11,10 +11,31 @@ the axis controller does and does not do), for
 
 import numpy as np
 
+from piezolib._checks import check_type
 from piezolib.problem import fsm_benchmark as fsm
 from piezolib.problem import fsm_control, fsm_models
 
 __all__ = ["claim_rows", "summary_lines", "slashed"]
+
+
+#: The result class of each argument of :func:`claim_rows` and :func:`summary_lines`.
+_RESULTS = {
+    "blas": fsm_models.LevelBLAs,
+    "scores": fsm_models.LinearScores,
+    "change": fsm_models.LevelChange,
+    "nonlinear": fsm_models.NonlinearModels,
+    "weight": fsm_models.LevelSpreadWeight,
+    "nominal": fsm_control.AxisNominal,
+    "design": fsm_control.AxisDesign,
+    "verified": fsm_control.AxisVerification,
+    "coupling": fsm_control.AxisCoupling,
+}
+
+
+def _check_results(**results):
+    for name, value in results.items():
+        cls = _RESULTS[name]
+        check_type(name, value, cls, f"a {cls.__module__.rsplit('.', 1)[-1]}.{cls.__name__}")
 
 
 def slashed(values):
@@ -56,6 +77,8 @@ def claim_rows(scores, nonlinear, weight, nominal, verified, design):
         claim's ``unit``, ``note``, ``precision``); none published (``paper``
         None): the benchmark's published numbers are in the notes.
     """
+    _check_results(scores=scores, nonlinear=nonlinear, weight=weight, nominal=nominal,
+                   verified=verified, design=design)
     linear, pub, sig3 = scores.linear, fsm.PUBLISHED_NRMSE_PERCENT, fsm_control.significant
     rows = []
     for lv in fsm.LEVELS_MV:
@@ -135,6 +158,8 @@ def summary_lines(blas, scores, change, nonlinear, weight, nominal, design, veri
     list of str
         Markdown lines, numbers in the notebook's tables' values.
     """
+    _check_results(blas=blas, scores=scores, change=change, nonlinear=nonlinear, weight=weight,
+                   nominal=nominal, design=design, verified=verified, coupling=coupling)
     levels, linear = fsm.LEVELS_MV, scores.linear
     same, share = scores.same_level_table(), scores.noise_share_table()
     levels_table, nl = blas.table(), nonlinear.table(scores)

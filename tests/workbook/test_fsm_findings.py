@@ -1,5 +1,6 @@
 """Notebook 10's claim rows and summary lines from (small, synthetic) benchmark results."""
 
+import dataclasses
 from types import SimpleNamespace
 
 import control as ct
@@ -52,7 +53,8 @@ def _results():
     verified = fsm_control.AxisVerification(mu=None, mu_upper=0.76218, mu_lower=0.7615,
                                             peak_Hz=1.0, wplane_max_real=-1.0,
                                             delay_radius=np.ones(4) * 0.99, loops=loops)
-    design = SimpleNamespace(bandwidth_Hz=20.0, K_w=SimpleNamespace(nstates=22))
+    design = fsm_control.AxisDesign(**{f.name: None for f in dataclasses.fields(
+        fsm_control.AxisDesign)} | dict(bandwidth_Hz=20.0, K_w=SimpleNamespace(nstates=22)))
     return scores, nonlinear, weight, nominal, verified, design
 
 
