@@ -1043,46 +1043,6 @@ def _bad_calls():
 #: argument (an AttributeError or KeyError from deep inside, or no error): each is a bug of
 #: that function, listed here so that the sweep stays complete while the fixes are pending.
 PENDING = {
-    "tracking_setup.sections_error": {
-        "Kd": ("text", "continuous"),
-        "sections": ("text", "number"),
-        "fs": ("zero", "negative", "nan", "inf", "text"),
-    },
-    "tracking_setup.loop_margins": {
-        "ing": ("text", "number"),
-    },
-    "tracking_setup.mu_certificate": {
-        "ing": ("text", "number"),
-    },
-    "tracking_setup.error_definition_evidence": {
-        "ing": ("text", "number"),
-    },
-    "tracking_study.run_experiments": {
-        "ing": ("text", "number"),
-    },
-    "tracking_study.case_I_gain": {
-        "ing": ("text", "number"),
-    },
-    "tracking_study.case_IV": {
-        "ing": ("text", "number"),
-        "runs": ("text", "number"),
-    },
-    "tracking_study.saturation": {
-        "runs": ("text", "number"),
-    },
-    "tracking_study.add_claims": {
-        "claims": ("text", "number"),
-        "mu": ("text", "number"),
-        "runs": ("text", "number"),
-        "case_iv": ("text", "number"),
-    },
-    "tracking_study.summary": {
-        "claims": ("text", "number"),
-        "reference": ("text", "number"),
-        "mu": ("text", "number"),
-        "runs": ("text", "number"),
-        "case_iv": ("text", "number"),
-    },
     "your_stage.analysis_grid": {
         "low_rad_s": ("zero", "negative", "nan", "inf", "text"),
         "high_rad_s": ("below low", "text"),

@@ -29,11 +29,13 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from piezolib._checks import check_lti, check_positive, check_type
 from piezolib.hysteresis import FitWarning
 from piezolib.problem import analysis, paper
 from piezolib.problem import stage as vstage
 from piezolib.problem.hysteresis_fits import workbook_dahl_fit
 from piezolib.robust.achievable import achievable_range
+from piezolib.robust.export import SOSController
 from piezolib.workbook import experiments, pipeline
 from piezolib.workbook import study as studies
 
@@ -210,6 +212,10 @@ def ingredients(study):
     return Ingredients(study, stage, fit, problem, design, continuous, discrete, sections, errors)
 
 
+def _check_ingredients(ing):
+    return check_type("ing", ing, Ingredients, "an Ingredients (tracking_setup.ingredients)")
+
+
 def sections_error(Kd, sections, fs):
     """Largest relative error of float32 sections against the discrete controller they export.
 
@@ -237,6 +243,11 @@ def sections_error(Kd, sections, fs):
     >>> err["from 1 Hz"] < 1e-4
     True
     """
+    check_lti("Kd", Kd)
+    if not Kd.isdtime(strict=True):
+        raise ValueError("Kd must be a discrete-time controller (at fs), got a continuous-time one")
+    check_type("sections", sections, SOSController, "an SOSController (robust.controller_sos)")
+    fs = check_positive("fs", fs)
     w = 2 * np.pi * np.logspace(0, np.log10(4e3), 400)                # [rad/s]
     ref = np.ravel(Kd(np.exp(1j * w / fs)))
     err = np.abs(sections.frequency_response(w, "float32") / ref - 1)
@@ -290,6 +301,7 @@ def loop_margins(ing):
     -------
     LoopMarginChecks
     """
+    _check_ingredients(ing)
     return LoopMarginChecks(analysis.margins_table(ing.continuous, ing.problem.G, ing.fs),
                             ing.ours, ing.delay)
 
@@ -347,6 +359,7 @@ def mu_certificate(ing):
     -------
     MuCertificate
     """
+    _check_ingredients(ing)
     G, H_m, H_e, H_y = ing.problem.G, ing.problem.H_m, ing.problem.H_e, ing.problem.H_y
     lower = analysis.achievable_mu_lower_bound(G, H_m, H_e, H_y)
     mu_rp = {name: analysis.robust_performance_peak(K, G, H_m, H_e, H_y)[0]
@@ -415,6 +428,7 @@ def error_definition_evidence(ing):
     -------
     ErrorDefinitionEvidence
     """
+    _check_ingredients(ing)
     ex = ing.study.experiments
     with _saturation_raises():
         runs = {f: experiments.run_case("I", ing.stage, experiments.tracking_reference(

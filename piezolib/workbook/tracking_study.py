@@ -29,11 +29,13 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from piezolib._checks import check_bool, check_type
 from piezolib.hysteresis import FitWarning
 from piezolib.problem import paper
 from piezolib.problem.hysteresis_fits import workbook_pi_fit
 from piezolib.workbook import experiments, pipeline, report
-from piezolib.workbook.tracking_setup import _saturation_raises, _with_plural
+from piezolib.workbook.tracking_setup import (MuCertificate, _check_ingredients,
+                                              _saturation_raises, _with_plural)
 from piezolib.workbook.two_dof import two_dof_feedforward
 
 __all__ = ["Experiments", "run_experiments", "case_I_gain", "CaseIV", "case_IV",
@@ -260,6 +262,17 @@ class Experiments:
         return out
 
 
+def _check_experiments(runs):
+    return check_type("runs", runs, Experiments, "an Experiments (run_experiments)")
+
+
+def _check_claim_inputs(claims, mu, runs, case_iv):
+    check_type("claims", claims, report.ClaimTable, "a report.ClaimTable")
+    check_type("mu", mu, MuCertificate, "a MuCertificate (tracking_setup.mu_certificate)")
+    _check_experiments(runs)
+    check_type("case_iv", case_iv, CaseIV, "a CaseIV (case_IV)")
+
+
 def run_experiments(ing):
     """Tables 4 and 5 for every controller, every noise seed, with the loop's delay and without.
 
@@ -271,6 +284,7 @@ def run_experiments(ing):
     -------
     Experiments
     """
+    _check_ingredients(ing)
     ex = ing.study.experiments
     stage, dahl, seeds = ing.stage, ing.dahl, ex.seeds
     start = time.perf_counter()
@@ -303,6 +317,7 @@ def case_I_gain(ing):
         The actuator stroke [V], the chord gain u_c -> v_y and g_a [V/V], G(0)
         [V/V] and g_a / chord - 1 [%].
     """
+    _check_ingredients(ing)
     dahl = ing.dahl
     G0 = paper.PLANT.b[0] / paper.PLANT.a[0]
     stroke_V = (paper.AMPLIFIER_GAIN * ing.study.experiments.range_um / paper.UM_PER_VOLT
@@ -411,6 +426,8 @@ def case_IV(ing, runs):
     -------
     CaseIV
     """
+    _check_ingredients(ing)
+    _check_experiments(runs)
     ex = ing.study.experiments
     sections = pipeline.study_feedforward_sections(ing.study)    # committed for the reference
     with warnings.catch_warnings():
@@ -472,6 +489,7 @@ def saturation(runs):
     -------
     Saturation
     """
+    _check_experiments(runs)
     table = pd.DataFrame(
         [(test, name, case, col, run.saturation_count, run.u_c_requested_V.min(),
           run.u_c_requested_V.max())
@@ -510,6 +528,7 @@ def add_claims(claims, mu, runs, case_iv):
     piezolib.workbook.report.ClaimTable
         ``claims``.
     """
+    _check_claim_inputs(claims, mu, runs, case_iv)
     ours, published = runs.ours, runs.published
     hyst, tracking = runs.hyst, runs.tracking
     add = experiments.add_table_claims
@@ -623,6 +642,8 @@ def summary(claims, reference, mu, runs, case_iv):
         ``title`` and ``lines`` (Markdown) of
         :meth:`piezolib.workbook.session.Session.summary`.
     """
+    _check_claim_inputs(claims, mu, runs, case_iv)
+    check_bool("reference", reference)
     verdicts = claims.frame().set_index("quantity")["verdict"]
     ours = runs.ours
     problem = "the published problem" if reference else "this study's problem"
