@@ -1043,41 +1043,6 @@ def _bad_calls():
 #: argument (an AttributeError or KeyError from deep inside, or no error): each is a bug of
 #: that function, listed here so that the sweep stays complete while the fixes are pending.
 PENDING = {
-    "your_stage.analysis_grid": {
-        "low_rad_s": ("zero", "negative", "nan", "inf", "text"),
-        "high_rad_s": ("below low", "text"),
-        "points": ("zero", "negative", "fraction", "text"),
-    },
-    "your_stage.load_records": {
-        "folder": ("number",),
-        "chirp_file": ("number",),
-        "output": ("zero scale",),
-    },
-    "your_stage.prepare_identification": {
-        "window_s": ("text", "reversed"),
-        "um_per_volt": ("zero", "negative", "nan", "inf", "text"),
-        "hold_out": ("zero", "one", "text"),
-        "band_Hz": ("reversed", "negative", "text"),
-    },
-    "your_stage.identify": {
-        "n_poles": ("zero", "negative", "fraction", "text"),
-        "n_zeros": ("negative", "fraction"),
-        "nb": ("zero", "negative", "fraction", "text"),
-        "nk": ("negative",),
-        "floor_percent": ("zero", "negative", "nan", "inf", "text"),
-        "coherence": ("above one", "negative", "text"),
-        "nperseg": ("zero", "negative", "fraction", "text"),
-    },
-    "your_stage.known_truth": {
-        "omega": ("nan", "negative", "empty", "complex", "text"),
-    },
-    "your_stage.uncertainty_weight": {
-        "identification": ("text", "number"),
-        "levels": ("zero", "negative", "fraction", "text"),
-        "order": ("zero", "negative", "fraction", "text"),
-        "omega": ("nan", "negative", "empty", "complex", "text"),
-        "truth": ("text", "number"),
-    },
     "your_stage_hysteresis.prepare_loops": {
         "skip_transient": ("text", "number"),
     },

@@ -32,7 +32,6 @@ is left out (``truth=None`` everywhere) together with
 import html
 import time
 from dataclasses import dataclass
-from pathlib import Path
 
 import control as ct
 import numpy as np
@@ -43,7 +42,8 @@ from piezolib import identification as ident
 from piezolib import records as recs
 from piezolib import robust
 from piezolib import uncertainty as unc
-from piezolib._checks import check_positive, check_type
+from piezolib._checks import (check_band, check_count, check_finite_array, check_frequency_grid,
+                              check_integer, check_path, check_positive, check_type)
 from piezolib.problem.stage import VirtualStage
 from piezolib.workbook import tables
 from piezolib.workbook.outputs import data_dir
@@ -112,6 +112,10 @@ def ran(result):
     return result is not None and not isinstance(result, Skipped)
 
 
+#: Most points of an analysis grid (:func:`analysis_grid`).
+MAX_GRID_POINTS = 100_000
+
+
 def analysis_grid(low_rad_s, high_rad_s, points=1000):
     """The logarithmic analysis grid of the notebook [rad/s]
     (:func:`piezolib.robust.frequency_grid`).
@@ -122,6 +126,12 @@ def analysis_grid(low_rad_s, high_rad_s, points=1000):
     >>> w.size, float(w[0]), float(w[-1])
     (1000, 1.0, 1000000.0)
     """
+    low_rad_s = check_positive("low_rad_s", low_rad_s)
+    high_rad_s = check_positive("high_rad_s", high_rad_s)
+    if high_rad_s <= low_rad_s:
+        raise ValueError(f"high_rad_s ({high_rad_s:g}) must exceed low_rad_s ({low_rad_s:g})")
+    points = check_count("points", points, maximum=MAX_GRID_POINTS, minimum=2,
+                         why="an analysis grid this fine only costs time")
     return robust.frequency_grid(low_rad_s, high_rad_s, points)
 
 
@@ -207,7 +217,9 @@ def load_records(folder, chirp_file, loop_files, *, columns, fs, header=False, d
     piezolib.records.RecordError
         A malformed file, naming the file and the line.
     """
-    folder = data_dir() / "own_stage" if folder is None else Path(folder)
+    folder = data_dir() / "own_stage" if folder is None else check_path("folder", folder)
+    if chirp_file is not None:
+        check_path("chirp_file", chirp_file)
     check_type("loop_files", loop_files, dict, "a dict {label: file name}")
     if not loop_files:
         raise ValueError("loop_files must name at least one hysteresis record")
@@ -218,6 +230,10 @@ def load_records(folder, chirp_file, loop_files, *, columns, fs, header=False, d
     for name, spec in (("input", input), ("output", output)):
         if not (isinstance(spec, tuple) and len(spec) == 3):
             raise TypeError(f"{name} must be (name, unit, scale), got {spec!r}")
+        scale = spec[2]
+        if isinstance(scale, bool) or not isinstance(scale, (int, float)) \
+                or not np.isfinite(scale) or scale == 0:
+            raise ValueError(f"{name} scale must be a finite non-zero number, got {scale!r}")
     fs = check_positive("fs", fs)
 
     def load(name):
@@ -315,11 +331,17 @@ def prepare_identification(records, window_s, um_per_volt, hold_out, band_Hz):
         identification run).
     """
     check_type("records", records, OwnRecords, "the OwnRecords of load_records")
+    if isinstance(window_s, (str, bytes)):
+        raise TypeError(f"window_s must be a pair (start, end) [s], got {window_s!r}")
+    window = check_finite_array("window_s", window_s, shape=(2,), real=True)
+    if window[1] <= window[0]:
+        raise ValueError(f"window_s must be (start, end) with start < end [s], got {tuple(window)}")
+    um_per_volt = check_positive("um_per_volt", um_per_volt)
+    if not 0 < check_positive("hold_out", hold_out) < 1:
+        raise ValueError(f"hold_out must lie between 0 and 1, got {hold_out!r}")
+    check_band("band_Hz", band_Hz)
     if not records.have_plant:
         return Skipped(NO_PLANT_NOTE)
-    um_per_volt = check_positive("um_per_volt", um_per_volt)
-    if not 0 < hold_out < 1:
-        raise ValueError(f"hold_out must lie between 0 and 1, got {hold_out!r}")
     chirp = records.chirp
     k0, k1 = (int(round((t - chirp.t0) * chirp.fs)) for t in window_s)
     window = chirp.segment(k0, k1)
@@ -425,6 +447,15 @@ def identify(data, n_poles, n_zeros, *, nb, nk, floor_percent, coherence=0.9, np
     -------
     Identification or Skipped
     """
+    n_poles = check_integer("n_poles", n_poles, minimum=1)
+    n_zeros = check_integer("n_zeros", n_zeros, minimum=0)
+    nb = check_integer("nb", nb, minimum=1)
+    nk = check_integer("nk", nk, minimum=0)
+    floor_percent = check_positive("floor_percent", floor_percent)
+    coherence = float(check_finite_array("coherence", coherence, ndim=0, real=True))
+    if not 0 <= coherence < 1:
+        raise ValueError(f"coherence must lie in [0, 1), got {coherence!r}")
+    nperseg = check_integer("nperseg", nperseg, minimum=8)
     if not ran(data):
         return data
     check_type("data", data, IdentificationData, "the IdentificationData of "
@@ -501,11 +532,11 @@ def known_truth(identification, omega):
     -------
     KnownTruth or Skipped
     """
-    if not ran(identification):
+    if not ran(identification):                 # a skip passes on
         return identification
     check_type("identification", identification, Identification, "the Identification of "
                "identify")
-    omega = np.asarray(omega, dtype=float)
+    omega = check_frequency_grid("omega", omega)
     rec, n_est = identification.data.record, identification.n_estimation
     G_true, G_id = VirtualStage().small_signal_model(), identification.model
     y_true = ident.zoh_simulate(G_true, rec.input, rec.fs)
@@ -589,10 +620,16 @@ def uncertainty_weight(identification, spread, levels, order, omega, truth=None)
     -------
     UncertaintyWeight or Skipped
     """
-    if not ran(identification):
+    if not ran(identification):                 # a skip passes on
         return identification
+    check_type("identification", identification, Identification, "the Identification of "
+               "identify")
     spread = check_positive("spread", spread)
-    omega = np.asarray(omega, dtype=float)
+    levels = check_integer("levels", levels, minimum=2)
+    order = check_integer("order", order, minimum=1)
+    omega = check_frequency_grid("omega", omega)
+    if truth is not None and not isinstance(truth, Skipped):
+        check_type("truth", truth, KnownTruth, "the KnownTruth of known_truth, or None")
     t0 = time.perf_counter()
     mset = unc.model_set(identification.model, spread, levels)
     envelope = unc.relative_error_envelope(mset, omega, "stable")
