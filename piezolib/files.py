@@ -9,7 +9,9 @@ writer left behind.  :func:`manifest_entry` and :func:`verify_file` check a
 file against a stored row count, sampling rate and SHA-256 (with block
 checksums that locate a change to a range of lines).  A file that fails its
 check raises the :class:`~piezolib.records.RecordError` of a record file,
-which names the file and the line.  :func:`seal` adds a SHA-256 of its
+which names the file and the line.  :func:`check_writable` tries a folder
+before work that writes to it starts; :func:`exclusive_lock` keeps a second
+process out of work that one process at a time must do.  :func:`seal` adds a SHA-256 of its
 content to a JSON document and :func:`seal_problem` checks it on reading.
 
 Examples
@@ -37,6 +39,7 @@ import json
 import logging
 import os
 import re
+import socket
 import stat
 import tempfile
 import time
@@ -46,6 +49,7 @@ from piezolib._checks import check_integer, check_nonnegative, check_positive
 from piezolib.records import RecordError
 
 __all__ = ["atomic_write", "atomic_path", "remove_stale_temporaries", "STALE_AFTER_S",
+           "check_writable", "exclusive_lock", "LockHeld",
            "manifest_entry", "verify_file", "BLOCK_LINES", "CONTENT_KEY", "content_sha256",
            "seal", "seal_problem"]
 
@@ -239,6 +243,157 @@ def remove_stale_temporaries(directory, older_than_s=STALE_AFTER_S):
                            "(%.0f s old)", path, age)
             removed.append(path)
     return removed
+
+
+def check_writable(folder):
+    """Raise the system's OSError, naming ``folder``, unless a file can be written in it.
+
+    A small file is written (and synced) in ``folder`` and removed, so that a
+    read-only file system, a missing permission or a full disk is met before
+    any work whose results go there starts, not after it.  ``folder`` is made
+    when it is missing.
+
+    Returns
+    -------
+    Path
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as root:
+    ...     print(check_writable(Path(root) / "out").name, sorted(Path(root, "out").iterdir()))
+    out []
+    """
+    folder = Path(folder)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        fd, probe = tempfile.mkstemp(prefix=".write-test.", dir=folder)
+        try:
+            os.write(fd, b"probe\n" * 64)
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+            with contextlib.suppress(OSError):
+                os.remove(probe)
+    except OSError as exc:
+        raise type(exc)(exc.errno, f"cannot write in {folder}: {exc.strerror or exc}",
+                        str(folder)) from None
+    return folder
+
+
+class LockHeld(RuntimeError):
+    """The lock of :func:`exclusive_lock` is held by another running process.
+
+    Attributes
+    ----------
+    path : Path
+        The lock file.
+    holder : dict
+        What the holder wrote in it: ``pid``, ``host``, ``since`` (UTC), ``what``
+        (empty when it could not be read).
+    """
+
+    def __init__(self, path, holder):
+        self.path, self.holder = Path(path), dict(holder)
+        who = (f"process {holder['pid']} on {holder.get('host', '?')} since "
+               f"{holder.get('since', '?')}" if "pid" in holder else "another process")
+        super().__init__(f"{holder.get('what') or 'the work'} is already running: {who} "
+                         f"holds {path}")
+
+
+@contextlib.contextmanager
+def exclusive_lock(path, what=""):
+    """Hold the lock file ``path`` for the block: one process at a time runs it.
+
+    The file holds the holder's pid, host, start time and ``what`` (for the
+    message of a process that is refused).  The lock is the operating
+    system's (``flock``), which ends with its process: a lock file left by a
+    killed holder is taken over (logged, with the dead holder's pid).
+
+    Parameters
+    ----------
+    path : str or Path
+        The lock file (its folder is made when missing).
+    what : str
+        What the lock guards, for the messages (``"sweep demo"``).
+
+    Raises
+    ------
+    LockHeld
+        Another running process holds the lock (names it and the file).
+    OSError
+        The lock file cannot be written (naming it).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as root:
+    ...     lock = Path(root) / "run.lock"
+    ...     with exclusive_lock(lock, "demo"):
+    ...         try:
+    ...             with exclusive_lock(lock, "demo"):
+    ...                 pass
+    ...         except LockHeld as exc:
+    ...             print(exc.holder["pid"] == os.getpid(), "holds" in str(exc))
+    ...     print(lock.exists())                        # removed when the block ends
+    True True
+    False
+    """
+    import fcntl           # POSIX only: imported here so that the rest of the module works anywhere
+
+    path = Path(path)
+    fd = _locked_fd(fcntl, path)
+    try:
+        left = _holder(fd)
+        if left.get("pid") not in (None, os.getpid()):
+            logger.warning("took over %s: its holder, process %s on %s, is no longer running",
+                           path, left.get("pid"), left.get("host", "?"))
+        doc = {"pid": os.getpid(), "host": socket.gethostname(), "what": str(what),
+               "since": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())}
+        try:
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, (json.dumps(doc) + "\n").encode("utf-8"), 0)
+            os.fsync(fd)
+        except OSError as exc:
+            raise _naming(exc, path) from exc
+        yield path
+    finally:
+        # removed while still locked: a process that opened it meanwhile sees another file
+        # at the path once it gets the lock and starts again (_locked_fd)
+        with contextlib.suppress(OSError):
+            os.remove(path)
+        os.close(fd)
+
+
+def _locked_fd(fcntl, path):
+    """A descriptor of ``path`` locked by this process; raise LockHeld if another holds it."""
+    while True:
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
+        except OSError as exc:
+            raise _naming(exc, path) from exc
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = _holder(fd)
+            os.close(fd)
+            raise LockHeld(path, holder) from None
+        try:
+            if os.fstat(fd).st_ino == os.stat(path).st_ino:
+                return fd
+        except FileNotFoundError:
+            pass
+        os.close(fd)          # the holder removed it between our open and our lock
+
+
+def _holder(fd):
+    """The JSON a lock file's holder wrote (empty when there is none)."""
+    try:
+        doc = json.loads(os.pread(fd, 4096, 0).decode("utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return doc if isinstance(doc, dict) else {}
 
 
 def _is_temporary_name(name):

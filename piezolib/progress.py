@@ -28,7 +28,8 @@ unset or ``auto``     a bar in a notebook or on a terminal, none when stderr
 :func:`postfix` sets the short status text after the bar (e.g. the current
 mu peak), :func:`finish` says why a search stopped, and :func:`write`
 prints a line without tearing an active text bar (for per-step report lines
-of a runner).  On a terminal, INFO logging lines and a bar share stderr;
+of a runner).  :class:`StatusLine` keeps one line of status current while
+work runs elsewhere (the points of a sweep on worker processes).  On a terminal, INFO logging lines and a bar share stderr;
 wrap the call in ``tqdm.contrib.logging.logging_redirect_tqdm()`` to route
 the log lines around the bar.  In a notebook, :func:`route_logs` shows a
 logger's records under the running bar instead of on stderr, and
@@ -40,15 +41,17 @@ uses this one stays cheap.
 
 import os
 import sys
+import threading
+import time
 
 import numpy as np
 
 from piezolib import notebook_display
-from piezolib._checks import check_integer
+from piezolib._checks import check_integer, check_positive
 from piezolib.notebook_display import route_logs, shown_in
 
 __all__ = ["ENV_VARIABLE", "progress", "progress_enabled", "postfix", "finish", "write",
-           "route_logs", "shown_in"]
+           "route_logs", "shown_in", "StatusLine"]
 
 #: Environment variable that switches the bars on (1), off (0) or to auto.
 ENV_VARIABLE = "PIEZOLIB_PROGRESS"
@@ -280,3 +283,109 @@ def write(line, file=None):
     tqdm.write(str(line), file=stream)
     if hasattr(stream, "flush"):
         stream.flush()
+
+
+class StatusLine:
+    """One line of status kept current while the work runs elsewhere (other processes).
+
+    ``status()`` is called for the text.  On a terminal the line is redrawn
+    in place every ``refresh_s`` seconds, below the lines :meth:`write`
+    prints.  On any other stream (a log file, a pipe, a notebook cell) it is
+    printed as a line of its own when nothing was printed for ``every_s``
+    seconds, so a log shows the run is alive before its first result.
+    ``PIEZOLIB_PROGRESS=0`` turns the status off (the written lines stay).
+
+    Parameters
+    ----------
+    status : callable
+        ``status() -> str``, called from a timer thread and after each write.
+    file : file-like, optional
+        Default ``sys.stdout``.
+    refresh_s, every_s : float
+        Redraw period on a terminal, and the quiet time after which a line
+        is printed elsewhere [s].
+
+    Examples
+    --------
+    >>> import io
+    >>> stream = io.StringIO()                     # not a terminal: no redrawn line
+    >>> with StatusLine(lambda: "2 done, 1 running, 0 left", file=stream,
+    ...                 every_s=60.0) as line:
+    ...     line.write("[2/3] point 2  0.1 s")
+    >>> print(stream.getvalue(), end="")
+    [2/3] point 2  0.1 s
+    """
+
+    def __init__(self, status, file=None, refresh_s=1.0, every_s=10.0):
+        if not callable(status):
+            raise TypeError(f"status must be a callable returning text, got {status!r}")
+        self.refresh_s = check_positive("refresh_s", refresh_s)
+        self.every_s = check_positive("every_s", every_s)
+        self._status, self.file = status, sys.stdout if file is None else file
+        isatty = getattr(self.file, "isatty", None)
+        self.live = bool(isatty and isatty())
+        self._enabled = progress_enabled() is not False
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._last_print = time.monotonic()
+        self._drawn = False
+        self._thread = None
+        if self._enabled:
+            self._thread = threading.Thread(target=self._tick_until_closed, daemon=True,
+                                            name="piezolib-status-line")
+            self._thread.start()
+
+    def write(self, line):
+        """Print ``line`` above the status (which is redrawn after it on a terminal)."""
+        with self._lock:
+            self._clear()
+            self._emit(f"{line}\n")
+            if self.live and self._enabled:
+                self._draw()
+
+    def refresh(self):
+        """Redraw the status now (a terminal), or print it when it is due (elsewhere)."""
+        with self._lock:
+            if not self._enabled:
+                return
+            if self.live:
+                self._clear()
+                self._draw()
+            elif time.monotonic() - self._last_print >= self.every_s:
+                self._emit(f"{self._status()}\n")
+
+    def close(self):
+        """Stop the timer and take the live line off the terminal."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+        with self._lock:
+            self._clear()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def _tick_until_closed(self):
+        period = self.refresh_s if self.live else min(self.refresh_s, self.every_s)
+        while not self._stop.wait(period):
+            self.refresh()
+
+    def _draw(self):
+        self._emit(f"\r{self._status()}\x1b[K", newline=False)
+        self._drawn = True
+
+    def _clear(self):
+        if self._drawn:
+            self._emit("\r\x1b[K", newline=False)
+            self._drawn = False
+
+    def _emit(self, text, newline=True):
+        self.file.write(text)
+        if hasattr(self.file, "flush"):
+            self.file.flush()
+        if newline:
+            self._last_print = time.monotonic()
+

@@ -23,6 +23,7 @@ import math
 import os
 import socket
 import sys
+import threading
 import time
 import warnings
 from dataclasses import dataclass
@@ -79,6 +80,9 @@ class SweepResult:
         ``{"table": csv path, "parquet": path or None, "figure": png path or None}``.
     backend : str
         Where the points ran (``"1 local worker(s)"``, a scheduler's address).
+    problems : tuple of str
+        What was computed but could not be written (a point's record, the
+        table): each names the file and the system's reason.
 
     Examples
     --------
@@ -104,6 +108,7 @@ class SweepResult:
     seconds: float
     paths: dict
     backend: str = ""
+    problems: tuple = ()
 
     def overview(self):
         """The table as a reader wants it: each point's parameters, μ_RP, the controller's
@@ -422,6 +427,18 @@ def run_sweep(spec, jobs=None, scheduler=None, evaluate=evaluate_point, dry_run=
     Returns
     -------
     SweepResult
+        A point whose record could not be written (a full disk) is in its
+        table and named in its ``problems``; it is kept in memory and written
+        again after each later point, and a later run computes only the points
+        without a record.
+
+    Raises
+    ------
+    piezolib.files.LockHeld
+        Another process runs this sweep (its lock file ``sweep.lock`` in the
+        output folder names it); a lock left by a killed run is taken over.
+    OSError
+        The output folder cannot be written, before any point is evaluated.
 
     Examples
     --------
@@ -452,39 +469,167 @@ def run_sweep(spec, jobs=None, scheduler=None, evaluate=evaluate_point, dry_run=
     evaluation = f"{evaluate.__module__}.{evaluate.__qualname__}"
     points = spec.points()
     keys = {p.index: p.key(evaluation) for p in points}
-    files.remove_stale_temporaries(spec.directory)       # what a killed earlier run left
-    stored = {p.index: read_record(_record_path(spec, keys[p.index]), keys[p.index])
-              for p in points}
     names = _short_names(spec.parameters)
     if dry_run:
-        return _dry_run(spec, points, keys, stored, names, stream)
+        return _dry_run(spec, points, keys, _stored(spec, points, keys), names, stream)
+    # one run of a sweep at a time: a second one would compute every point again
+    with files.exclusive_lock(spec.directory / LOCK_NAME, f"sweep {spec.name}"):
+        files.check_writable(spec.directory / "points")      # before the first evaluation
+        files.remove_stale_temporaries(spec.directory)       # what a killed earlier run left
+        stored = _stored(spec, points, keys)
+        return _run(spec, points, keys, stored, names, evaluate, jobs, scheduler, stream)
+
+
+#: The lock file of a running sweep in its folder (holder's pid, host and start time).
+LOCK_NAME = "sweep.lock"
+
+
+def _stored(spec, points, keys):
+    """{point index: its record or None}."""
+    return {p.index: read_record(_record_path(spec, keys[p.index]), keys[p.index])
+            for p in points}
+
+
+def _run(spec, points, keys, stored, names, evaluate, jobs, scheduler, stream):
+    """Evaluate the points without a record; store each; write the table and the figure."""
     start = time.perf_counter()
+    evaluation = f"{evaluate.__module__}.{evaluate.__qualname__}"
     todo = [p for p in points if stored[p.index] is None]
     reused = len(points) - len(todo)
     backend = (f"{scheduler if isinstance(scheduler, str) else 'the dask cluster'}"
                if scheduler is not None else f"{jobs} local worker(s)")
-    _say(stream, f"sweep {spec.name}: {len(points)} points, {reused} stored "
-         f"(reused), {len(todo)} to run on {backend}")
-    _warn_other_library(stored, stream)
     rows = {p.index: _row(p, stored[p.index]["metrics"], None, keys[p.index])
             for p in points if stored[p.index] is not None}
     by_key = {keys[p.index]: p for p in todo}
     failed = 0
-    for k, (key, metrics, error, seconds, host) in enumerate(
-            _results(evaluate, todo, keys, jobs, scheduler), reused + 1):
-        point = by_key[key]
-        if error is None:
-            _write_record(spec, point, key, evaluation, metrics, seconds, host)
-        failed += error is not None
-        rows[point.index] = _row(point, metrics, error, key)
-        _say(stream, _progress_line(k, len(points), point, names, metrics, error, seconds))
+    client, own = _client(scheduler) if scheduler is not None and todo else (None, False)
+    try:
+        workers = jobs if client is None else max(1, sum(client.nthreads().values()))
+        tally = _Tally(len(todo), workers, _median_seconds(stored))
+        with progress.StatusLine(tally.status, file=stream) as status:
+            records = _Records(spec, evaluation, status.write)
+            status.write(f"sweep {spec.name}: {len(points)} points, {reused} stored "
+                         f"(reused), {len(todo)} to run on {backend}")
+            _warn_other_library(stored, status.write)
+            try:
+                for k, (key, metrics, error, seconds, host) in enumerate(
+                        _results(evaluate, todo, keys, jobs, client), reused + 1):
+                    point = by_key[key]
+                    tally.finished(seconds)
+                    failed += error is not None
+                    rows[point.index] = _row(point, metrics, error, key)
+                    line = _progress_line(k, len(points), point, names, metrics, error,
+                                          seconds)
+                    status.write(f"{line}  | {tally.status()}")
+                    if error is None:
+                        records.add(point, key, metrics, seconds, host)
+            finally:
+                records.store()          # also on Ctrl-C: what was computed is kept
+    finally:
+        if own:
+            client.close()
+    problems = records.problems()
     table = _table([rows[i] for i in sorted(rows)])
-    paths = _write_outputs(spec, table)
+    try:
+        paths = _write_outputs(spec, table)
+    except OSError as exc:               # the table is still returned, and the records kept
+        paths = {"table": None, "parquet": None, "figure": None}
+        problems.append(f"the table and the figure were not written: {exc}")
     seconds = time.perf_counter() - start
     _say(stream, f"sweep {spec.name}: {len(todo) - failed} evaluated, {reused} reused, "
-         f"{failed} failed in {seconds:.1f} s; table {paths['table']}"
+         f"{failed} failed in {seconds:.1f} s; "
+         + (f"table {paths['table']}" if paths["table"] else "no table written")
          + (f", figure {paths['figure']}" if paths["figure"] else ""))
-    return SweepResult(spec, table, len(todo) - failed, reused, failed, seconds, paths, backend)
+    for line in problems:
+        _say(stream, f"NOT STORED: {line}")
+    return SweepResult(spec, table, len(todo) - failed, reused, failed, seconds, paths, backend,
+                       tuple(problems))
+
+
+class _Records:
+    """The records of the computed points: written as each point comes back; a point
+    whose record the system refuses (a full disk) is kept and written again after each
+    later point, so that no computed point is lost to a failed write."""
+
+    def __init__(self, spec, evaluation, say):
+        self.spec, self.evaluation, self.say = spec, evaluation, say
+        self.pending, self.errors = {}, {}
+
+    def add(self, point, key, metrics, seconds, host):
+        self.pending[key] = (point, metrics, seconds, host)
+        self.store()
+
+    def store(self):
+        for key, (point, metrics, seconds, host) in list(self.pending.items()):
+            try:
+                _write_record(self.spec, point, key, self.evaluation, metrics, seconds, host)
+            except OSError as exc:
+                if key not in self.errors:
+                    self.say(f"point {point.index}: its record was not written ({exc}); kept "
+                             "in memory, written again after the next point")
+                self.errors[key] = exc
+                continue
+            del self.pending[key]
+            self.errors.pop(key, None)
+
+    def problems(self):
+        """One line per point whose record could not be written."""
+        return [f"point {point.index}: computed (its numbers are in this run's table) but "
+                f"its record could not be written ({self.errors[key]}); the next run "
+                "computes it again" for key, (point, *_) in self.pending.items()]
+
+
+class _Tally:
+    """Points done, running and left of a run, and an estimate of the time left."""
+
+    def __init__(self, todo, workers, seconds_per_point=None):
+        self.todo, self.workers, self.done = todo, workers, 0
+        self.seconds = [] if seconds_per_point is None else [seconds_per_point]
+        self.prior = seconds_per_point is not None
+        self.start = self.last = time.perf_counter()
+
+    def finished(self, seconds):
+        if self.prior:                 # the points of this run replace the stored estimate
+            self.seconds, self.prior = [], False
+        self.done += 1
+        self.seconds.append(seconds)
+        self.last = time.perf_counter()
+
+    def status(self):
+        """``3 done, 2 running, 7 left; 2 min 10 s elapsed, about 4 min 0 s left``."""
+        unfinished = self.todo - self.done
+        running = min(self.workers, unfinished)
+        elapsed = time.perf_counter() - self.start
+        text = (f"{self.done} done, {running} running, {unfinished - running} left; "
+                f"{_duration(elapsed)} elapsed")
+        if not unfinished:
+            return text
+        if not self.seconds:
+            return f"{text}, time left known after the first point"
+        # the unfinished points run in waves of `workers`, each about as long as the points
+        # so far; the running wave started when the last point came back, at the latest
+        wave = float(np.mean(self.seconds))
+        running_for = min(time.perf_counter() - self.last, wave)
+        left = wave * math.ceil(unfinished / self.workers) - running_for
+        return f"{text}, about {_duration(max(left, 1.0))} left"
+
+
+def _median_seconds(stored):
+    """The median time [s] of the stored points (the estimate before a point of this run
+    is back), or None."""
+    seconds = [doc["seconds"] for doc in stored.values()
+               if doc is not None and isinstance(doc.get("seconds"), (int, float))]
+    return float(np.median(seconds)) if seconds else None
+
+
+def _duration(seconds):
+    """``42 s``, ``3 min 5 s``, ``2 h 10 min``."""
+    seconds = int(round(seconds))
+    if seconds < 60:
+        return f"{seconds} s"
+    if seconds < 3600:
+        return f"{seconds // 60} min {seconds % 60} s"
+    return f"{seconds // 3600} h {seconds % 3600 // 60} min"
 
 
 def _jobs(jobs):
@@ -495,28 +640,41 @@ def _jobs(jobs):
     return jobs
 
 
-def _results(evaluate, todo, keys, jobs, scheduler):
-    """``_evaluate_task`` results of the points, each as soon as it is done."""
+def _results(evaluate, todo, keys, jobs, client):
+    """``_evaluate_task`` results of the points, each as soon as it is done (on ``jobs``
+    local processes, or on the workers of a dask ``client``)."""
     if not todo:
         return
     import joblib
 
     tasks = [joblib.delayed(_evaluate_task)(evaluate, p.study, p.options, keys[p.index])
              for p in todo]
-    if scheduler is None:
-        # batch_size=1: a point takes seconds to minutes, and its record is written as
-        # soon as it is back (a batch would hold finished points back)
-        yield from joblib.Parallel(n_jobs=jobs, batch_size=1,
-                                   return_as="generator_unordered")(tasks)
-        return
-    client, own = _client(scheduler)
-    try:
-        with joblib.parallel_config(backend="dask"):
-            yield from joblib.Parallel(n_jobs=-1, batch_size=1,
+    # batch_size=1: a point takes seconds to minutes, and its record is written as soon
+    # as it is back (a batch would hold finished points back)
+    if client is None:
+        # each local worker ends itself when this process dies (kill -9 included)
+        with joblib.parallel_config(backend="loky", initializer=_exit_with_parent):
+            yield from joblib.Parallel(n_jobs=jobs, batch_size=1,
                                        return_as="generator_unordered")(tasks)
-    finally:
-        if own:
-            client.close()
+        return
+    with joblib.parallel_config(backend="dask"):
+        yield from joblib.Parallel(n_jobs=-1, batch_size=1,
+                                   return_as="generator_unordered")(tasks)
+
+
+def _exit_with_parent(period_s=0.5):
+    """Initializer of a local worker process: a daemon thread ends the process when its
+    parent (the sweep) is gone, so that a killed sweep leaves no worker computing for
+    nobody and holding its output pipe (loky's own workers notice only when idle)."""
+    parent = os.getppid()
+    threading.Thread(target=_watch_parent, args=(parent, period_s), daemon=True,
+                     name="piezolib-sweep-parent-watch").start()
+
+
+def _watch_parent(parent, period_s):
+    while os.getppid() == parent:          # a child of a dead process is given another parent
+        time.sleep(period_s)
+    os._exit(1)
 
 
 def _client(scheduler):
@@ -675,12 +833,11 @@ def _dry_run(spec, points, keys, stored, names, stream):
                        {"table": None, "parquet": None, "figure": None})
 
 
-def _warn_other_library(stored, stream):
+def _warn_other_library(stored, say):
     from piezolib.workbook import pipeline
 
     here = pipeline.library_fingerprint()
     other = sum(1 for doc in stored.values() if doc is not None and doc.get("library") != here)
     if other:
-        _say(stream, f"note: {other} stored point(s) were computed by another version of "
-             "piezolib (library fingerprint); delete their records under points/ to "
-             "recompute them")
+        say(f"note: {other} stored point(s) were computed by another version of piezolib "
+            "(library fingerprint); delete their records under points/ to recompute them")

@@ -3,6 +3,7 @@ records, the Pareto front, what a run shows (the specs: test_sweep_spec.py)."""
 
 import io
 import json
+import os
 from pathlib import Path
 
 import numpy as np
@@ -244,3 +245,104 @@ def test_the_checks_of_a_run_can_fail(checkout):
     for name, bad in broken.items():
         assert not sweep.SweepResult(result.spec, bad, 6, 0, 0, 1.0, {}).checks[name], name
     assert not sweep.SweepResult(result.spec, table, 5, 0, 1, 1.0, {}).checks["every point ran"]
+
+
+# --------------------------------------------------------------------------- faults
+def test_a_second_run_of_a_running_sweep_is_refused_naming_the_first(checkout):
+    from piezolib import files
+
+    spec = grid_spec()
+    with files.exclusive_lock(spec.directory / sweep.LOCK_NAME, "sweep small"):
+        with pytest.raises(files.LockHeld) as info:
+            run(spec, jobs=1)
+    assert FAKE["calls"] == 0                             # computed every point twice before
+    said = str(info.value)
+    assert f"process {os.getpid()}" in said and "sweep.lock" in said
+    assert "sweep small is already running" in said
+    assert not (spec.directory / sweep.LOCK_NAME).exists()    # the first run's end removes it
+
+
+def test_the_lock_file_of_a_killed_run_is_taken_over(checkout, caplog):
+    spec = grid_spec()
+    lock = spec.directory / sweep.LOCK_NAME
+    lock.parent.mkdir(parents=True)
+    lock.write_text(json.dumps({"pid": 999999999, "host": "h", "since": "then"}) + "\n")
+    result, _ = run(spec, jobs=1)
+    assert result.evaluated == 6 and not lock.exists()
+    assert "process 999999999 on h, is no longer running" in caplog.text
+
+
+def test_an_unwritable_output_folder_is_refused_before_the_first_evaluation(checkout):
+    spec = grid_spec()
+    spec.directory.parent.mkdir(parents=True)
+    spec.directory.write_text("a file where the sweep's folder goes")  # writable by no one
+    with pytest.raises(OSError, match="sweeps/small"):
+        run(spec, jobs=1)
+    assert FAKE["calls"] == 0                       # evaluated a point first, before
+
+
+def test_a_failed_write_loses_no_computed_point(checkout, monkeypatch):
+    from piezolib import files
+
+    real = files.atomic_write
+    refused = []
+
+    def full_disk_after_two_records(path, data):      # the disk fills after two records
+        if Path(path).parent.name == "points" and len(list(Path(path).parent.glob("*.json"))) >= 2:
+            refused.append(Path(path).name)
+            raise OSError(28, f"cannot write {path}: No space left on device", str(path))
+        return real(path, data)
+
+    monkeypatch.setattr(files, "atomic_write", full_disk_after_two_records)
+    result, said = run(grid_spec(), jobs=1)           # stopped at the third point before
+    assert (result.evaluated, result.failed) == (6, 0)
+    assert result.table["mu_RP"].notna().all()        # every computed point is in the table
+    assert len(result.problems) == 4 and "point 3: computed" in result.problems[0]
+    assert "No space left on device" in result.problems[0]
+    assert "point 3: its record was not written" in said and "NOT STORED: point 6" in said
+    assert len(set(refused)) == 4                     # each tried again after later points
+    monkeypatch.setattr(files, "atomic_write", real)
+    FAKE["calls"] = 0
+    again, _ = run(grid_spec(), jobs=1)
+    assert FAKE["calls"] == 4 and again.reused == 2 and not again.problems
+
+
+def test_a_record_refused_once_is_written_after_the_next_point(checkout, monkeypatch):
+    from piezolib import files
+
+    real = files.atomic_write
+    refusals = {"left": 1}
+
+    def one_refusal(path, data):
+        if Path(path).parent.name == "points" and refusals["left"]:
+            refusals["left"] -= 1
+            raise OSError(5, f"cannot write {path}: Input/output error", str(path))
+        return real(path, data)
+
+    monkeypatch.setattr(files, "atomic_write", one_refusal)
+    result, said = run(grid_spec(), jobs=1)
+    assert not result.problems and "point 1: its record was not written" in said
+    assert len(list((result.spec.directory / "points").glob("*.json"))) == 6
+
+
+# --------------------------------------------------------------------------- progress
+def test_each_point_line_says_what_is_done_running_and_left_with_an_estimate():
+    _, said = run(grid_spec(), jobs=1)
+    lines = [line for line in said.splitlines() if line.startswith("[")]
+    assert "| 1 done, 1 running, 4 left; " in lines[0] and " s left" in lines[0]
+    assert "| 5 done, 1 running, 0 left; " in lines[4]
+    assert "| 6 done, 0 running, 0 left; " in lines[5] and "left" not in lines[5][-10:]
+
+
+def test_on_a_terminal_the_status_is_a_line_redrawn_in_place():
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    stream = Terminal()
+    sweep.run_sweep(grid_spec(), jobs=1, evaluate=fake_evaluate, stream=stream)
+    text = stream.getvalue()
+    assert "\r" in text and "\x1b[K" in text
+    # the status is taken off before the summary, and not drawn again after it
+    assert text.rpartition("\r\x1b[K")[2].startswith("sweep small: 6 evaluated")
+    assert text.endswith(".png\n")
