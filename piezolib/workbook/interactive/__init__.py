@@ -18,7 +18,9 @@ result object (:func:`weight_design_view`, :func:`spread_view`,
 :func:`dahl_view`, and :func:`redesign`) and a drawing function
 (:func:`draw_weight_design`, :func:`draw_spread`, :func:`draw_dahl`); the
 callbacks are what the tests exercise.  The plumbing the three share
-(widget or figure, sliders, the live panel) is in the private ``_panel``.
+(widget or figure, sliders, the live panel) is in the private ``_panel``;
+:class:`LatestOnly` (:mod:`.coalesce`) draws only a slider's latest value, off
+the kernel's thread, so that the figure follows the hand.
 
 Headless degradation
 --------------------
@@ -42,6 +44,7 @@ point shows the widget or the figure exactly once.
 """
 
 from piezolib.workbook.interactive._panel import STATIC_ENV, interactive_available
+from piezolib.workbook.interactive.coalesce import LatestOnly
 from piezolib.workbook.interactive.dahl_panel import (DAHL_SLIDER_PARAMETERS, DahlView,
                                                       dahl_control, dahl_view, draw_dahl)
 from piezolib.workbook.interactive.spread_panel import (SpreadView, draw_spread, spread_control,
@@ -52,7 +55,7 @@ from piezolib.workbook.interactive.weight_panel import (WEIGHT_PARAMETERS, Redes
                                                         weight_design_view)
 
 __all__ = [
-    "STATIC_ENV", "interactive_available",
+    "STATIC_ENV", "interactive_available", "LatestOnly",
     "WEIGHT_PARAMETERS", "WeightDesignView", "weight_design_view", "draw_weight_design",
     "Redesign", "redesign", "weight_design_control",
     "SpreadView", "spread_view", "spread_view_from", "draw_spread", "spread_control",

@@ -16,9 +16,9 @@ import numpy as np
 from piezolib.problem import paper
 from piezolib._checks import check_integer, check_type
 from piezolib.hysteresis.dahl import DahlModel, check_dahl_model, simulate_dahl
-from piezolib.workbook.interactive._panel import (LivePanel, finish, import_ipywidgets,
-                                                  linear_slider, log_slider, panel_figure,
-                                                  static_figure, want_widget)
+from piezolib.workbook.interactive._panel import (LivePanel, apply_unit_text_to, finish,
+                                                  import_ipywidgets, linear_slider, log_slider,
+                                                  panel_figure, static_figure, want_widget)
 from piezolib.workbook.style import PALETTE, STYLE, apply_unit_text
 
 __all__ = ["DAHL_SLIDER_PARAMETERS", "DahlView", "dahl_view", "draw_dahl", "dahl_control"]
@@ -164,28 +164,68 @@ def draw_dahl(view, fig=None):
     -------
     matplotlib.figure.Figure
     """
-    check_type("view", view, DahlView, "a DahlView")
-    d = view.discard
-    with mpl.rc_context(STYLE):
-        fig, (ax_loop, ax_err) = panel_figure(fig, 2, (9.0, 3.8))
-        ax_loop.plot(view.v[d:], view.x[d:], color="0.6", lw=0.8, label="measured")
-        ax_loop.plot(view.v[d:], view.x_model[d:], color=PALETTE.contrast, lw=1.2,
-                     label="Dahl model")
-        ax_loop.set_xlabel("u_c (amplifier input) [V]")
-        ax_loop.set_ylabel("v_y (sensor) [V]")
-        # the loop runs along the diagonal: the upper left corner is empty
-        ax_loop.legend(loc="upper left")
-        ax_loop.set_title("loops after the first period")
-        ax_err.plot(view.t[d:], view.residual_percent, color=PALETTE.primary, lw=0.9)
-        ax_err.axhline(0.0, color="0.4", lw=0.6)
-        ax_err.set_xlabel("time [s]")
-        ax_err.set_ylabel("model - measured [% of stroke]")
-        ax_err.set_title(f"RMS {view.rms_percent:.3f} %, max {view.max_percent:.2f} % of stroke")
+    return _DahlPlot(view, fig).figure
+
+
+class _DahlPlot:
+    """The figure of :func:`draw_dahl`, whose model curves, limits and texts follow a new view."""
+
+    def __init__(self, view, fig=None):
+        check_type("view", view, DahlView, "a DahlView")
+        d = view.discard
+        self.discard, self.samples = d, view.v.size
+        with mpl.rc_context(STYLE):
+            self.figure, (ax_loop, ax_err) = panel_figure(fig, 2, (9.0, 3.8))
+            self.axes = (ax_loop, ax_err)
+            (self.measured,) = ax_loop.plot(view.v[d:], view.x[d:], color="0.6", lw=0.8,
+                                            label="measured")
+            (self.model,) = ax_loop.plot(view.v[d:], view.x_model[d:], color=PALETTE.contrast,
+                                         lw=1.2, label="Dahl model")
+            ax_loop.set_xlabel("u_c (amplifier input) [V]")
+            ax_loop.set_ylabel("v_y (sensor) [V]")
+            # the loop runs along the diagonal: the upper left corner is empty
+            ax_loop.legend(loc="upper left")
+            ax_loop.set_title("loops after the first period")
+            (self.error,) = ax_err.plot(view.t[d:], view.residual_percent, color=PALETTE.primary,
+                                        lw=0.9)
+            self.zero = ax_err.axhline(0.0, color="0.4", lw=0.6)
+            ax_err.set_xlabel("time [s]")
+            ax_err.set_ylabel("model - measured [% of stroke]")
+        self.show(view)
+        apply_unit_text(self.figure)
+
+    @property
+    def moving(self):
+        """The artists a new model changes: the curves (the limits follow them), the axes,
+        the legend and the titles."""
+        ax_loop, ax_err = self.axes
+        return [self.measured, self.model, self.error, self.zero, *(ax.xaxis for ax in self.axes),
+                *(ax.yaxis for ax in self.axes), ax_loop.get_legend(), ax_err.title,
+                self.suptitle]
+
+    def show(self, view):
+        """Draw ``view`` into the figure; False for another loop length or discard."""
+        check_type("view", view, DahlView, "a DahlView")
+        if (view.discard, view.v.size) != (self.discard, self.samples):
+            return False
+        d = view.discard
+        ax_loop, ax_err = self.axes
+        self.measured.set_data(view.v[d:], view.x[d:])
+        self.model.set_data(view.v[d:], view.x_model[d:])
+        self.error.set_data(view.t[d:], view.residual_percent)
+        for ax in self.axes:
+            ax.relim()
+            ax.autoscale_view()
         m = view.model
-        fig.suptitle(f"Dahl model ({m.form} form, start: {m.start})\ng_a = {m.g_a:.4g} V/V, "
-                     f"alpha1 = {m.alpha1:.4g} 1/V, alpha2 = {m.alpha2:.4g} 1/V^2, "
-                     f"beta2 = {m.beta2:.4g}, x0 = {m.x0:.3g} V")
-    return apply_unit_text(fig)
+        with mpl.rc_context(STYLE):
+            ax_err.set_title(f"RMS {view.rms_percent:.3f} %, max {view.max_percent:.2f} % "
+                             "of stroke")
+            self.suptitle = self.figure.suptitle(
+                f"Dahl model ({m.form} form, start: {m.start})\ng_a = {m.g_a:.4g} V/V, "
+                f"alpha1 = {m.alpha1:.4g} 1/V, alpha2 = {m.alpha2:.4g} 1/V^2, "
+                f"beta2 = {m.beta2:.4g}, x0 = {m.x0:.3g} V")
+        apply_unit_text_to(self.moving)
+        return True
 
 
 def dahl_control(model, loop, *, discard=None, interactive=None):
@@ -229,5 +269,5 @@ def dahl_control(model, loop, *, discard=None, interactive=None):
     }
     panel = LivePanel(w, sliders,
                       lambda values: dahl_view(replace(model, **values), loop, discard=discard),
-                      draw_dahl, _dahl_summary)
+                      _DahlPlot, _dahl_summary)
     return finish(panel, panel.box())

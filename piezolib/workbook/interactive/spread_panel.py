@@ -10,7 +10,7 @@ set the notebook has already surveyed and covered, so that the control starts th
 without fitting the weight a second time.
 """
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import control as ct
 import matplotlib as mpl
@@ -22,9 +22,9 @@ from piezolib import uncertainty as unc
 from piezolib._checks import (check_frequency_grid, check_integer, check_positive, check_siso,
                               check_type)
 from piezolib.robust.lti import frequency_grid
-from piezolib.workbook.interactive._panel import (LivePanel, curve_db, finish, import_ipywidgets,
-                                                  linear_slider, magnitude, panel_figure,
-                                                  static_figure, want_widget)
+from piezolib.workbook.interactive._panel import (LivePanel, apply_unit_text_to, curve_db, finish,
+                                                  import_ipywidgets, linear_slider, magnitude,
+                                                  panel_figure, static_figure, want_widget)
 from piezolib.workbook.style import PALETTE, STYLE, apply_unit_text, unit_text
 
 __all__ = ["SpreadView", "spread_view", "spread_view_from", "draw_spread", "spread_control"]
@@ -59,11 +59,12 @@ class SpreadView:
         The same over all members.
     member_errors : ndarray, shape (m, len(omega))
         |G_k/G - 1| of an evenly thinned selection of the stable members (for drawing).
-    weight : control.TransferFunction
+    weight : control.TransferFunction or None
         Stable, minimum-phase weight fitted to ``envelope``
-        (:func:`piezolib.uncertainty.fit_covering_weight`, order 5).
-    coverage : piezolib.uncertainty.Coverage
-        How ``weight`` covers ``envelope`` on the grid.
+        (:func:`piezolib.uncertainty.fit_covering_weight`, order 5); None in
+        the first frame a live control draws while the weight is fitted.
+    coverage : piezolib.uncertainty.Coverage or None
+        How ``weight`` covers ``envelope`` on the grid (None with ``weight``).
     """
 
     spread: float
@@ -74,8 +75,8 @@ class SpreadView:
     envelope: np.ndarray = field(repr=False)
     envelope_all: np.ndarray = field(repr=False)
     member_errors: np.ndarray = field(repr=False)
-    weight: ct.TransferFunction = field(repr=False)
-    coverage: unc.Coverage
+    weight: ct.TransferFunction | None = field(repr=False)
+    coverage: unc.Coverage | None
 
     @property
     def n_unstable(self):
@@ -110,6 +111,12 @@ def spread_view(G, spread, omega=None, levels=3):
     ValueError
         When no member of the set is stable (no envelope to cover).
     """
+    return _with_weight(_envelope_view(G, spread, omega, levels))
+
+
+def _envelope_view(G, spread, omega=None, levels=3):
+    """:func:`spread_view` without the covering weight (``weight`` and ``coverage`` None):
+    what a live panel draws while the weight is fitted."""
     omega = (frequency_grid(*_SPREAD_GRID) if omega is None
              else check_frequency_grid("omega", omega, min_length=16))
     levels = check_integer("levels", levels, minimum=2)
@@ -120,13 +127,16 @@ def spread_view(G, spread, omega=None, levels=3):
         raise ValueError(f"spread = {spread:g}: every member of the {levels}-level set is "
                          "unstable, there is no envelope of stable members to cover")
     errors = unc.relative_errors(mset, omega)
-    envelope = errors[stable].max(axis=0)
-    pick = _thinned(stable)
-    weight = unc.fit_covering_weight(omega, envelope, order=_COVER_ORDER)
     return SpreadView(spread=float(mset.spread), levels=levels, omega=omega, members=mset.size,
-                      unstable=unstable, envelope=envelope, envelope_all=errors.max(axis=0),
-                      member_errors=errors[pick], weight=weight,
-                      coverage=unc.coverage(weight, omega, envelope))
+                      unstable=unstable, envelope=errors[stable].max(axis=0),
+                      envelope_all=errors.max(axis=0), member_errors=errors[_thinned(stable)],
+                      weight=None, coverage=None)
+
+
+def _with_weight(view):
+    """``view`` with the order-5 weight fitted to its envelope, and its coverage."""
+    weight = unc.fit_covering_weight(view.omega, view.envelope, order=_COVER_ORDER)
+    return replace(view, weight=weight, coverage=unc.coverage(weight, view.omega, view.envelope))
 
 
 def _thinned(stable):
@@ -170,8 +180,12 @@ def spread_view_from(survey, cover):
 
 def _spread_summary(view, H_m=None):
     text = (f"+-{100 * view.spread:.3g} %, {view.levels} levels: {view.members} models, "
-            f"{view.n_unstable} unstable;  fitted order-{_COVER_ORDER} weight exceeds E_m by "
-            f"at most {view.coverage.max_excess_dB:.1f} dB")
+            f"{view.n_unstable} unstable;  ")
+    if view.coverage is None:
+        text += f"fitting an order-{_COVER_ORDER} weight ..."
+    else:
+        text += (f"fitted order-{_COVER_ORDER} weight exceeds E_m by "
+                 f"at most {view.coverage.max_excess_dB:.1f} dB")
     if H_m is not None:
         cover = unc.coverage(H_m, view.omega, view.envelope)
         text += (f";  |H_m| / E_m >= {cover.worst_ratio:.3g} "
@@ -194,34 +208,79 @@ def draw_spread(view, H_m=None, fig=None):
     -------
     matplotlib.figure.Figure
     """
-    check_type("view", view, SpreadView, "a SpreadView")
-    if H_m is not None:
-        check_siso("H_m", H_m)
-    with mpl.rc_context(STYLE):
-        fig, (ax,) = panel_figure(fig, 1, (7.0, 4.2))
-        w = view.omega
-        for k, err in enumerate(view.member_errors):
-            ax.semilogx(w, curve_db(err), color="0.75", lw=0.5,
-                        label="stable members (a selection)" if k == 0 else None)
-        if view.n_unstable:
-            ax.semilogx(w, curve_db(view.envelope_all), color=PALETTE.contrast, lw=0.9, ls=":",
-                        label=f"envelope incl. {view.n_unstable} unstable members")
-        ax.semilogx(w, curve_db(view.envelope), "k", lw=1.4, label="envelope E_m (stable members)")
-        ax.semilogx(w, curve_db(magnitude(view.weight, w)), color=PALETTE.primary, lw=1.4,
-                    label=f"fitted weight, order {_COVER_ORDER}")
+    return _SpreadPlot(view, H_m, fig).figure
+
+
+class _SpreadPlot:
+    """The figure of :func:`draw_spread`, whose curves, limits and texts follow a new view."""
+
+    def __init__(self, view, H_m=None, fig=None):
+        check_type("view", view, SpreadView, "a SpreadView")
         if H_m is not None:
-            ax.semilogx(w, curve_db(magnitude(H_m, w)), color=PALETTE.highlight, ls="--", lw=1.4,
-                        label="|H_m| (Table 2)")
-        top = float(np.max(curve_db(view.envelope_all)))
-        ax.set_ylim(-80, max(20.0, top + 10.0))
-        ax.set_xlim(w[0], w[-1])
-        ax.set_xlabel("frequency omega [rad/s]")
-        ax.set_ylabel("relative error |G_k/G - 1| [dB]")
-        # above the flat low-frequency level (~20 log10 spread) the left corner is empty;
-        # below it the members' notches reach down
-        ax.legend(loc="upper left")
-        ax.set_title(_spread_summary(view, H_m).replace(";  ", "\n", 1))
-    return apply_unit_text(fig)
+            check_siso("H_m", H_m)
+        with mpl.rc_context(STYLE):
+            self.figure, (ax,) = panel_figure(fig, 1, (7.0, 4.2))
+            self.ax, w = ax, view.omega
+            self.members = [ax.semilogx(w, curve_db(err), color="0.75", lw=0.5,
+                                        label="stable members (a selection)" if k == 0 else None)[0]
+                            for k, err in enumerate(view.member_errors)]
+            # shown when the set has unstable members
+            (self.envelope_all,) = ax.semilogx(w, curve_db(view.envelope_all),
+                                               color=PALETTE.contrast, lw=0.9, ls=":")
+            (self.envelope,) = ax.semilogx(w, curve_db(view.envelope), "k", lw=1.4,
+                                           label="envelope E_m (stable members)")
+            # shown once the weight is fitted
+            (self.weight,) = ax.semilogx(w, curve_db(view.envelope), color=PALETTE.primary,
+                                         lw=1.4)
+            self.H_m = None
+            if H_m is not None:
+                (self.H_m,) = ax.semilogx(w, curve_db(magnitude(H_m, w)), color=PALETTE.highlight,
+                                          ls="--", lw=1.4, label="|H_m| (Table 2)")
+            self.H_m_model = H_m
+            ax.set_xlim(w[0], w[-1])
+            ax.set_xlabel("frequency omega [rad/s]")
+            ax.set_ylabel("relative error |G_k/G - 1| [dB]")
+        self.show(view)
+        apply_unit_text(self.figure)
+
+    @property
+    def moving(self):
+        """The artists a new view changes: every curve (the y limits follow the set), the
+        y axis, the legend and the title."""
+        lines = [*self.members, self.envelope_all, self.envelope, self.weight]
+        return lines + ([self.H_m] if self.H_m is not None else []) + [
+            self.ax.yaxis, self.ax.get_legend(), self.ax.title]
+
+    def show(self, view):
+        """Draw ``view`` into the figure; False when it has more member curves than the figure."""
+        check_type("view", view, SpreadView, "a SpreadView")
+        ax, w = self.ax, view.omega
+        if (len(view.member_errors) > len(self.members)
+                or w.shape != self.envelope.get_xdata().shape):
+            return False
+        for k, line in enumerate(self.members):
+            line.set_visible(k < len(view.member_errors))
+            if k < len(view.member_errors):
+                line.set_data(w, curve_db(view.member_errors[k]))
+        self.envelope_all.set_data(w, curve_db(view.envelope_all))
+        self.envelope_all.set_visible(bool(view.n_unstable))
+        self.envelope_all.set_label(f"envelope incl. {view.n_unstable} unstable members"
+                                    if view.n_unstable else "_hidden")
+        self.envelope.set_data(w, curve_db(view.envelope))
+        self.weight.set_visible(view.weight is not None)
+        if view.weight is not None:
+            self.weight.set_data(w, curve_db(magnitude(view.weight, w)))
+        self.weight.set_label(f"fitted weight, order {_COVER_ORDER}" if view.weight is not None
+                              else "_hidden")
+        with mpl.rc_context(STYLE):
+            top = float(np.max(curve_db(view.envelope_all)))
+            ax.set_ylim(-80, max(20.0, top + 10.0))
+            # above the flat low-frequency level (~20 log10 spread) the left corner is empty;
+            # below it the members' notches reach down
+            ax.legend(loc="upper left")
+            ax.set_title(_spread_summary(view, self.H_m_model).replace(";  ", "\n", 1))
+        apply_unit_text_to(self.moving)
+        return True
 
 
 def spread_control(G, H_m, omega=None, spread=paper.UNCERTAINTY_SPREAD, *, levels=3,
@@ -264,20 +323,23 @@ def spread_control(G, H_m, omega=None, spread=paper.UNCERTAINTY_SPREAD, *, level
             raise ValueError("start was computed on another grid than omega: pass the grid "
                              "of its cover (or omega=None)")
 
-    def view_of(value):
-        """The view of one spread: ``start`` for its own, else computed."""
+    def views_of(value):
+        """The views of one spread: ``start`` for its own, else the envelope, then with its
+        fitted weight (the fit takes the longest: the set is shown before it)."""
         if start is not None and np.isclose(value, start.spread):
-            return start
-        return spread_view(G, value, omega, levels)
+            yield start
+            return
+        view = _envelope_view(G, value, omega, levels)
+        yield view
+        yield _with_weight(view)
 
     if not want_widget(interactive):
-        return static_figure(draw_spread(view_of(spread), H_m))
+        return static_figure(draw_spread(list(views_of(spread))[-1], H_m))
     w = import_ipywidgets()
     slider = linear_slider(w, "spread", 100 * spread, 0.5, 10.0, 0.1,
                            description="spread +- [%]")
     slider.description = unit_text(slider.description)
-    panel = LivePanel(w, {"spread": slider},
-                      lambda values: view_of(values["spread"] / 100),
-                      lambda view, fig: draw_spread(view, H_m, fig),
+    panel = LivePanel(w, {"spread": slider}, lambda values: views_of(values["spread"] / 100),
+                      lambda view, fig: _SpreadPlot(view, H_m, fig),
                       lambda view: _spread_summary(view, H_m))
     return finish(panel, panel.box())

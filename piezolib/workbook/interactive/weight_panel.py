@@ -23,9 +23,10 @@ from piezolib._checks import check_frequency_grid, check_positive, check_siso, c
 from piezolib.problem.analysis import RobustnessAnalysis, analyze, robust_performance_peak
 from piezolib.problem.design import design_controller
 from piezolib.robust.lti import frequency_grid, loop_functions
-from piezolib.workbook.interactive._panel import (LivePanel, curve_db, finish, import_ipywidgets,
-                                                  linear_slider, log_slider, magnitude,
-                                                  panel_figure, static_figure, want_widget)
+from piezolib.workbook.interactive._panel import (LivePanel, apply_unit_text_to, curve_db, finish,
+                                                  import_ipywidgets, linear_slider, log_slider,
+                                                  magnitude, panel_figure, static_figure,
+                                                  want_widget)
 from piezolib.workbook.style import STYLE, apply_unit_text, unit_text
 
 __all__ = ["WEIGHT_PARAMETERS", "WeightDesignView", "weight_design_view", "draw_weight_design",
@@ -230,34 +231,97 @@ def draw_weight_design(view, fig=None):
     -------
     matplotlib.figure.Figure
     """
-    check_type("view", view, WeightDesignView, "a WeightDesignView")
-    with mpl.rc_context(STYLE):
-        fig, (ax_s, ax_t) = panel_figure(fig, 2, (9.0, 3.8))
+    return _WeightPlot(view, fig).figure
+
+
+class _WeightPlot:
+    """The figure of :func:`draw_weight_design`, whose curves and texts follow a new view."""
+
+    def __init__(self, view, fig=None):
+        check_type("view", view, WeightDesignView, "a WeightDesignView")
+        with mpl.rc_context(STYLE):
+            self.figure, (ax_s, ax_t) = panel_figure(fig, 2, (9.0, 3.8))
+            self.axes = (ax_s, ax_t)
+            w = view.omega
+            (self.S,) = ax_s.semilogx(w, curve_db(view.S))
+            (self.inv_He,) = ax_s.semilogx(w, curve_db(view.inv_He), "k--",
+                                           label="template 1/|H_e|")
+            (self.T,) = ax_t.semilogx(w, curve_db(view.T))
+            (self.inv_Hy,) = ax_t.semilogx(w, curve_db(view.inv_Hy), "k--",
+                                           label="template 1/|H_y|")
+            # where the template crosses 0 dB (hidden when it does not)
+            self.crossings = [ax.axvline(1.0, color="0.5", lw=0.8, ls=":") for ax in self.axes]
+            for ax in self.axes:
+                ax.set_xlabel("frequency omega [rad/s]")
+                ax.set_ylabel("magnitude [dB]")
+                ax.set_xlim(w[0], w[-1])
+            # the empty corners: |S| and 1/|H_e| rise to ~0 dB and M_e, |T| and 1/|H_y| fall
+            ax_s.set_ylim(-100, 20)
+            ax_t.set_ylim(-160, 20)
+        self.show(view)
+        apply_unit_text(self.figure)
+
+    @property
+    def moving(self):
+        """The artists a new view changes: curves, crossing lines, legends and titles."""
+        return [self.S, self.inv_He, self.T, self.inv_Hy, *self.crossings,
+                *(ax.get_legend() for ax in self.axes), *(ax.title for ax in self.axes),
+                self.suptitle]
+
+    def show(self, view):
+        """Draw ``view`` into the figure's curves and texts (always possible: True)."""
+        check_type("view", view, WeightDesignView, "a WeightDesignView")
+        ax_s, ax_t = self.axes
         w = view.omega
-        ax_s.semilogx(w, curve_db(view.S), label=f"|S| ({view.controller})")
-        ax_s.semilogx(w, curve_db(view.inv_He), "k--", label="template 1/|H_e|")
-        ax_t.semilogx(w, curve_db(view.T), label=f"|T| ({view.controller})")
-        ax_t.semilogx(w, curve_db(view.inv_Hy), "k--", label="template 1/|H_y|")
-        for ax, crossing, name in ((ax_s, view.crossing_He, "H_e"),
-                                   (ax_t, view.crossing_Hy, "H_y")):
-            if np.isfinite(crossing):
-                ax.axvline(crossing, color="0.5", lw=0.8, ls=":",
-                           label=f"1/|{name}| = 0 dB at {crossing:.3g} rad/s")
-            ax.set_xlabel("frequency omega [rad/s]")
-            ax.set_ylabel("magnitude [dB]")
-            ax.set_xlim(w[0], w[-1])
-        # the empty corners: |S| and 1/|H_e| rise to ~0 dB and M_e, |T| and 1/|H_y| fall
-        ax_s.set_ylim(-100, 20)
-        ax_t.set_ylim(-160, 20)
-        ax_s.legend(loc="lower right")
-        ax_t.legend(loc="lower left")
-        ax_s.set_title(f"sensitivity: ||H_e S||_inf = {view.norm_He_S:.3f}")
-        ax_t.set_title(f"complementary sensitivity: ||H_y T||_inf = {view.norm_Hy_T:.3f}")
-        p = view.params
-        fig.suptitle(f"{_weight_summary(view)}\nM_e = {p['M_e']:.3g}, eps_e = {p['eps_e']:.3g}, "
-                     f"omega_e = {p['omega_e']:.3g} rad/s;  M_y = {p['M_y']:.3g}, "
-                     f"eps_y = {p['eps_y']:.3g}, omega_y = {p['omega_y']:.3g} rad/s")
-    return apply_unit_text(fig)
+        with mpl.rc_context(STYLE):
+            for line, curve in ((self.S, view.S), (self.inv_He, view.inv_He),
+                                (self.T, view.T), (self.inv_Hy, view.inv_Hy)):
+                line.set_data(w, curve_db(curve))
+            self.S.set_label(f"|S| ({view.controller})")
+            self.T.set_label(f"|T| ({view.controller})")
+            for line, crossing, name in ((self.crossings[0], view.crossing_He, "H_e"),
+                                         (self.crossings[1], view.crossing_Hy, "H_y")):
+                line.set_visible(bool(np.isfinite(crossing)))
+                if np.isfinite(crossing):
+                    line.set_xdata([crossing, crossing])
+                    line.set_label(f"1/|{name}| = 0 dB at {crossing:.3g} rad/s")
+                else:
+                    line.set_label("_hidden")
+            ax_s.legend(loc="lower right")
+            ax_t.legend(loc="lower left")
+            ax_s.set_title(f"sensitivity: ||H_e S||_inf = {view.norm_He_S:.3f}")
+            ax_t.set_title(f"complementary sensitivity: ||H_y T||_inf = {view.norm_Hy_T:.3f}")
+            p = view.params
+            self.suptitle = self.figure.suptitle(
+                f"{_weight_summary(view)}\nM_e = {p['M_e']:.3g}, eps_e = {p['eps_e']:.3g}, "
+                f"omega_e = {p['omega_e']:.3g} rad/s;  M_y = {p['M_y']:.3g}, "
+                f"eps_y = {p['eps_y']:.3g}, omega_y = {p['omega_y']:.3g} rad/s")
+        apply_unit_text_to(self.moving)
+        return True
+
+
+#: The class of a progress bar still running (:mod:`piezolib.notebook_display` draws it).
+_RUNNING_BAR = "piezolib-progress-running"
+
+
+class _FinalStateHeld:
+    """Bars and log lines drawn into the HTML widget ``target`` as they change, except a state
+    with no bar running (the last one), which waits for :meth:`release`."""
+
+    def __init__(self, target):
+        self.target, self.held = target, None
+
+    def __call__(self, html_text, _plain):
+        if _RUNNING_BAR in html_text:
+            self.held = None
+            self.target.value = html_text
+        else:
+            self.held = html_text
+
+    def release(self):
+        """Show the state held back (if any)."""
+        if self.held is not None:
+            self.target.value, self.held = self.held, None
 
 
 class Redesign(NamedTuple):
@@ -338,7 +402,10 @@ def weight_design_control(G, H_m, K, params=None, omega=None, *, design_options=
         (``box.redesign_result``), and adds it to the controller menu.
         ``box.controls`` holds the sliders, the button ("redesign") and the
         menu ("controller"); ``box.panel.view`` the latest
-        :class:`WeightDesignView`.  Saved without a frontend, the widget's
+        :class:`WeightDesignView` (a change is drawn by a worker thread:
+        ``box.panel.wait()`` blocks until the figure shows the latest values;
+        the re-design's done line and result appear with the figure of the
+        new controller).  Saved without a frontend, the widget's
         output holds the figure as image/png.  Headless: the figure of
         :func:`draw_weight_design` for ``params``.
     """
@@ -369,37 +436,39 @@ def weight_design_control(G, H_m, K, params=None, omega=None, *, design_options=
         return weight_design_view(G, H_m, controllers[menu.value], values, omega,
                                   controller=menu.value)
 
-    panel = LivePanel(w, sliders, compute, draw_weight_design, _weight_summary)
+    panel = LivePanel(w, sliders, compute, _WeightPlot, _weight_summary)
     menu.observe(panel.refresh, names="value")
 
     activity = w.HTML()
 
-    def show_activity(html_text, _plain):
-        activity.value = html_text
-
     def on_redesign(_):
         button.disabled = True
         result.value = "<i>re-designing (DK-iteration) ...</i>"
+        bars = _FinalStateHeld(activity)
         try:
             # a button's callback runs outside any cell: its bars and log lines would only
             # reach the hidden log console, so they are drawn under the button instead
-            with progress.shown_in(show_activity):
+            with progress.shown_in(bars):
                 K_new, mu_new = redesign(G, H_m, panel.values(), **design_options)
         except Exception as exc:        # noqa: BLE001 -- shown, not lost in the kernel log
+            bars.release()
             result.value = f"<b>re-design failed</b> ({type(exc).__name__}): {html.escape(str(exc))}"
             return
         finally:
             button.disabled = False
         label = f"re-designed K ({K_new.nstates} states)"
         controllers[label] = K_new
-        result.value = html.escape(unit_text(
-            f"{label}: peak mu_RP = {mu_new:.3f} for these weights"))
+        done = html.escape(unit_text(f"{label}: peak mu_RP = {mu_new:.3f} for these weights"))
+
+        def announce():
+            bars.release()
+            result.value = done
+
         if label not in menu.options:
             menu.options = list(menu.options) + [label]
-        if menu.value == label:
-            panel.refresh()
-        else:
-            menu.value = label
+        menu.value = label
+        # the done line comes with the figure of the new controller, not before it
+        panel.refresh(then=announce)
 
     button.on_click(on_redesign)
     box = finish(panel, panel.box(extra=[w.HBox([menu, button, result]), activity]))

@@ -96,10 +96,12 @@ def test_dahl_widget_follows_its_sliders(dahl, widgets):
     assert set(box.controls) == set(I.DAHL_SLIDER_PARAMETERS)
     assert panel.view.rms_percent == pytest.approx(fit.rms_percent[-1], rel=1e-12)
     box.controls["g_a"].value = 1.1 * fit.model.g_a
+    assert panel.wait(30)
     assert panel.view.model.g_a == pytest.approx(1.1 * fit.model.g_a)
     assert panel.view.rms_percent > fit.rms_percent[-1] + 0.5
     worse = panel.view
     # a model too weakly damped to invert: the message is shown, the last view kept
     box.controls["alpha1"].value = box.controls["alpha1"].min
+    assert panel.wait(30)
     assert "NotInvertibleError" in panel.status.value
     assert panel.view is worse

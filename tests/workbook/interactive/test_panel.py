@@ -2,6 +2,7 @@
 
 import base64
 import sys
+import time
 import types
 
 import pytest
@@ -104,15 +105,85 @@ def test_a_panel_box_is_saved_with_its_figure_as_png(monkeypatch):
         ax.plot([0, 1], [0, view])
         return fig
 
-    panel = _panel.LivePanel(widgets, sliders, lambda values: values["a"], draw,
+    panel = _panel.LivePanel(widgets, sliders, lambda values: values["a"], _panel.redrawn(draw),
                              lambda view: f"a = {view:.2f} & more")
     box = _panel.finish(panel, panel.box())
     assert isinstance(box, widgets.VBox) and box.panel is panel
     bundle = box._repr_mimebundle_()
     assert set(bundle) == {_panel.WIDGET_VIEW_MIME, "image/png", "text/plain"}
-    assert base64.b64decode(bundle["image/png"]) == _panel.png_bytes(panel.figure)
+    assert base64.b64decode(bundle["image/png"]) == panel.image.value     # the figure shown
     assert bundle["text/plain"] == ("interactive control (figure for the values shown): "
                                     "a = 1.00 & more")
     assert "VBox(" not in bundle["text/plain"]
+    first = panel.image.value
     sliders["a"].value = 2.0                                      # the saved figure follows
-    assert base64.b64decode(box._repr_mimebundle_()["image/png"]) == _panel.png_bytes(panel.figure)
+    assert panel.wait(10) and panel.image.value != first
+    assert base64.b64decode(box._repr_mimebundle_()["image/png"]) == panel.image.value
+
+
+def _counting_panel(widgets, seconds):
+    """A panel whose callback takes ``seconds`` and records the values it was called with."""
+    sliders = {"a": _panel.linear_slider(widgets, "a", 1.0, 0.0, 3.0, 0.1)}
+    computed = []
+
+    def compute(values):
+        computed.append(values["a"])
+        time.sleep(seconds)
+        return values["a"]
+
+    def draw(view, fig=None):
+        fig, (ax,) = _panel.panel_figure(fig, 1, (2.0, 1.5))
+        ax.plot([0, 1], [0, view])
+        return fig
+
+    panel = _panel.LivePanel(widgets, sliders, compute, _panel.redrawn(draw), str)
+    box = _panel.finish(panel, panel.box())
+    computed.clear()
+    return box, sliders["a"], computed
+
+
+def test_twenty_key_presses_draw_the_last_value_not_every_one(widgets):
+    """A slider moved by 20 key presses while each frame takes 0.1 s: the presses return at
+    once, at most two frames are drawn and the last one shows the last value."""
+    box, slider, computed = _counting_panel(widgets, 0.1)
+    frames = box.panel.frames
+    start = time.monotonic()
+    for _ in range(20):
+        slider.value = round(slider.value + 0.1, 1)
+    assert time.monotonic() - start < 1.0                 # 20 synchronous frames take 2 s
+    assert box.panel.wait(10)
+    assert len(computed) <= 2 and computed[-1] == pytest.approx(3.0)
+    assert box.panel.frames - frames == len(computed)
+    assert box.panel.view == pytest.approx(3.0) and box.panel.summary.value == "3.0"
+
+
+def test_a_frame_blitted_over_the_background_is_the_full_figure(widgets):
+    """The moving artists are painted over a picture of the rest: no stale curve remains."""
+    import io
+
+    import numpy as np
+    from PIL import Image
+
+    class Plot:
+        def __init__(self, view, fig):
+            self.figure, (ax,) = _panel.panel_figure(fig, 1, (3.0, 2.0))
+            (self.line,) = ax.plot([0, 1], [0, view], lw=3)
+            ax.set_ylim(-3, 3)
+            self.moving = [self.line, ax.title]
+
+        def show(self, view):
+            self.line.set_ydata([0, view])
+            self.line.axes.set_title(f"a = {view:.1f}")
+            return True
+
+    sliders = {"a": _panel.linear_slider(widgets, "a", 1.0, -2.0, 2.0, 0.1)}
+    panel = _panel.LivePanel(widgets, sliders, lambda values: values["a"], Plot, str)
+    _panel.finish(panel, panel.box())
+    sliders["a"].value = -2.0
+    assert panel.wait(10) and panel.frames == 2
+    blitted = np.asarray(Image.open(io.BytesIO(panel.image.value)).convert("RGB"), dtype=int)
+    full = np.asarray(Image.open(io.BytesIO(_panel.png_bytes(panel.figure))).convert("RGB"),
+                      dtype=int)
+    assert blitted.shape == full.shape
+    # the line is drawn after the frame of the axes here, before it in a full draw
+    assert np.mean(np.abs(blitted - full).max(axis=2) > 40) < 0.005

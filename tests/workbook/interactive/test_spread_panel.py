@@ -92,6 +92,7 @@ def test_spread_widget_follows_its_slider(problem, widgets):
     assert (slider.min, slider.max, slider.value) == (0.5, 10.0, 5.0)
     assert box.panel.view.n_unstable == 42
     slider.value = 3.0
+    assert box.panel.wait(60)
     assert box.panel.view.spread == pytest.approx(0.03) and box.panel.view.n_unstable == 0
     assert "0 unstable" in box.panel.summary.value
 

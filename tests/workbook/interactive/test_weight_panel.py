@@ -142,13 +142,25 @@ def test_weight_widget_follows_its_sliders(problem, published_analysis, widgets)
     first_image, first_crossing = bytes(panel.image.value), panel.view.crossing_He
 
     box.controls["omega_e"].value = 2 * PUBLISHED["omega_e"]       # as a person moving it
+    assert panel.wait(30)
     assert panel.view.params["omega_e"] == pytest.approx(2 * PUBLISHED["omega_e"])
     assert panel.view.crossing_He / first_crossing == pytest.approx(2.0, rel=5e-3)
     assert bytes(panel.image.value) != first_image
     assert "NP ||H_e S||" in panel.summary.value and panel.status.value == ""
 
+    events = []          # what the reader sees, in order
+    panel.image.observe(lambda change: events.append(("figure", panel.view.controller)), "value")
+    box.redesign_progress.observe(lambda change: events.append(
+        ("bar", "done" if "piezolib-progress-done" in change.new else "running")), "value")
+    box.redesign_result.observe(lambda change: events.append(("result", change.new)), "value")
     box.controls["redesign"].click()
+    assert panel.wait(30)
     menu = box.controls["controller"]
+    # the done line and the result come with the figure of the new controller, not before it
+    new_figure = events.index(("figure", menu.value))
+    assert [kind for kind, _ in events[new_figure:]] == ["figure", "bar", "result"]
+    assert events[new_figure + 1] == ("bar", "done") and "μ_RP" in events[-1][1]
+    assert ("bar", "done") not in events[:new_figure]
     assert menu.value.startswith("re-designed K") and len(menu.options) == 2
     assert "μ_RP" in box.redesign_result.value
     # its progress is drawn under the button (a callback's output reaches no cell), finished
@@ -160,6 +172,7 @@ def test_weight_widget_follows_its_sliders(problem, published_analysis, widgets)
     assert panel.view.mu_RP == pytest.approx(mu, rel=1e-9)
     assert f"{mu:.3f}" in box.redesign_result.value
     menu.value = menu.options[0]                                    # back to the given K
+    assert panel.wait(30)
     assert panel.view.controller == menu.options[0]
     assert panel.view.norm_He_S > published_analysis.norm_He_S      # faster template on S
 
