@@ -16,8 +16,8 @@ import scipy.linalg as la
 from piezolib._checks import (check_channels, check_finite_array, check_integer, check_lti,
                               check_positive, check_proper)
 from piezolib.robust.hinf_central import _AXIS_REL_TOL, _central, _eig_errors, _marginal
-from piezolib.robust.lft import lft_hinf_norm
-from piezolib.robust.lti import (balance, from_scaled, hinf_norm, max_singular_value,
+from piezolib.robust.lft import lft_response
+from piezolib.robust.lti import (balance, from_scaled, max_singular_value,
                                  time_scale_of, to_scaled)
 
 __all__ = ["HinfResult", "HinfSynthesisError", "hinfsyn", "DEFAULT_EFFORT_WEIGHT"]
@@ -30,6 +30,7 @@ _MAX_CHECKS = 16      # final verifications of the best controllers (each two de
 _MAX_BACKOFFS = 8     # then raises of gamma by growing steps
 _MAX_SAMPLES = 24     # trials spread over the last rtol when no controller landed there
 _GOLDEN = (np.sqrt(5.0) - 1) / 2   # low-discrepancy spacing of those trials
+_MODAL_COND = 1e6     # eigenvector condition below which a response is evaluated modally
 
 
 class HinfSynthesisError(ValueError):
@@ -194,11 +195,84 @@ def _balance_states(pl, sweeps=30):
     return pl
 
 
+def _gains(A, B, C, D, omega):
+    """Largest singular value of C (j omega I - A)^-1 B + D at each ``omega`` [scaled rad/s].
+
+    All frequencies at once, from the eigenvectors of A when they are well
+    conditioned, else by one batched LU solve: a fraction of the cost of
+    python-control's frequency-by-frequency evaluation, which took half of a
+    small synthesis.  An exactly singular point (an undamped pole on the grid) is
+    left to :func:`~piezolib.robust.lti.max_singular_value`.
+    """
+    omega = np.atleast_1d(np.asarray(omega, float))
+    n = A.shape[0]
+    if n == 0:
+        return np.full(omega.size, np.linalg.norm(D, 2))
+    lam, V = np.linalg.eig(A)
+    if np.linalg.cond(V) < _MODAL_COND:
+        # well-conditioned eigenvectors: C V diag(1 / (j omega - lam)) V^-1 B + D, the
+        # rounding amplified by at most cond(V)
+        CV, VB = C @ V, np.linalg.solve(V, B)
+        H = np.einsum("ik,fk,kj->fij", CV, 1.0 / (1j * omega[:, None] - lam), VB) + D
+    else:
+        try:
+            resolvent = 1j * omega[:, None, None] * np.eye(n) - A
+            H = C @ np.linalg.solve(resolvent, B.astype(complex)) + D
+        except np.linalg.LinAlgError:
+            return max_singular_value(ct.ss(A, B, C, D), omega)
+    return _largest_singular_values(H)
+
+
+def _largest_singular_values(H):
+    """sigma_max of each matrix of a stack (f, p, m): closed forms for one and two columns
+    (or rows), where a batched SVD spends microseconds per matrix in LAPACK's overhead."""
+    if min(H.shape[1:]) == 1:
+        return np.sqrt(np.sum(np.abs(H) ** 2, axis=(1, 2)))
+    if min(H.shape[1:]) == 2:
+        # the larger eigenvalue of the 2 x 2 Gram matrix [[a, b], [b*, d]], without the
+        # cancellation of the smaller one
+        M = H if H.shape[2] == 2 else np.swapaxes(H, 1, 2)
+        a, d = (np.sum(np.abs(M[:, :, k]) ** 2, axis=1) for k in (0, 1))
+        b = np.sum(M[:, :, 0].conj() * M[:, :, 1], axis=1)
+        return np.sqrt((a + d) / 2 + np.sqrt(((a - d) / 2) ** 2 + np.abs(b) ** 2))
+    return np.linalg.svd(H, compute_uv=False)[:, 0]
+
+
 def _peak_gain(A, B, C, D, omega):
     """Largest gain on the grid only (cheap: every gamma trial is checked this way)."""
-    if A.shape[0] == 0:
-        return float(np.linalg.norm(D, 2))
-    return float(np.max(max_singular_value(ct.ss(A, B, C, D), omega)))
+    return float(np.max(_gains(A, B, C, D, omega)))
+
+
+def _refined_peak(gains, omega, xtol=1e-9):
+    """(peak, omega_peak) of ``gains`` (a vectorised function of frequency) on the grid
+    ``omega`` and at DC, refined around the best grid point by nested geometric grids of
+    65 points until the bracket is ``xtol`` wide (relative).
+
+    Five batched evaluations instead of the ~25 scalar ones of a Brent search, for
+    the same peak: each round narrows the bracket 32-fold.
+    """
+    omega = np.asarray(omega, float)
+    values = gains(omega)
+    k = int(np.argmax(values))
+    peak, w_peak = float(values[k]), float(omega[k])
+    lo, hi = omega[max(k - 1, 0)], omega[min(k + 1, omega.size - 1)]
+    while lo > 0 and hi > lo * (1 + xtol):
+        sub = np.geomspace(lo, hi, 65)
+        values = gains(sub)
+        j = int(np.argmax(values))
+        if values[j] > peak:
+            peak, w_peak = float(values[j]), float(sub[j])
+        lo, hi = sub[max(j - 1, 0)], sub[min(j + 1, sub.size - 1)]
+    dc = float(gains(np.zeros(1))[0])
+    return (dc, 0.0) if dc >= peak else (peak, w_peak)
+
+
+def _lft_peak(P, K, omega, omega_s):
+    """||F_l(P, K)||_inf and its frequency [rad/s] from the pointwise loop
+    (:func:`~piezolib.robust.lft.lft_response`, as ``lft_hinf_norm`` computes it),
+    refined by :func:`_refined_peak`."""
+    return _refined_peak(
+        lambda w: _largest_singular_values(lft_response(P, K, w, omega_s=omega_s)), omega)
 
 
 def _regularization_weight(name, D, rank, reference, weight, option, what):
@@ -496,8 +570,8 @@ def _on_modal_realization(P, nmeas, ncon, effort_weight, noise_weight, options):
     loop = P.lft(res.K, nu=ncon, ny=nmeas)
     if np.any(np.linalg.eigvals(np.asarray(loop.A, float)).real >= 0):
         return None
-    norm, w_peak = lft_hinf_norm(P, res.K, _check_grid(np.asarray(loop.A, float), 2000),
-                                 omega_s=res.time_scale)
+    norm, w_peak = _lft_peak(P, res.K, _check_grid(np.asarray(loop.A, float), 2000),
+                             res.time_scale)
     if not norm <= res.gamma * (1 + options["verify_rtol"]):
         return None
     return replace(res, norm=float(norm), omega_peak=float(w_peak),
@@ -726,7 +800,7 @@ class _GammaSearch:
         recomputed pointwise on the given plant."""
         P, ws, verify_rtol = self.P, self.ws, self.verify_rtol
         A, B, C, D = _close_loop(self.nz.plant, K)
-        peak, _ = hinf_norm(ct.ss(A, B, C, D), omega=_check_grid(A, 2000))
+        peak, _ = _refined_peak(lambda w: _gains(A, B, C, D, w), _check_grid(A, 2000))
         if peak > level * (1 + verify_rtol):
             self.attempts.append((float(level), f"dense-grid peak {peak:.4g} > gamma"))
             return None
@@ -745,8 +819,7 @@ class _GammaSearch:
                 return None
         # the norm from the pointwise loop, not from CLs: near pole-zero cancellations the
         # closed loop's realisation is evaluated badly (1.7e5 instead of 1.38 seen at DC)
-        norm, w_peak = lft_hinf_norm(self.Ps, balance(Ks), _check_grid(CLs.A, 2000),
-                                     omega_s=1.0) \
+        norm, w_peak = _lft_peak(self.Ps, balance(Ks), _check_grid(CLs.A, 2000), 1.0) \
             if CLs.nstates else (float(np.linalg.norm(CLs.D, 2)), 0.0)
         if not np.isfinite(norm) or norm > level * (1 + verify_rtol):
             self.attempts.append((float(level), f"recomputed norm {norm:.4g} on the given "
