@@ -5,7 +5,7 @@ import argparse
 import sys
 import time
 
-__all__ = ["main", "parser"]
+__all__ = ["main", "parser", "error_line"]
 
 
 def parser():
@@ -123,7 +123,7 @@ def _sweep(args, stream):
         result = sweep.run_sweep(spec, jobs=args.jobs, scheduler=args.scheduler,
                                  dry_run=args.dry_run, stream=stream)
     except OSError as exc:                      # an unreachable scheduler, a full disk
-        print(f"python -m piezolib sweep: {exc}", file=sys.stderr)
+        print(f"python -m piezolib sweep: {error_line(exc)}", file=sys.stderr)
         return 2 if args.scheduler and "scheduler" in str(exc) else 1
     except KeyboardInterrupt:
         stored = len(list((spec.directory / "points").glob("*.json")))
@@ -131,7 +131,7 @@ def _sweep(args, stream):
               f"{spec.directory / 'points'}: run the same command again to resume",
               file=sys.stderr)
         return 130
-    return 1 if result.failed else 0
+    return 1 if result.failed or result.problems else 0
 
 
 def _list_studies(stream):
@@ -237,8 +237,48 @@ def _data(stream):
 
 
 def main(argv=None, stream=sys.stdout):
-    """Run the command line; return the exit status (0 ok, 1 failure, 2 usage)."""
+    """Run the command line; return the exit status (0 ok, 1 failure, 2 usage, 130 interrupted).
+
+    An error of the file system (a read-only or full disk, a missing permission), a data
+    file that fails its check, a sweep another process runs, or Ctrl-C is one line on
+    stderr naming the command and the file, never a traceback.
+    """
+    from piezolib import files
+    from piezolib.records import RecordError
+
     args = parser().parse_args(argv)
+    try:
+        return _command(args, stream)
+    except KeyboardInterrupt:
+        print(f"python -m piezolib {args.command}: interrupted", file=sys.stderr)
+        return 130
+    except (OSError, RecordError, files.LockHeld) as exc:
+        print(f"python -m piezolib {args.command}: {error_line(exc)}", file=sys.stderr)
+        return 1
+
+
+def error_line(exc):
+    """One line saying what went wrong: the message of ``exc`` (an OSError's without its
+    errno prefix, with the file it names).
+
+    Examples
+    --------
+    >>> error_line(OSError(30, "cannot write data/a.csv: Read-only file system", "data/a.csv"))
+    'cannot write data/a.csv: Read-only file system'
+    >>> error_line(PermissionError(13, "Permission denied", "runs/x"))
+    'runs/x: Permission denied'
+    """
+    if isinstance(exc, OSError) and exc.strerror:
+        text = exc.strerror
+        if exc.filename is not None and str(exc.filename) not in text:
+            text = f"{exc.filename}: {text}"
+    else:
+        text = str(exc) or type(exc).__name__
+    lines = text.strip().splitlines() or [type(exc).__name__]
+    return lines[0]
+
+
+def _command(args, stream):
     if args.command == "data":
         return _data(stream)
     if args.command == "controllers":
