@@ -1043,67 +1043,6 @@ def _bad_calls():
 #: argument (an AttributeError or KeyError from deep inside, or no error): each is a bug of
 #: that function, listed here so that the sweep stays complete while the fixes are pending.
 PENDING = {
-    "your_stage_hysteresis.prepare_loops": {
-        "skip_transient": ("text", "number"),
-    },
-    "your_stage_hysteresis.fit_hysteresis": {
-        "fit_loops": ("number",),
-        "validation_loops": ("number",),
-        "gamma_a": ("zero", "negative", "nan", "inf", "text"),
-        "plays": ("zero", "negative", "fraction", "text"),
-        "ceiling_percent": ("zero", "negative", "nan", "inf", "text"),
-    },
-    "your_stage_control.design_for_loop": {
-        "identification": ("text", "number"),
-        "weight": ("text", "number"),
-        "error_weight": ("text",),
-        "output_weight": ("text",),
-        "rolloff": ("text",),
-        "order": ("zero", "negative", "fraction", "text"),
-        "d_order": ("negative", "fraction"),
-        "iterations": ("zero", "negative", "fraction", "text"),
-        "delay_samples": ("negative", "fraction"),
-    },
-    "your_stage_control.verify_design": {
-        "identification": ("text", "number"),
-        "weight": ("text", "number"),
-        "truth": ("text", "number"),
-    },
-    "your_stage_control.run_experiments": {
-        "loop": ("text", "number"),
-        "amplitudes_V": ("empty", "negative"),
-        "periods": ("zero", "negative", "fraction", "text"),
-        "frequencies_Hz": ("empty", "negative"),
-        "amplitude_um": ("zero", "negative", "nan", "inf", "text"),
-        "delay_samples": ("negative",),
-        "loop_rate_Hz": ("text",),
-    },
-    "your_stage_claims.record_claims": {
-        "claims": ("text", "number"),
-        "records": ("text", "number"),
-        "identification": ("text", "number"),
-        "weight": ("text", "number"),
-        "choice": ("text", "number"),
-        "loop": ("text", "number"),
-        "verification": ("text", "number"),
-        "experiments": ("text", "number"),
-        "truth": ("text", "number"),
-    },
-    "your_stage_claims.stage_checks": {
-        "results": ("text", "number"),
-    },
-    "your_stage_claims.known_truth_checks": {
-        "truth": ("text", "number"),
-        "choice": ("text", "number"),
-        "identification": ("text", "number"),
-        "weight": ("text", "number"),
-        "verification": ("text", "number"),
-        "experiments": ("text", "number"),
-    },
-    "your_stage_claims.summary_lines": {
-        "records": ("text", "number"),
-        "seconds": ("negative", "nan", "text"),
-    },
 }
 
 

@@ -16,12 +16,30 @@ no row and no check.
 
 import control as ct
 
-from piezolib.workbook.your_stage import NO_PLANT_NOTE, TRUTH_TOP_RAD_S, ran
+from piezolib._checks import check_nonnegative, check_type
+from piezolib.workbook.report import ClaimTable
+from piezolib.workbook.your_stage import (NO_PLANT_NOTE, TRUTH_TOP_RAD_S, Identification,
+                                          KnownTruth, OwnRecords, Skipped, UncertaintyWeight,
+                                          _Shown, ran)
+from piezolib.workbook.your_stage_control import Experiments, LoopDesign, Verification
+from piezolib.workbook.your_stage_hysteresis import HysteresisChoice
 
 __all__ = ["record_claims", "stage_checks", "known_truth_checks", "summary_lines"]
 
 #: Section of the claims this notebook writes.
 SECTION = "own stage"
+
+#: The class of each stage's result (a stage that did not run gives None or Skipped).
+_RESULTS = {"identification": Identification, "weight": UncertaintyWeight,
+            "choice": HysteresisChoice, "loop": LoopDesign, "verification": Verification,
+            "experiments": Experiments, "truth": KnownTruth}
+
+
+def _check_results(**results):
+    for name, value in results.items():
+        if value is not None and not isinstance(value, Skipped):
+            check_type(name, value, _RESULTS[name],
+                       f"the {_RESULTS[name].__name__} of that stage, Skipped or None")
 
 
 def record_claims(claims, records, identification, weight, choice, loop, verification,
@@ -45,6 +63,10 @@ def record_claims(claims, records, identification, weight, choice, loop, verific
     ClaimTable
         ``claims``.
     """
+    check_type("claims", claims, ClaimTable, "a report.ClaimTable")
+    check_type("records", records, OwnRecords, "the OwnRecords of load_records")
+    _check_results(identification=identification, weight=weight, choice=choice, loop=loop,
+                   verification=verification, experiments=experiments, truth=truth)
     c = SECTION
     claims.add(c, "record sampling rate", None, next(iter(records.loops.values())).fs, unit="Hz")
     known = ran(truth)
@@ -102,6 +124,10 @@ def stage_checks(*results):
     >>> stage_checks(Skipped("no plant"), None)
     {}
     """
+    for result in results:
+        if result is not None and not isinstance(result, _Shown):
+            raise TypeError(f"results must be the stages' results (or None), got "
+                            f"{type(result).__name__}")
     out = {}
     for result in results:
         if ran(result):
@@ -125,6 +151,9 @@ def known_truth_checks(truth, identification, weight, choice, verification, expe
     dict
         {what it states: bool}.
     """
+    check_type("choice", choice, HysteresisChoice, "the HysteresisChoice of fit_hysteresis")
+    _check_results(truth=truth, identification=identification, weight=weight,
+                   verification=verification, experiments=experiments)
     out = {"PI chosen (the stage's hysteresis is made of plays)": choice.chosen_name == "PI"}
     if not ran(truth):
         return out
@@ -161,5 +190,7 @@ def summary_lines(records, seconds):
     >>> summary_lines(OwnRecords(None, {}, 5e3), 12.34)[-1]
     'the notebook ran in 12.3 s'
     """
+    check_type("records", records, OwnRecords, "the OwnRecords of load_records")
+    seconds = check_nonnegative("seconds", seconds)
     out = [] if records.have_plant else [NO_PLANT_NOTE]
     return out + [f"the notebook ran in {seconds:.1f} s"]

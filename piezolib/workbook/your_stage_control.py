@@ -22,13 +22,15 @@ import pandas as pd
 
 from piezolib import hysteresis as hy
 from piezolib import robust
-from piezolib._checks import check_positive, check_type
+from piezolib._checks import (check_integer, check_mapping, check_positive,
+                              check_positive_values, check_type)
 from piezolib.problem import analysis, genplant
 from piezolib.problem.design import design_controller
 from piezolib.problem.stage import VirtualStage
 from piezolib.workbook import experiments as exps
 from piezolib.workbook.loop import DISCARD_PERIODS
-from piezolib.workbook.your_stage import _Shown, ran
+from piezolib.workbook.your_stage import (Identification, KnownTruth, Skipped,
+                                          UncertaintyWeight, _Shown, ran)
 from piezolib.workbook.your_stage_hysteresis import HysteresisChoice
 
 __all__ = ["LoopDesign", "Verification", "Experiments", "design_for_loop", "verify_design",
@@ -90,6 +92,15 @@ class LoopDesign(_Shown):
                 bool(d.discrete.matches and d.discrete.loop_stable)}
 
 
+def _check_plant_results(identification, weight, truth=None):
+    check_type("identification", identification, Identification,
+               "the Identification of your_stage.identify")
+    check_type("weight", weight, UncertaintyWeight,
+               "the UncertaintyWeight of your_stage.uncertainty_weight")
+    if truth is not None and not isinstance(truth, Skipped):
+        check_type("truth", truth, KnownTruth, "the KnownTruth of your_stage.known_truth, or None")
+
+
 def design_for_loop(identification, weight, error_weight, output_weight, rolloff, *, order,
                     d_order, iterations, fs, delay_samples):
     """A mu controller for the identified model at the real-time loop's rate and delay.
@@ -128,7 +139,15 @@ def design_for_loop(identification, weight, error_weight, output_weight, rolloff
     """
     if not ran(identification):
         return identification
+    _check_plant_results(identification, weight)
+    for name, fields in (("error_weight", error_weight), ("output_weight", output_weight),
+                         ("rolloff", rolloff)):
+        check_mapping(name, fields, "a dict of keyword arguments", empty=True)
+    order = check_integer("order", order, minimum=1)
+    d_order = check_integer("d_order", d_order, minimum=0)
+    iterations = check_integer("iterations", iterations, minimum=1)
     fs = check_positive("fs", fs)
+    delay_samples = check_integer("delay_samples", delay_samples, minimum=0)
     H_e = robust.sensitivity_weight(**error_weight, inputs="v_e", outputs="y1", name="H_e")
     H_y = robust.complementary_sensitivity_weight(**output_weight, inputs="v_y", outputs="y2",
                                                   name="H_y")
@@ -227,6 +246,7 @@ def verify_design(loop, identification, weight, truth=None):
     if not ran(loop):
         return loop
     check_type("loop", loop, LoopDesign, "the LoopDesign of design_for_loop")
+    _check_plant_results(identification, weight, truth)
     d = loop.design
     fs, delay = d.fs, loop.delay_samples
     t0 = time.perf_counter()
@@ -352,7 +372,14 @@ def run_experiments(loop, choice, *, seed, noise_rms_V, amplitudes_V, periods, f
     """
     if not ran(loop):
         return loop
+    check_type("loop", loop, LoopDesign, "the LoopDesign of design_for_loop")
     check_type("choice", choice, HysteresisChoice, "the HysteresisChoice of fit_hysteresis")
+    amplitudes_V = check_positive_values("amplitudes_V", amplitudes_V).tolist()
+    periods = check_integer("periods", periods, minimum=1)
+    frequencies_Hz = check_positive_values("frequencies_Hz", frequencies_Hz).tolist()
+    amplitude_um = check_positive("amplitude_um", amplitude_um)
+    delay_samples = check_integer("delay_samples", delay_samples, minimum=0)
+    loop_rate_Hz = check_positive("loop_rate_Hz", loop_rate_Hz)
     stage = VirtualStage(seed=seed, noise_rms_V=noise_rms_V)
     if stage.fs != loop_rate_Hz:
         raise ValueError(f"loop_rate_Hz: the experiment loop runs at {stage.fs:g} Hz, the "

@@ -22,7 +22,7 @@ import pandas as pd
 
 from piezolib import hysteresis as hy
 from piezolib import records as recs
-from piezolib._checks import check_integer, check_positive, check_type
+from piezolib._checks import check_bool, check_integer, check_positive, check_type
 from piezolib.workbook.your_stage import OwnRecords, _Shown
 
 __all__ = ["HysteresisLoops", "HysteresisChoice", "FeedforwardCheck", "prepare_loops",
@@ -75,6 +75,7 @@ def prepare_loops(records, um_per_volt, decimation, skip_transient=True):
     check_type("records", records, OwnRecords, "the OwnRecords of load_records")
     um_per_volt = check_positive("um_per_volt", um_per_volt)
     decimation = check_integer("decimation", decimation, 1)
+    skip_transient = check_bool("skip_transient", skip_transient)
     data, dropped = {}, {}
     for label, rec in records.loops.items():
         cut = recs.cut_at_turning_points(rec, skip_transient=skip_transient)
@@ -164,6 +165,16 @@ class HysteresisChoice(_Shown):
                 bool(self.validation_rms(self.chosen_name) == s["pooled RMS %"].min())}
 
 
+def _labels(name, labels):
+    """Record labels as a tuple of str."""
+    if isinstance(labels, str) or not hasattr(labels, "__iter__"):
+        raise TypeError(f"{name} must be a sequence of record labels (str), got {labels!r}")
+    labels = tuple(labels)
+    if not all(isinstance(x, str) for x in labels):
+        raise TypeError(f"{name} must hold record labels (str), got {labels!r}")
+    return labels
+
+
 def fit_hysteresis(loops, fit_loops, validation_loops, *, gamma_a, plays, ceiling_percent):
     """Fit a Dahl and a Prandtl-Ishlinskii model; choose the one that validates best.
 
@@ -191,7 +202,11 @@ def fit_hysteresis(loops, fit_loops, validation_loops, *, gamma_a, plays, ceilin
     HysteresisChoice
     """
     check_type("loops", loops, HysteresisLoops, "the HysteresisLoops of prepare_loops")
-    fit_loops, validation_loops = tuple(fit_loops), tuple(validation_loops)
+    fit_loops = _labels("fit_loops", fit_loops)
+    validation_loops = _labels("validation_loops", validation_loops)
+    gamma_a = check_positive("gamma_a", gamma_a)
+    plays = check_integer("plays", plays, minimum=1)
+    ceiling_percent = check_positive("ceiling_percent", ceiling_percent)
     unknown = sorted(set(fit_loops + validation_loops) - set(loops.data))
     if unknown or not fit_loops:
         raise ValueError(f"fit_loops and validation_loops must name records among "

@@ -29,5 +29,6 @@ def test_design_for_loop_refuses_a_rolloff_above_the_loops_nyquist_frequency():
     H_y = dict(low_frequency_bound=1.5, high_frequency_bound=1e-4, bandwidth_rad_s=7500.0)
     rolloff = dict(hf_gain=10.0, lf_gain=1e4, frequency=4e4, order=2)     # pi 1e4 = 31416
     with pytest.raises(ValueError, match="rolloff"):
-        own_control.design_for_loop(model, None, H_e, H_y, rolloff, order=6, d_order=2,
+        weight = object.__new__(own.UncertaintyWeight)     # not read: the roll-off fails first
+        own_control.design_for_loop(model, weight, H_e, H_y, rolloff, order=6, d_order=2,
                                     iterations=1, fs=1e4, delay_samples=1)
