@@ -4,6 +4,7 @@ paper            the published numbers, the units table, ``problem()`` -> G, H_m
 genplant         generalized plant of Fig. 9 / eq. 16
 stage            virtual P-752.21 stage (the hardware stand-in): one stage, one run
 stage_batch      N virtual stages run at once (noise seeds, members of a model set)
+stage_loop_kernel  their closed loop with a section controller, compiled (numba)
 stage_hysteresis  the virtual stage's hysteresis truth (play operators)
 stage_data       its experiment files (chirps, Table 4 Case I loops): definitions, CSV I/O
 stage_calibration  the Table 4 Case I experiment and the hysteresis law calibrated on it
@@ -30,7 +31,7 @@ that the other modules here take explicitly (plant first, then the weights);
 ``piezolib.paper`` is the same module under its old name.
 """
 
-__all__ = ["paper", "genplant", "stage", "stage_batch", "stage_calibration",
+__all__ = ["paper", "genplant", "stage", "stage_batch", "stage_loop_kernel", "stage_calibration",
            "stage_hysteresis", "stage_data", "design", "analysis", "verification",
            "hysteresis_fits", "dahl_audit", "hysteresis_choice",
            "weighting", "fsm_benchmark", "paths",

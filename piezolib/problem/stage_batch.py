@@ -520,6 +520,65 @@ class StageBatchSimulation:
         self._measure(z_new[0])
         return self._v_y
 
+    def run_sections_loop(self, v_r, u_f, sections, delay, diverged_v):
+        """The whole closed loop with a section controller, compiled
+        (:func:`piezolib.problem.stage_loop_kernel.closed_loop`): from sample 0, at each
+        sample k ``u_b[k] = sections.step(v_r[k] - v_y[k])`` and u_c[k] = u_f[k] +
+        u_b[k - delay] (0 before), with :meth:`step`'s arithmetic, so the records and
+        outputs are identical, float for float, to that loop in Python.
+
+        Parameters
+        ----------
+        v_r, u_f : ndarray, shape (n,)
+            Reference and feedforward [V] (finite).
+        sections : piezolib.robust.export.SectionFilterBatch
+            The controller of every member (its states are advanced).
+        delay : int
+            Computation delay [samples].
+        diverged_v : float
+            Stop when the root sum of squares of the members' u_b reaches this [V].
+
+        Returns
+        -------
+        u_b : ndarray, shape (n, N)
+            Controller outputs [V] (up to the diverged sample).
+        diverged : int
+            -1, or the sample at which the outputs diverged (the simulation is then
+            left unusable).
+        """
+        from piezolib.problem.stage_loop_kernel import closed_loop
+
+        if self._k:
+            raise RuntimeError("run_sections_loop starts at sample 0 of a new simulation")
+        v_r, u_f = (np.ascontiguousarray(x, dtype=float) for x in (v_r, u_f))
+        n, N, B = v_r.shape[0], self.size, self._BLOCK
+        # the noise blocks the Python loop would draw, in the same order
+        noises = [self._noise]
+        for _ in range(n // B):
+            self._new_block()
+            noises.append(self._noise)
+        noise = np.concatenate(noises)
+        log = np.empty((len(self._SIGNALS), noise.shape[0], N))
+        log[5:, 0] = self._blocks[0][5:, 0]            # the measurement at sample 0
+        blocks = [log[:, b * B:(b + 1) * B] for b in range(len(noises))]
+        plays = self._plays is not None
+        empty = np.zeros((0, N))
+        state = dict(dac=np.array([float(x) for x in self._dac]),
+                     adc=np.array([float(x) for x in self._adc]),
+                     gain=float(self._gain), amp=bool(self._amp_limits),
+                     out_lo=float(self._out[0]), out_hi=float(self._out[1]), has_plays=plays,
+                     r=self._r if plays else empty, w=self._w if plays else empty,
+                     w0=np.asarray(self._w0, float) if plays else np.zeros(N),
+                     plays=self._plays if plays else empty, b0=self._b0, b1=self._b1,
+                     a1=self._a1, z=self._z, noise=noise, log=log, v_y=self._v_y)
+        u_b = np.zeros((n, N))
+        diverged = closed_loop(v_r, u_f, int(delay), state, sections.arrays, u_b, diverged_v)
+        stop = n if diverged < 0 else diverged
+        self._blocks, self._log = blocks, blocks[-1]
+        self._k, self._j = stop, stop % B
+        self._v_y = log[6, stop]
+        return u_b[:stop + (diverged >= 0)], diverged
+
     def record(self, i):
         """The samples applied so far to member ``i`` as a :class:`StageRecord`
         (no warning; see :meth:`records`)."""

@@ -541,11 +541,19 @@ class SectionFilterBatch:
         self._u, self._y = self._v[:-1], self._v[1:]
         self._t = np.empty((2, n_sec, self.size), self.dtype)
         self._t2 = np.empty_like(self._t)
+        self._coef = c
         self.reset()
 
     def reset(self):
         """Zero the states."""
         self._s = np.zeros((2, len(self._b0), self.size), self.dtype)   # [s1; s2] per section
+
+    @property
+    def arrays(self):
+        """``(coefficients, states)``: the (n_sections, 6) rows ``[b0 b1 b2 1 a1 a2]``
+        and the (2, n_sections, N) states ``[s1; s2]``, in :attr:`dtype` (the states are
+        the filter's own: a compiled loop that runs the filter updates them in place)."""
+        return self._coef, self._s
 
     def step(self, x):
         """One sample of every channel.

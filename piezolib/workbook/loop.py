@@ -406,14 +406,16 @@ def _run_batch(batch, v_r, feedforward, controller, delay_samples, sections_dtyp
         if not math.isclose(controller.fs, batch.fs, rel_tol=1e-9):
             raise ValueError(f"controller sections run at {controller.fs:g} Hz, the stage at "
                              f"{batch.fs:g} Hz")
-        step, used = SectionFilterBatch(controller, sections_dtype, n).step, controller
+        used = controller
+        sections = SectionFilterBatch(controller, sections_dtype, n)
+        u_b, records = _closed_loop_sections(batch, v_r, u_f, sections, delay)
     else:
         used = discrete_controller(controller, batch.fs)
         if used is None:
             return [LoopResult(v_r, u_f, np.zeros_like(v_r), record, ff_text, None, delay)
                     for record in batch.run(u_f)]
-        step = _state_space_batch_step(used, n)
-    u_b, records = _closed_loop_batch(batch, v_r, u_f, step, delay)
+        u_b, records = _closed_loop_batch(batch, v_r, u_f, _state_space_batch_step(used, n),
+                                          delay)
     return [LoopResult(v_r, u_f, u_b[i], record, ff_text, used, delay)
             for i, record in enumerate(records)]
 
@@ -436,6 +438,20 @@ def _state_space_batch_step(Kd, size):
         W = np.matmul(M, W)
         return W[:, n, 0].copy()
     return step
+
+
+def _closed_loop_sections(batch, v_r, u_f, sections, delay):
+    """:func:`_closed_loop_batch` with a section controller, as one compiled loop
+    (:meth:`StageBatchSimulation.run_sections_loop`: the same arithmetic)."""
+    sim = batch.start()
+    u_b, diverged = sim.run_sections_loop(v_r, u_f, sections, delay, _DIVERGED_V)
+    if diverged >= 0:
+        ub = u_b[diverged]
+        bad = [batch.seeds[i] for i in np.flatnonzero(~(np.abs(ub) < _DIVERGED_V))]
+        raise ValueError(f"the controller output diverged at sample {diverged} "
+                         f"(t = {diverged / batch.fs:.4f} s) for seed(s) "
+                         f"{bad or list(batch.seeds)}: is the closed loop stable?")
+    return u_b.T.copy(), sim.records()
 
 
 def _closed_loop_batch(batch, v_r, u_f, controller_step, delay):

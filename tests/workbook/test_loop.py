@@ -329,3 +329,27 @@ def test_section_filter_batch_is_the_section_filter_per_channel(dtype):
         batch.step(np.ones(3))
     with pytest.raises(ValueError, match="size must be >= 1"):
         SectionFilterBatch(sos, dtype, size=0)
+
+
+@pytest.mark.parametrize("variant", ["hysteresis, float32", "linear, limited, float64"])
+def test_compiled_batch_loop_over_several_noise_blocks_is_the_single_run(stage, variant):
+    # 9000 samples: three blocks of the signal log and of the noise streams; the
+    # second variant has no plays and an amplifier whose output limits act
+    limited = variant.startswith("linear")
+    base = (stage.replace(hysteresis=None, amplifier_output_range_V=(-40.0, 40.0))
+            if limited else stage)
+    v = reference(peak=5.0 if limited else 3.0, frequency_Hz=10.0, periods=9)
+    assert v.size > 2 * 4096
+    dtype = variant.split(", ")[-1]
+    seeds = [5, 8]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", StageSaturationWarning)
+        runs = loop.run_loop(base, v, feedforward=1.0 if limited else DAHL,
+                             controller=sections(), delay_samples=1, sections_dtype=dtype,
+                             seeds=seeds)
+        for seed, member in zip(seeds, runs):
+            one = loop.run_loop(base.replace(seed=seed), v, feedforward=1.0 if limited else DAHL,
+                                controller=sections(), delay_samples=1, sections_dtype=dtype)
+            assert_same_run(one, member)
+    if limited:
+        assert runs[0].record.output_saturation.occurred

@@ -1,0 +1,132 @@
+"""The closed loop of a batch of virtual stages and a section controller, compiled.
+
+:func:`closed_loop` runs the per-sample loop of
+:class:`~piezolib.problem.stage_batch.StageBatchSimulation` fed by a
+:class:`~piezolib.robust.export.SectionFilterBatch` (the loop every tracking
+experiment runs) as one compiled function (numba).  Each operation is the one
+the numpy path applies elementwise, in the same order and precision (float32
+sections stay float32; no fused multiply-add, no reassociation), so the result
+is identical, float for float, to the Python loop it replaces; the Python loop
+costs about 0.5 ms per sample whatever the number of members, this one a few
+nanoseconds per member and sample.
+
+numba is imported on first use, and the compiled function is cached on disk
+(``__pycache__``), so a process that never runs a closed loop does not pay for
+it and the compilation (a few seconds) happens once per machine.
+"""
+
+import functools
+
+import numpy as np
+
+__all__ = ["closed_loop"]
+
+
+@functools.cache
+def _kernel():
+    """The compiled loop (numba imported and the function compiled or loaded once)."""
+    import numba
+
+    @numba.njit(cache=True, nogil=True)
+    def convert(v, lsb, code_lo, code_hi):
+        # _Converter.convert_scalar: round half to even, limit the code, back to volts
+        out = np.rint(v / lsb)
+        out = max(out, code_lo)
+        return min(out, code_hi) * lsb
+
+    @numba.njit(cache=True, nogil=True)
+    def loop(v_r, u_f, delay, dac, adc, gain, amp, out_lo, out_hi,
+             has_plays, r, w, w0, plays, b0, b1, a1, z, noise, log, coef, s, v_y0,
+             u_b, diverged_v):
+        n, N = v_r.shape[0], v_y0.shape[0]
+        order, n_plays, n_sec = z.shape[0], r.shape[0], coef.shape[0]
+        z_new = np.empty(order)
+        v_y = v_y0.copy()
+        cast = np.empty(1, coef.dtype)      # rounds the error to the sections' precision
+        limit = diverged_v * diverged_v
+        for k in range(n):
+            # the controller: sections in their precision, one after the other
+            total = 0.0
+            for i in range(N):
+                cast[0] = v_r[k] - v_y[i]
+                v = cast[0]
+                for q in range(n_sec):
+                    y = coef[q, 0] * v + s[0, q, i]
+                    s1 = (coef[q, 1] * v - coef[q, 4] * y) + s[1, q, i]
+                    s[1, q, i] = coef[q, 2] * v - coef[q, 5] * y
+                    s[0, q, i] = s1
+                    v = y
+                u_b[k, i] = np.float64(v)
+                total += u_b[k, i] * u_b[k, i]
+            if not total < limit:
+                return k
+            # the stage: u_c = u_f + u_b (delayed), DAC, amplifier, plays, plant, ADC
+            for i in range(N):
+                ub = u_b[k - delay, i] if k >= delay else 0.0
+                u_c = u_f[k] + ub
+                u_dac = convert(u_c, dac[0], dac[1], dac[2])
+                v_cmd = u_dac * gain
+                v_a = v_cmd
+                if amp:
+                    v_a = min(max(v_cmd, out_lo), out_hi)
+                    log[3, k, i] = v_a
+                if has_plays:
+                    v_h = w0[i] * v_a
+                    for p in range(n_plays):
+                        lo, hi = v_a + (-r[p, i]), v_a + r[p, i]
+                        plays[p, i] = min(max(plays[p, i], lo), hi)
+                        h = (plays[p, i] - r[p, i]) * w[p, i]
+                        v_h = v_h + h
+                else:
+                    v_h = v_a
+                x_in = v_h / gain
+                y_k = z[0, i] + b0[i] * x_in
+                for m in range(order):
+                    z_new[m] = x_in * b1[m, i]
+                for m in range(order - 1):
+                    z_new[m] = z_new[m] + z[m + 1, i]
+                for m in range(order):
+                    z[m, i] = z_new[m] - y_k * a1[m, i]
+                analog = z[0, i] + noise[k + 1, i]
+                log[0, k, i], log[1, k, i], log[2, k, i], log[4, k, i] = u_c, u_dac, v_cmd, y_k
+                log[5, k + 1, i] = analog
+                v_y[i] = convert(analog, adc[0], adc[1], adc[2])
+                log[6, k + 1, i] = v_y[i]
+        return -1
+
+    return loop
+
+
+def closed_loop(v_r, u_f, delay, stage, sections, u_b, diverged_v):
+    """Run the loop of :func:`piezolib.workbook.loop.run_loop` over all samples.
+
+    Parameters
+    ----------
+    v_r, u_f : ndarray, shape (n,)
+        Reference and feedforward [V], float64.
+    delay : int
+        Samples between the controller output and the stage input.
+    stage : dict
+        The batch simulation's coefficients and states (arrays updated in place;
+        :meth:`StageBatchSimulation._compiled_state`).
+    sections : tuple
+        ``(coef, s)``: the (n_sections, 6) coefficients and the (2, n_sections, N)
+        states of a :class:`~piezolib.robust.export.SectionFilterBatch`, in its
+        precision (``s`` updated in place).
+    u_b : ndarray, shape (n, N)
+        Filled with the controller outputs [V].
+    diverged_v : float
+        The loop stops when the root sum of squares of the members' outputs
+        reaches this [V].
+
+    Returns
+    -------
+    int
+        -1, or the sample at which the outputs diverged (u_b filled up to it).
+    """
+    coef, s = sections
+    return _kernel()(v_r, u_f, delay, stage["dac"], stage["adc"], stage["gain"],
+                     stage["amp"], stage["out_lo"], stage["out_hi"], stage["has_plays"],
+                     stage["r"], stage["w"], stage["w0"], stage["plays"], stage["b0"],
+                     stage["b1"], stage["a1"], stage["z"], stage["noise"], stage["log"],
+                     coef, s, stage["v_y"], u_b, float(diverged_v))
