@@ -1,10 +1,12 @@
 """Run the whole workbook headless: data files first, then every notebook.
 
-``python -m piezolib reproduce`` regenerates the virtual-stage experiment
-files, executes ``notebooks/NN_*.ipynb`` (the notebooks save the figures
-into ``figures/`` and the paper-versus-reproduced tables into
+``python -m piezolib reproduce`` checks the virtual-stage experiment files
+against their manifest (its first line says how many it checked, or which it
+regenerated and why), executes ``notebooks/NN_*.ipynb`` (the notebooks save
+the figures into ``figures/`` and the paper-versus-reproduced tables into
 ``data/results/``), prints one progress line per step and exits non-zero,
-naming the notebook and the cell, when a step fails.  Two notebooks run side
+naming the notebook and the cell, when a step fails (a cell that raises, runs
+past the time limit or loses its kernel).  Two notebooks run side
 by side on a machine with two cores or more (``--jobs``); the reproduction
 report, which gathers the other notebooks' tables, runs last.  The notebooks
 on disk are never modified: they are executed in memory.  First of all, the
@@ -31,7 +33,7 @@ from piezolib.workbook import study as studies
 from piezolib.workbook.outputs import (data_dir, notebooks_dir, project_root,
                                        study_figures_dir, study_results_dir)
 
-__all__ = ["DATA_STEPS", "DATA_CHECKS", "GATHERING", "KERNEL_ENVIRONMENT", "list_notebooks", "notebook_waves", "default_jobs", "inject_study", "study_spec",
+__all__ = ["DATA_STEPS", "DATA_CHECKS", "DATA_FILES", "GATHERING", "KERNEL_ENVIRONMENT", "list_notebooks", "notebook_waves", "default_jobs", "inject_study", "study_spec",
            "run_notebook", "run", "remove_stale_temporaries", "NotebookFailure"]
 
 #: Data-generating steps run before the notebooks, as "module:function" names
@@ -42,6 +44,10 @@ DATA_STEPS = ["piezolib.problem.stage_data:write_experiment_files"]
 #: that take no arguments and return ``{path: problem}`` for the files that
 #: fail; each failing file gets one line when the data steps regenerate it.
 DATA_CHECKS = ["piezolib.problem.stage_data:check_experiment_files"]
+
+#: The files those checks look at, as "module:function" names of functions that take no
+#: arguments and return them (for the line saying how many were checked).
+DATA_FILES = ["piezolib.problem.stage_data:experiment_paths"]
 
 #: Name prefixes of the notebooks that read every other notebook's table
 #: (the reproduction report): they run after all the others have finished.
@@ -68,7 +74,10 @@ class NotebookFailure(RuntimeError):
         self.notebook, self.cell_index, self.source, self.error = (
             notebook, cell_index, source, error)
         first_line = source.strip().splitlines()[0] if source.strip() else ""
-        super().__init__(f"{notebook}: cell {cell_index} failed ({first_line!r}): {error}")
+        if cell_index is None:          # before or after the cells (the kernel, the file)
+            super().__init__(f"{notebook}: failed: {error}")
+        else:
+            super().__init__(f"{notebook}: cell {cell_index} failed ({first_line!r}): {error}")
 
 
 def list_notebooks(selection=None):
@@ -218,11 +227,12 @@ def run_notebook(path, timeout=600, study=None, save_to=None, env=None):
     Raises
     ------
     NotebookFailure
-        When a cell raises; names the notebook and the cell.
+        When a cell raises, runs longer than ``timeout`` or its kernel dies;
+        names the notebook and the cell.
     """
     import nbformat
     from nbclient import NotebookClient
-    from nbclient.exceptions import CellExecutionError
+    from nbclient.exceptions import CellExecutionError, CellTimeoutError, DeadKernelError
 
     path = _notebook_paths([path], "path")[0]
     timeout = check_positive("timeout", timeout)
@@ -234,8 +244,14 @@ def run_notebook(path, timeout=600, study=None, save_to=None, env=None):
     nb = nbformat.read(path, as_version=4)
     if study is not None:
         inject_study(nb, study)
+    started = {}                     # the cell running when the kernel stops answering
+
+    def note_cell(cell, cell_index, **_):
+        started.update(index=cell_index, source=cell.source)
+
     client = NotebookClient(nb, timeout=timeout, kernel_name="python3",
-                            resources={"metadata": {"path": str(path.parent)}})
+                            resources={"metadata": {"path": str(path.parent)}},
+                            on_cell_start=note_cell)
     try:
         # the kernel process's own log (a TCP-transport notice) is noise here;
         # cell output, including stderr, still reaches the notebook
@@ -244,6 +260,13 @@ def run_notebook(path, timeout=600, study=None, save_to=None, env=None):
         index, source = _failed_cell(nb)
         raise NotebookFailure(path.name, index, source,
                               f"{exc.ename}: {exc.evalue}") from None
+    except CellTimeoutError:
+        raise NotebookFailure(path.name, started.get("index"), started.get("source", ""),
+                              f"timed out: the cell ran longer than {timeout:g} s "
+                              "(the per-cell limit, --timeout)") from None
+    except DeadKernelError as exc:
+        raise NotebookFailure(path.name, started.get("index"), started.get("source", ""),
+                              f"the kernel died ({exc})") from None
     finally:
         if save_to is not None:
             save_to.mkdir(parents=True, exist_ok=True)
@@ -335,22 +358,43 @@ class _Counter:
 
 
 def _run_data_steps(steps, counter, stream):
-    """Checks, then the data steps; returns the number of failures (stops at the first)."""
-    if steps:
-        for path, problem in _check_data().items():
-            print(f"regenerating {path}: it failed its check ({problem})", file=stream,
-                  flush=True)
+    """Checks, then the data steps when a file fails its check; returns the number of
+    failures (stops at the first).  The first line says what was done: the files checked
+    (none regenerated), or each file regenerated and why."""
+    if not steps:
+        return 0
+    start = time.perf_counter()
+    problems = _check_data()
+    if not problems:
+        for step in steps:
+            counter.line("data files", time.perf_counter() - start,
+                         f"checked {_checked_count()} files against their manifest: intact, "
+                         "none regenerated")
+        return 0
+    for path, problem in problems.items():
+        print(f"regenerating {path}: it failed its check ({problem})", file=stream,
+              flush=True)
     for step in steps:
         start = time.perf_counter()
         module, func = step.split(":")
         try:
             written = getattr(importlib.import_module(module), func)()
-            status = f"ok ({len(written)} files)"
+            status = (f"regenerated {len(written)} files ({len(problems)} failed "
+                      "their check)")
         except Exception as exc:  # report and stop, like a notebook
             counter.line(step, time.perf_counter() - start, f"FAILED: {type(exc).__name__}: {exc}")
             return 1
-        counter.line(step, time.perf_counter() - start, status)
+        counter.line("data files", time.perf_counter() - start, status)
     return 0
+
+
+def _checked_count():
+    """How many files :data:`DATA_CHECKS` look at (:data:`DATA_FILES`)."""
+    count = 0
+    for listing in DATA_FILES:
+        module, func = listing.split(":")
+        count += len(getattr(importlib.import_module(module), func)())
+    return count
 
 
 def _run_wave(paths, jobs, counter, keep_going, stream, options):
@@ -383,6 +427,9 @@ def _timed_notebook(path, options):
         return time.perf_counter() - start, None
     except NotebookFailure as exc:
         return time.perf_counter() - start, exc
+    except Exception as exc:       # a kernel that does not start, an unwritable save_to, ...
+        return time.perf_counter() - start, NotebookFailure(
+            path.name, None, "", f"{type(exc).__name__}: {exc}")
 
 
 def _report(counter, stream, name, seconds, error):
@@ -391,7 +438,8 @@ def _report(counter, stream, name, seconds, error):
         counter.line(name, seconds, "ok")
         return
     lines = error.error.strip().splitlines() or [""]
-    counter.line(name, seconds, f"FAILED at cell {error.cell_index}: {lines[0][:160]}")
+    where = "" if error.cell_index is None else f" at cell {error.cell_index}"
+    counter.line(name, seconds, f"FAILED{where}: {lines[0][:160]}")
     if len(lines) > 1:
         detail = lines[1:21] + ([f"... ({len(lines) - 21} more lines)"] if len(lines) > 21 else [])
         print("\n".join("      " + line for line in detail), file=stream, flush=True)
