@@ -10,7 +10,7 @@ entry point (a widget, or headless the figure: :mod:`piezolib.workbook.interacti
 """
 
 import html
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import NamedTuple
 
 import control as ct
@@ -98,9 +98,11 @@ class WeightDesignView:
         |S(j omega)|, |T(j omega)| of the loop of G and K (absolute values).
     inv_He, inv_Hy : ndarray
         The templates 1/|H_e(j omega)|, 1/|H_y(j omega)|.
-    analysis : piezolib.problem.analysis.RobustnessAnalysis
+    analysis : piezolib.problem.analysis.RobustnessAnalysis or None
         Table 3 for K with these weights (on the analysis grid of
-        :func:`piezolib.problem.analysis.analyze`).
+        :func:`piezolib.problem.analysis.analyze`); None in the first frame a
+        live control draws while the peaks are computed (they read NaN and
+        ``stable`` None until then).
     controller : str
         Label of K.
     """
@@ -113,33 +115,36 @@ class WeightDesignView:
     T: np.ndarray = field(repr=False)
     inv_He: np.ndarray = field(repr=False)
     inv_Hy: np.ndarray = field(repr=False)
-    analysis: RobustnessAnalysis = field(repr=False)
+    analysis: RobustnessAnalysis | None = field(repr=False)
     controller: str = "K"
+
+    def _analysed(self, name):
+        return float("nan") if self.analysis is None else getattr(self.analysis, name)
 
     @property
     def norm_He_S(self):
         """NP: ||H_e S||_inf."""
-        return self.analysis.norm_He_S
+        return self._analysed("norm_He_S")
 
     @property
     def norm_Hy_T(self):
         """NP: ||H_y T||_inf."""
-        return self.analysis.norm_Hy_T
+        return self._analysed("norm_Hy_T")
 
     @property
     def mu_RS(self):
         """RS: peak of mu(M11) = |H_m T|."""
-        return self.analysis.mu_RS
+        return self._analysed("mu_RS")
 
     @property
     def mu_RP(self):
         """RP: peak of the mu upper bound of M."""
-        return self.analysis.mu_RP
+        return self._analysed("mu_RP")
 
     @property
     def stable(self):
-        """Whether K stabilises G (Table 3's NS)."""
-        return self.analysis.nominal_stability
+        """Whether K stabilises G (Table 3's NS); None before the analysis."""
+        return None if self.analysis is None else self.analysis.nominal_stability
 
     @property
     def crossing_He(self):
@@ -196,20 +201,38 @@ def weight_design_view(G, H_m, K, params=None, omega=None, *, controller=None):
     """
     check_siso("G", G)
     check_siso("K", K)
-    values = _weight_parameters(params)
     omega = (frequency_grid(*_WEIGHT_GRID) if omega is None
              else check_frequency_grid("omega", omega, min_length=16))
-    H_e, H_y = _weights(values)
+    view = _curves_view(params, omega, controller or K.name or "K", _loop_curves(G, K, omega))
+    return _with_analysis(view, G, H_m, K)
+
+
+def _loop_curves(G, K, omega):
+    """|S(j omega)|, |T(j omega)| of the loop of G and K (they do not depend on the weights)."""
     loop = loop_functions(G, K)
-    result = analyze(K, G, H_m, H_e, H_y)
+    return magnitude(loop.S, omega), magnitude(loop.T, omega)
+
+
+def _curves_view(params, omega, controller, curves):
+    """The view of the weights ``params`` over the loop ``curves`` (|S|, |T|), without the
+    peaks (``analysis`` None): what a live control draws first."""
+    values = _weight_parameters(params)
+    H_e, H_y = _weights(values)
+    S, T = curves
     return WeightDesignView(
-        params=values, H_e=H_e, H_y=H_y, omega=omega,
-        S=magnitude(loop.S, omega), T=magnitude(loop.T, omega),
+        params=values, H_e=H_e, H_y=H_y, omega=omega, S=S, T=T,
         inv_He=1 / magnitude(H_e, omega), inv_Hy=1 / magnitude(H_y, omega),
-        analysis=result, controller=controller or K.name or "K")
+        analysis=None, controller=controller)
+
+
+def _with_analysis(view, G, H_m, K):
+    """``view`` with Table 3 for K and its weights."""
+    return replace(view, analysis=analyze(K, G, H_m, view.H_e, view.H_y))
 
 
 def _weight_summary(view):
+    if view.analysis is None:
+        return f"{view.controller}:  computing the NP, RS and RP peaks ..."
     if not view.stable:
         return f"{view.controller} does not stabilise G: no condition of Table 3 holds"
     return (f"{view.controller}:  NP ||H_e S|| = {view.norm_He_S:.3f}, "
@@ -232,6 +255,11 @@ def draw_weight_design(view, fig=None):
     matplotlib.figure.Figure
     """
     return _WeightPlot(view, fig).figure
+
+
+def _peak_text(peak, view):
+    """A peak in a title: three decimals, "..." while it is computed."""
+    return "..." if view.analysis is None else f"{peak:.3f}"
 
 
 class _WeightPlot:
@@ -289,8 +317,9 @@ class _WeightPlot:
                     line.set_label("_hidden")
             ax_s.legend(loc="lower right")
             ax_t.legend(loc="lower left")
-            ax_s.set_title(f"sensitivity: ||H_e S||_inf = {view.norm_He_S:.3f}")
-            ax_t.set_title(f"complementary sensitivity: ||H_y T||_inf = {view.norm_Hy_T:.3f}")
+            ax_s.set_title(f"sensitivity: ||H_e S||_inf = {_peak_text(view.norm_He_S, view)}")
+            ax_t.set_title("complementary sensitivity: ||H_y T||_inf = "
+                           f"{_peak_text(view.norm_Hy_T, view)}")
             p = view.params
             self.suptitle = self.figure.suptitle(
                 f"{_weight_summary(view)}\nM_e = {p['M_e']:.3g}, eps_e = {p['eps_e']:.3g}, "
@@ -432,9 +461,19 @@ def weight_design_control(G, H_m, K, params=None, omega=None, *, design_options=
                       icon="cogs")
     result = w.HTML()
 
+    grid = (frequency_grid(*_WEIGHT_GRID) if omega is None
+            else check_frequency_grid("omega", omega, min_length=16))
+    curves = {}         # |S|, |T| of each controller: the sliders move the weights only
+
     def compute(values):
-        return weight_design_view(G, H_m, controllers[menu.value], values, omega,
-                                  controller=menu.value)
+        """The curves under the new templates at once, then the peaks (the slow part)."""
+        label = menu.value
+        K_now = controllers[label]
+        if label not in curves:
+            curves[label] = _loop_curves(G, K_now, grid)
+        view = _curves_view(values, grid, label, curves[label])
+        yield view
+        yield _with_analysis(view, G, H_m, K_now)
 
     panel = LivePanel(w, sliders, compute, _WeightPlot, _weight_summary)
     menu.observe(panel.refresh, names="value")
@@ -458,6 +497,7 @@ def weight_design_control(G, H_m, K, params=None, omega=None, *, design_options=
             button.disabled = False
         label = f"re-designed K ({K_new.nstates} states)"
         controllers[label] = K_new
+        curves.pop(label, None)         # a new design under a label already used
         done = html.escape(unit_text(f"{label}: peak mu_RP = {mu_new:.3f} for these weights"))
 
         def announce():

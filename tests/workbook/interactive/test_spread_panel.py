@@ -91,8 +91,13 @@ def test_spread_widget_follows_its_slider(problem, widgets):
     slider = box.controls["spread"]
     assert (slider.min, slider.max, slider.value) == (0.5, 10.0, 5.0)
     assert box.panel.view.n_unstable == 42
+    summaries = []
+    box.panel.summary.observe(lambda change: summaries.append(change.new), "value")
     slider.value = 3.0
     assert box.panel.wait(60)
+    # the set and its envelope are drawn before the weight is fitted to them
+    assert len(summaries) == 2 and "fitting an order-5 weight" in summaries[0]
+    assert "fitted order-5 weight exceeds" in summaries[1]
     assert box.panel.view.spread == pytest.approx(0.03) and box.panel.view.n_unstable == 0
     assert "0 unstable" in box.panel.summary.value
 

@@ -141,8 +141,12 @@ def test_weight_widget_follows_its_sliders(problem, published_analysis, widgets)
     assert bytes(panel.image.value).startswith(b"\x89PNG")
     first_image, first_crossing = bytes(panel.image.value), panel.view.crossing_He
 
+    summaries = []
+    panel.summary.observe(lambda change: summaries.append(change.new), "value")
     box.controls["omega_e"].value = 2 * PUBLISHED["omega_e"]       # as a person moving it
     assert panel.wait(30)
+    # the curves under the new template come first, the peaks (the slow part) after
+    assert len(summaries) == 2 and "computing the NP, RS and RP peaks" in summaries[0]
     assert panel.view.params["omega_e"] == pytest.approx(2 * PUBLISHED["omega_e"])
     assert panel.view.crossing_He / first_crossing == pytest.approx(2.0, rel=5e-3)
     assert bytes(panel.image.value) != first_image
@@ -157,9 +161,10 @@ def test_weight_widget_follows_its_sliders(problem, published_analysis, widgets)
     assert panel.wait(30)
     menu = box.controls["controller"]
     # the done line and the result come with the figure of the new controller, not before it
+    # (its curves, then the figure with its peaks)
     new_figure = events.index(("figure", menu.value))
-    assert [kind for kind, _ in events[new_figure:]] == ["figure", "bar", "result"]
-    assert events[new_figure + 1] == ("bar", "done") and "μ_RP" in events[-1][1]
+    assert [kind for kind, _ in events[new_figure:]] == ["figure", "figure", "bar", "result"]
+    assert events[-2] == ("bar", "done") and "μ_RP" in events[-1][1]
     assert ("bar", "done") not in events[:new_figure]
     assert menu.value.startswith("re-designed K") and len(menu.options) == 2
     assert "μ_RP" in box.redesign_result.value
