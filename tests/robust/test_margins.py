@@ -146,3 +146,15 @@ def test_ordinary_loops_agree_with_python_control(L):
     assert m.phase_margin_deg == pytest.approx(pm, rel=1e-6)
     assert m.omega_crossover == pytest.approx(wgc, rel=1e-6)
     assert m.gain_margin_low == 0
+
+
+def test_modulus_margin_is_refined_between_grid_points():
+    # on a 40-point grid the smallest |1 + L| on the grid is 0.5745; the refined minimum
+    # matches a grid of 2 million points
+    L = 2 / (s * (s + 1))
+    omega = np.logspace(-2, 2, 40)
+    dense = np.logspace(-2, 2, 2_000_001)
+    reference = np.min(np.abs(1 + np.ravel(L(1j * dense))))
+    m = loop_margins(L, ONE, omega=omega)
+    assert m.modulus_margin == pytest.approx(reference, rel=1e-9)
+    assert m.modulus_margin < np.min(np.abs(1 + np.ravel(L(1j * omega)))) - 1e-2
