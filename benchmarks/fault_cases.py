@@ -203,9 +203,12 @@ def full_disk():
         out, err = proc.communicate(timeout=300)
         stored = records(point)
         said = json.loads(out.strip().splitlines()[-1]) if out.strip() else {}
+        problems = said.get("problems", [])
+        points = sum(p.startswith("point") for p in problems)
         print(f"full disk after the first point: exit {proc.returncode}, "
-              f"{said.get('evaluated')} evaluated, {stored} records stored, "
-              f"{len(said.get('problems', []))} reported as not stored")
+              f"{said.get('evaluated')} evaluated, {stored} records stored, {points} points "
+              f"reported as not stored (in the table returned), the table "
+              f"{'not written (reported)' if len(problems) > points else 'written'}")
         filler.unlink()
         again = start_driver(point, spec, seconds=0.1, jobs=1)
         out, err = again.communicate(timeout=300)

@@ -11,7 +11,10 @@ cluster (``scheduler``).  Each finished point is stored at once in
 ``runs/sweeps/<name>/points/<key>.json`` (written atomically, sealed with a
 SHA-256 of its content), keyed by a digest of the point's whole study, its
 options and the evaluation: a sweep that is killed and run again computes
-only the points it has no record of.  The table of every point
+only the points it has no record of.  One run of a sweep at a time holds its
+lock (``sweep.lock``, :data:`LOCK_NAME`); a record the disk refuses is kept and
+written again after each later point; local workers end when the sweep's
+process dies.  The table of every point
 (``results.csv``, also ``results.parquet`` when pyarrow is installed) and
 the Pareto figure (``extra_sweep_pareto.png``) are written under
 ``runs/sweeps/<name>/``, never to ``figures/`` or ``data/results/``.
@@ -37,8 +40,8 @@ from piezolib._checks import check_type
 from piezolib.workbook import study as studies
 from piezolib.workbook import sweep_spec as specs
 
-__all__ = ["SweepResult", "METRICS", "TRACKING_FREQUENCIES_HZ", "evaluate_point", "run_sweep",
-           "read_record", "pareto_front", "check_scheduler_address"]
+__all__ = ["SweepResult", "METRICS", "TRACKING_FREQUENCIES_HZ", "LOCK_NAME", "evaluate_point",
+           "run_sweep", "read_record", "pareto_front", "check_scheduler_address"]
 
 #: Triangle frequencies [Hz] of the Case III tracking run of each point: the two
 #: design goals of Sec. IV-B (< 1 % up to 10 Hz, < 5 % at 50 Hz).

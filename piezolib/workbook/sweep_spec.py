@@ -64,7 +64,7 @@ RECORD_FORMAT = 1
 
 #: Most points one sweep may hold (a grid's combinations, a random sample's ``samples``).
 #: A point is a design of seconds to minutes, so 10,000 points are days of work on a
-#: small cluster; setting them up (one study each, about 0.4 ms) takes a few seconds.
+#: small cluster; setting them up (one study each) takes 4-10 s on a 2-core machine.
 #: Larger sweeps are refused before any study is built, naming the key and this limit.
 MAX_POINTS = 10_000
 _TOP_KEYS = {"name", "description", "study", "set", "grid", "random"}
