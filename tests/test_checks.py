@@ -61,3 +61,23 @@ def test_proper_and_stable():
         C.check_stable("H", 1 / (s - 1))
     with pytest.raises(TypeError, match="H must be a control"):
         C.check_lti("H", np.ones(2))
+
+
+@pytest.mark.parametrize("check, args, exc, match", [
+    (C.check_bool, ("flag", "yes"), TypeError, "flag must be True or False"),
+    (C.check_mapping, ("opts", [1]), TypeError, "opts must be a dict"),
+    (C.check_mapping, ("opts", {}), ValueError, "opts must not be empty"),
+    (C.check_positive_values, ("spreads", [0.1, -1.0]), ValueError, "spreads must be positive"),
+    (C.check_positive_values, ("spreads", [0.1, 2.0], 1.0), ValueError, "below 1.0"),
+    (C.check_positive_values, ("spreads", "x"), TypeError, "sequence of positive numbers"),
+    (C.check_integers, ("orders", []), ValueError, "at least one integer"),
+    (C.check_integers, ("orders", [4, 0.5]), TypeError, r"orders\[1\] must be an integer"),
+    (C.check_band, ("band_Hz", (50.0, 5.0)), ValueError, "0 <= low < high"),
+    (C.check_band, ("band_Hz", "x"), TypeError, "band_Hz must be a pair"),
+    (C.check_index_pair, ("pair", (3, 0), (3, 3)), ValueError, "must index a 3 x 3"),
+    (C.check_index_pair, ("pair", (-1, 0), (3, 3)), ValueError, r"pair\[0\] must be >= 0"),
+    (C.check_count, ("rows", 11, 10), ValueError, "rows must be at most 10, got 11"),
+])
+def test_the_list_and_size_checks_name_the_argument(check, args, exc, match):
+    with pytest.raises(exc, match=match):
+        check(*args)

@@ -79,6 +79,10 @@ class DahlFeedforward:
 
     def step(self, x_r):
         """Advance to the desired displacement ``x_r`` and return u_f [v-unit]."""
+        # float('1') would take text (and a complex reference loses its imaginary part);
+        # checked cheaply: step runs once per sample
+        if isinstance(x_r, (str, bytes, complex, bool)):
+            raise TypeError(f"x_r must be a real number, got {x_r!r}")
         x_r = float(x_r)
         if not math.isfinite(x_r):
             raise ValueError(f"x_r must be finite, got {x_r!r}")

@@ -91,6 +91,8 @@ def whiteness(residual, max_lag=20, alpha=0.05):
     e = check_finite_array("residual", residual, ndim=1, real=True)
     max_lag = check_integer("max_lag", max_lag, minimum=1)
     alpha = check_positive("alpha", alpha)
+    if not alpha < 1:
+        raise ValueError(f"alpha must be a significance level in (0, 1), got {alpha!r}")
     n = len(e)
     if n < 5 * max_lag:
         raise ValueError(f"residual too short ({n} samples) for {max_lag} lags")

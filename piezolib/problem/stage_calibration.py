@@ -22,7 +22,7 @@ from piezolib import signals
 from piezolib._checks import check_integer, check_positive, check_type
 from piezolib.hysteresis.measure import hysteresis_percent
 from piezolib.problem import paper
-from piezolib.problem.stage import StageRecord, VirtualStage
+from piezolib.problem.stage import StageRecord, StageSettings, VirtualStage
 from piezolib.problem.stage_hysteresis import CALIBRATED_HYSTERESIS, HysteresisLaw
 
 __all__ = ["case_I_input", "run_case_I", "case_I_hysteresis", "calibrate_hysteresis"]
@@ -30,12 +30,29 @@ __all__ = ["case_I_input", "run_case_I", "case_I_hysteresis", "calibrate_hystere
 
 def case_I_input(amplitude_V, stage=None, periods=3, frequency_Hz=None):
     """u_c [V] of the Table 4 experiment: a triangle of the actuator voltage
-    from 0 to ``amplitude_V`` [V] (u_c from 0 to amplitude/gain)."""
+    from 0 to ``amplitude_V`` [V] (u_c from 0 to amplitude/gain).
+
+    ``amplitude_V`` must lie within what the stage can drive: the DAC's top
+    times the amplifier gain and the amplifier's output limit (120 V for the
+    paper's stage); above it the run would be clipped, not a Case I loop.
+
+    Examples
+    --------
+    >>> float(case_I_input(10.0).max())
+    1.0
+    """
+    if stage is not None:
+        check_type("stage", stage, VirtualStage, "a VirtualStage or None")
+    settings = StageSettings() if stage is None else stage.settings
     gain = paper.AMPLIFIER_GAIN if stage is None else stage.gain
     fs = paper.SAMPLING_FREQUENCY_HZ if stage is None else stage.fs
     f = paper.HYSTERESIS_TEST["frequency_Hz"] if frequency_Hz is None else frequency_Hz
-    return signals.triangle(check_positive("amplitude_V", amplitude_V) / gain, f,
-                            periods=periods, fs=fs)[1]
+    amplitude_V = check_positive("amplitude_V", amplitude_V)
+    top_V = min(settings.dac_range_V[1] * gain, settings.amplifier_output_range_V[1])
+    if amplitude_V > top_V:
+        raise ValueError(f"amplitude_V must be at most {top_V:g} V (the stage's DAC range "
+                         f"times its gain, within the amplifier's output), got {amplitude_V:g}")
+    return signals.triangle(amplitude_V / gain, f, periods=periods, fs=fs)[1]
 
 
 def run_case_I(stage, amplitudes_V=None, periods=3):

@@ -21,6 +21,7 @@ full-order D,G-K iteration with fitted scalings is in ``docs/robust.md``.
 The controller is SISO (the parametrisation of the fixed-order steps).
 """
 
+import inspect
 import time
 from dataclasses import dataclass, field
 
@@ -89,6 +90,22 @@ def _as_complex(blocks):
     return tuple(b if b.is_full else Block.full(1, 1) for b in blocks)
 
 
+def _check_dk_options(dk_options):
+    """Extra keyword arguments of :func:`piezolib.robust.musyn` (a dict naming its options)."""
+    if dk_options is None:
+        return {}
+    if not isinstance(dk_options, dict):
+        raise TypeError(f"dk_options must be a dict of keyword arguments of musyn, got "
+                        f"{type(dk_options).__name__}")
+    taken = {"P", "blk", "nmeas", "ncon", "omega", "d_order", "max_iter"}
+    known = set(inspect.signature(musyn).parameters) - taken
+    unknown = sorted(str(k) for k in dk_options if k not in known)
+    if unknown:
+        raise ValueError(f"dk_options: {unknown} are not options of musyn (it takes "
+                         f"{sorted(known)})")
+    return dk_options
+
+
 def mixed_musyn(P, blk, omega, *, K0=None, order=None, d_order=4, dk_iterations=8,
                 dg_steps=20, refinements=2, dk_options=None):
     """Mixed-mu synthesis of a SISO controller: complex DK start, then D,G-K steps.
@@ -149,6 +166,7 @@ def mixed_musyn(P, blk, omega, *, K0=None, order=None, d_order=4, dk_iterations=
     dk_iterations = check_integer("dk_iterations", dk_iterations, minimum=1)
     dg_steps = check_integer("dg_steps", dg_steps, minimum=1)
     refinements = check_integer("refinements", refinements, minimum=0)
+    dk_options = _check_dk_options(dk_options)
     dk = None
     if K0 is None:
         dk = musyn(P, _as_complex(blocks), 1, 1, omega, d_order=d_order,

@@ -248,7 +248,7 @@ def controller_sos(Kd, name="K"):
     _check_name(name)
     check_proper("Kd", Kd)
     fs = 1.0 / float(Kd.dt)
-    K = ct.ss(Kd)
+    K = _state_space(Kd)
     Kb = _balanced(K)
     theta = np.linspace(0.01, 0.99, 97) * np.pi
     z = np.exp(1j * theta)
@@ -315,6 +315,21 @@ def _pencil_eigenvalues(K):
     _, (scale, _) = la.matrix_balance(L, permute=False, separate=True)
     w = la.eigvals(L / scale[:, None] * scale, np.diag(np.r_[np.ones(n), 0.0]))
     return w[np.argsort(np.where(np.isfinite(w), np.abs(w), np.inf), kind="stable")]
+
+
+def _state_space(Kd):
+    """``ct.ss(Kd)``, a transfer function's numerator scaled to O(1) first (by a power of two,
+    put back exactly): the conversion drops coefficients below an absolute tolerance, so
+    that 1e-46 / (z - 0.5) would become the zero system."""
+    if not isinstance(Kd, ct.TransferFunction):
+        return ct.ss(Kd)
+    num = np.atleast_1d(np.asarray(Kd.num[0][0], dtype=float))
+    peak = float(np.max(np.abs(num)))
+    if peak == 0:
+        return ct.ss(Kd)
+    scale = 2.0 ** np.round(np.log2(peak))
+    K = ct.ss(ct.tf(num / scale, Kd.den[0][0], Kd.dt))
+    return ct.ss(K.A, K.B, K.C * scale, K.D * scale, K.dt)
 
 
 def _balanced(K):
@@ -435,6 +450,12 @@ def _check_float32(controller, sos, what, stacklevel, rtol=None, refuse=True):
 
     ``stacklevel`` is that of a warning issued by the caller of this function.
     """
+    big = np.abs(sos) > np.finfo(np.float32).max
+    if np.any(big):
+        raise ExportError(f"{what} has a section coefficient {sos[big][0]:.3g} outside the "
+                          f"float32 range (|x| <= {np.finfo(np.float32).max:.3g}): the target's "
+                          "float32 sections cannot hold it (scale the controller's input or "
+                          "output)")
     if np.array_equal(sos.astype(np.float32).astype(np.float64), sos):
         return          # float32 holds every coefficient: nothing moves
     check = (controller._float32_check if isinstance(controller, SOSController)
@@ -635,7 +656,25 @@ def _meta_json(meta):
         json.dumps(meta)
     except (TypeError, ValueError) as exc:
         raise TypeError(f"meta must be JSON-serialisable: {exc}") from None
+    try:
+        json.dumps(meta, allow_nan=False)
+    except ValueError:      # NaN / Infinity are no JSON: a strict reader refuses the file
+        raise ValueError(f"meta must hold finite numbers only (JSON has no NaN or infinity), "
+                         f"got {_non_finite(meta)}") from None
     return meta
+
+
+def _non_finite(value, where="meta"):
+    """The first path in ``value`` (nested dicts and lists) holding a non-finite float."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return f"{where} = {value}"
+    items = value.items() if isinstance(value, dict) else (
+        enumerate(value) if isinstance(value, (list, tuple)) else ())
+    for key, item in items:
+        found = _non_finite(item, f"{where}[{key!r}]")
+        if found:
+            return found
+    return None
 
 
 def write_json(controller, path, meta=None):

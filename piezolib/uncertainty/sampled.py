@@ -14,16 +14,23 @@ import math
 
 import control as ct
 import numpy as np
-import scipy.linalg as la
 import scipy.signal as sg
 
-from piezolib._checks import check_integer, check_positive, check_proper, check_siso
+from piezolib._checks import check_count, check_integer, check_positive, check_proper, check_siso
+from piezolib.robust.matrix_exponential import expm_stack
 from piezolib.uncertainty.modelset import ModelSet, check_model_set
 from piezolib.uncertainty.polynomials import (batched_roots, check_plant, check_spread,
                                               plant_polynomials, scale_coefficients)
 
 __all__ = ["random_model_set", "member_zoh_coefficients", "sampled_loop_poles",
-           "sampled_loop_unstable", "sampled_loop_spread"]
+           "sampled_loop_unstable", "sampled_loop_spread", "MAX_MEMBERS", "MAX_DELAY_SAMPLES"]
+
+
+#: Most members of a random model set (its offsets take 8 n bytes a member, and every
+#: analysis of the set loops over the members).
+MAX_MEMBERS = 1_000_000
+#: Most samples of computation delay of a sampled loop (its matrix grows by one per sample).
+MAX_DELAY_SAMPLES = 1_000
 
 
 def random_model_set(G, spread, count, seed=0):
@@ -36,7 +43,7 @@ def random_model_set(G, spread, count, seed=0):
     spread : float
         Relative spread of every denominator coefficient, 0 < spread < 1.
     count : int
-        Number of members, >= 1.
+        Number of members, 1 ... :data:`MAX_MEMBERS`.
     seed : int
         Seed of the draw (numpy's default generator).
 
@@ -47,7 +54,8 @@ def random_model_set(G, spread, count, seed=0):
     """
     G = check_plant(G)
     spread = check_spread(spread)
-    count = check_integer("count", count, minimum=1)
+    count = check_count("count", count, maximum=MAX_MEMBERS,
+                        why="every analysis of the set loops over its members")
     seed = check_integer("seed", seed, minimum=0)
     n = len(plant_polynomials(G)[0]) - 1
     offsets = np.random.default_rng(seed).uniform(-1.0, 1.0, (count, n))
@@ -95,7 +103,7 @@ def member_zoh_coefficients(mset, dt):
     M[:, :n - 1, 1:n] = np.eye(n - 1)                         # x_i' = x_{i+1}
     M[:, n - 1, :n] = -den[:, :n]                             # x_n' = -sum a_i x_i + u
     M[:, n - 1, n] = 1.0
-    E = la.expm(M * (ws * dt))
+    E = expm_stack(M * (ws * dt))       # scipy's expm takes the stack one matrix at a time
     Ad, Bd = E[:, :n, :n], E[:, :n, n]
     a = _characteristic(Ad)
     b = _characteristic(Ad - Bd[:, :, None] * C[:, None, :]) - a
@@ -152,7 +160,7 @@ def sampled_loop_poles(mset, Kd, dt, delay_samples=1):
     dt : float
         Sample time [s].
     delay_samples : int
-        Computation delay d >= 0 [samples].
+        Computation delay d [samples], 0 ... :data:`MAX_DELAY_SAMPLES`.
 
     Returns
     -------
@@ -161,7 +169,8 @@ def sampled_loop_poles(mset, Kd, dt, delay_samples=1):
         the unit circle.
     """
     dt = check_positive("dt", dt)
-    d = check_integer("delay_samples", delay_samples, minimum=0)
+    d = check_count("delay_samples", delay_samples, maximum=MAX_DELAY_SAMPLES, minimum=0,
+                    why="each sample of delay adds a state to every member's loop matrix")
     bK, aK = _controller_polynomials(Kd, dt)
     b, a = member_zoh_coefficients(mset, dt)
     # highest power first: z^d a_G a_K + b_G b_K (b_G padded to a_G's length)

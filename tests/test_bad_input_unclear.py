@@ -1,0 +1,113 @@
+"""Bad input that once gave an unclear error or a silent answer: each now a clear error.
+
+The cases of the third bad-input campaign that the sweeps (``tests/test_bad_input*.py``) do
+not reach: a value of the right type that is still wrong (a significance level of 2, a
+controller coefficient past float32's range), sizes past what the machine can do, and
+errors that blamed the wrong argument.
+"""
+
+import json
+
+import control as ct
+import numpy as np
+import pytest
+
+from piezolib import identification as ident
+from piezolib import robust
+from piezolib import uncertainty as unc
+from piezolib._checks import check_count
+from piezolib.hysteresis import DahlFeedforward, DahlModel
+from piezolib.problem import stage_calibration
+from piezolib.robust.dgk import mixed_musyn
+
+DAHL = DahlModel(alpha1=236.0, alpha2=335.4, beta1=0.0, beta2=2.56, gamma_a=30.0, g_a=1.28,
+                 form="bliman_sorine", x0=-0.15, start="rest")
+KD = ct.tf([1.0, -0.5], [1.0, -0.2], 1e-4)
+G3 = ct.tf([1.0], [1.0, 3.0, 3.0, 1.0])
+
+
+def test_whiteness_refuses_a_significance_level_above_one():
+    with pytest.raises(ValueError, match=r"alpha must be a significance level in \(0, 1\)"):
+        ident.whiteness(np.random.default_rng(0).standard_normal(200), alpha=2)
+
+
+def test_the_feedforward_step_refuses_text():
+    with pytest.raises(TypeError, match="x_r must be a real number"):
+        DahlFeedforward(DAHL).step("1")
+
+
+def test_case_I_input_refuses_a_voltage_the_stage_cannot_drive():
+    with pytest.raises(ValueError, match=r"amplitude_V must be at most 120 V"):
+        stage_calibration.case_I_input(1e6)
+    assert stage_calibration.case_I_input(40.0).max() == pytest.approx(4.0)
+
+
+def test_export_refuses_a_non_finite_meta_value_before_writing(tmp_path):
+    with pytest.raises(ValueError, match=r"meta\['x'\]\['y'\] = nan"):
+        robust.export_controller(KD, tmp_path, "K", meta={"x": {"y": float("nan")}})
+    assert not list(tmp_path.iterdir())
+
+
+def test_export_names_the_float32_range_before_writing(tmp_path):
+    with pytest.raises(ValueError, match="outside the float32 range"):
+        robust.export_controller(ct.tf([1e39, -0.5], [1.0, -0.2], 1e-4), tmp_path, "K")
+    assert not list(tmp_path.iterdir())
+
+
+def _twentieth_order(gain):
+    poles = 0.5 * np.exp(1j * np.linspace(0.1, 3.0, 10))
+    zeros = 0.7 * np.exp(1j * np.linspace(0.2, 2.9, 10))
+    return ct.tf(gain * np.real(np.poly(np.r_[zeros, zeros.conj()])),
+                 np.real(np.poly(np.r_[poles, poles.conj()])), 1e-4)
+
+
+@pytest.mark.parametrize("K", [ct.tf([1e-46], [1.0, -0.5], 1e-4), _twentieth_order(4e-10)],
+                         ids=["1e-46 / (z - 0.5)", "20th order, gain 4e-10"])
+def test_a_tiny_gain_is_not_identically_zero(K):
+    """Zero is judged relative to the controller, not against an absolute tolerance: the
+    sections reproduce the tiny controller's response."""
+    sos = robust.controller_sos(K)
+    w = 2 * np.pi * np.array([100.0, 1000.0])
+    ref = np.ravel(K(np.exp(1j * w * 1e-4)))
+    assert np.allclose(sos.frequency_response(w, "float64"), ref, rtol=1e-6, atol=0)
+
+
+def test_frf_error_blames_the_models_sample_time():
+    fs, f = 1000.0, np.linspace(10.0, 400.0, 20)
+    G = np.ravel(ct.c2d(ct.tf([1.0], [1e-2, 1.0]), 1 / fs)(np.exp(2j * np.pi * f / fs)))
+    with pytest.raises(ValueError, match=r"model is sampled at 500 Hz.*Nyquist"):
+        ident.frf_error(ct.c2d(ct.tf([1.0], [1e-2, 1.0]), 1 / 500), G, f)
+
+
+@pytest.mark.parametrize("call, limit", [
+    (lambda: ident.fit_frf(np.ones(20), np.linspace(1, 100, 20), 1000.0, 2, n_rows=10 ** 6),
+     "n_rows must be at most 400"),
+    (lambda: unc.random_model_set(G3, 0.05, 10 ** 10), "count must be at most 1,000,000"),
+    (lambda: unc.sampled_loop_poles(unc.random_model_set(G3, 0.05, 2), ct.tf([1.0], [1.0], 1e-3),
+                                    1e-3, delay_samples=10 ** 6),
+     "delay_samples must be at most 1,000"),
+])
+def test_sizes_past_the_limit_are_refused_before_any_work(call, limit):
+    with pytest.raises(ValueError, match=limit):
+        call()
+
+
+def test_check_count_names_the_limit_and_why():
+    with pytest.raises(ValueError, match=r"rows must be at most 10 \(too slow\), got 11"):
+        check_count("rows", 11, maximum=10, why="too slow")
+    with pytest.raises(TypeError, match="rows must be an integer"):
+        check_count("rows", 2.5, maximum=10)
+
+
+def test_mixed_musyn_checks_dk_options():
+    P = ct.ss(-np.eye(3), np.eye(3), np.eye(3), np.zeros((3, 3)))
+    blk, omega = [(-1, 0), (1, 1)], np.logspace(0, 2, 20)
+    with pytest.raises(TypeError, match="dk_options must be a dict"):
+        mixed_musyn(P, blk, omega, dk_options=[1])
+    with pytest.raises(ValueError, match=r"dk_options: \['nope'\] are not options of musyn"):
+        mixed_musyn(P, blk, omega, dk_options={"nope": 1})
+
+
+def test_export_meta_stays_strict_json(tmp_path):
+    robust.export_controller(KD, tmp_path, "K", meta={"x": 1.5})
+    json.loads((tmp_path / "K.json").read_text(), parse_constant=lambda c: pytest.fail(c))
