@@ -20,20 +20,24 @@ residual stops falling.
 """
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import control as ct
 import numpy as np
+import scipy.linalg as sla
 import scipy.optimize as opt
 import scipy.signal as sg
 
 from piezolib._checks import check_finite_array, check_integer, check_positive
-from piezolib.hysteresis.common import (FitScores, check_loops, covariance, estimates,
-                                        loop_errors, warn_about)
+from piezolib.hysteresis.common import (FitScores, FitWarning, check_loops, covariance,
+                                        estimates, loop_errors, warn_about)
 from piezolib.hysteresis.pi import PI_STARTS, PIModel, pi_regressors
+from piezolib.hysteresis.select import split_record
 from piezolib.identification.continuous import zoh_coefficients
 
-__all__ = ["HammersteinModel", "HammersteinFit", "fit_hammerstein", "unit_dc_dynamics"]
+__all__ = ["HammersteinModel", "HammersteinFit", "fit_hammerstein", "unit_dc_dynamics",
+           "AUTO_ORDERS"]
 
 
 def _unit_gain(b, a):
@@ -192,7 +196,11 @@ class HammersteinFit(FitScores):
     iterations : int
         Alternations of weights and dynamics (0 with given dynamics).
     start_scores : dict
-        Weighted residual norm from each initial play state tried.
+        Weighted residual norm of the first PI fit from each initial play
+        state tried.
+    order_scores : dict
+        With ``order="auto"``: {(na, nb): RMS % after the middle turning
+        point of the fit before it}, the validation that chose the order.
 
     Examples
     --------
@@ -215,6 +223,7 @@ class HammersteinFit(FitScores):
     parameters: tuple = ()
     iterations: int = 0
     start_scores: dict = None
+    order_scores: dict = None
 
 
 def _weights_step(data, regs, b, a, offset, n):
@@ -226,8 +235,22 @@ def _weights_step(data, regs, b, a, offset, n):
         rhs.append(weight * x[used])
     A, rhs = np.vstack(rows), np.concatenate(rhs)
     lower = np.r_[np.zeros(n), [-np.inf] if offset else []]
-    theta = opt.lsq_linear(A, rhs, bounds=(lower, np.inf), method="bvls").x
+    theta = opt.lsq_linear(*_compressed(A, rhs), bounds=(lower, np.inf), method="bvls").x
     return A, rhs, theta
+
+
+def _compressed(A, rhs):
+    """(R, y) with |A t - rhs|^2 = |R t - y|^2 + const, R square: a bounded solve on p rows.
+
+    R from the Cholesky factor of A^T A (a QR of a tall record costs 10 x more);
+    a QR when A^T A is not numerically positive definite.
+    """
+    try:
+        L = np.linalg.cholesky(A.T @ A)
+        return L.T, sla.solve_triangular(L, A.T @ rhs, lower=True)
+    except np.linalg.LinAlgError:
+        Q, R = np.linalg.qr(A)
+        return R, Q.T @ rhs
 
 
 def _dynamics_step(data, regs, w, x0, b, a, na, nb, nk, passes=3):
@@ -263,9 +286,112 @@ def _cost(A, rhs, theta):
     return float(r @ r)
 
 
-def fit_hammerstein(loops, fs, order=(4, 4), n_plays=10, dynamics=None, delay=1, offset=True,
+#: Orders (na, nb) of the dynamics that ``order="auto"`` chooses among by validation.
+AUTO_ORDERS = ((1, 1), (2, 2), (3, 3), (4, 4))
+
+
+def _quasi_static_rows(data):
+    """Each record's samples with the start-up's ringing left out (for the first weights).
+
+    After a jump of the input by more than 2 % of its range the next 2 % of
+    the record (at least 20 samples) is left out: there the stage rings, and
+    the weights of a delay-only model would bend to follow it.
+    """
+    out = []
+    for v, x, used in data:
+        jumps = np.flatnonzero(np.abs(np.diff(v)) > 0.02 * np.ptp(v)) + 1
+        quiet = np.ones(v.size, dtype=bool)
+        for k in jumps:
+            quiet[k:k + max(20, v.size // 50)] = False
+        rows = used[quiet[used]]
+        out.append((v, x, rows if rows.size > 8 else used))
+    return out
+
+
+def _alternate(data, regs, theta, offset, n, na, nb, delay, iterations, tol):
+    """Dynamics (Steiglitz-McBride) and weights (bounded LS) in turn from the weights ``theta``."""
+    b, a = np.r_[np.zeros(delay), 1.0], np.array([1.0])
+    A, rhs, theta = _weights_step(data, regs, b, a, offset, n) if theta is None else \
+        (None, None, theta)
+    best, k = None, 0
+    for k in range(1, iterations + 1):
+        x0 = float(theta[-1]) if offset else 0.0
+        b1, a1 = _dynamics_step(data, regs, theta[:n], x0, b, a, na, nb, delay)
+        A1, rhs1, theta1 = _weights_step(data, regs, b1, a1, offset, n)
+        cost1 = _cost(A1, rhs1, theta1)
+        if best is not None and cost1 > best[5]:          # no better: keep the last
+            break
+        done = best is not None and best[5] - cost1 <= tol * best[5]
+        b, a, theta = b1, a1, theta1
+        best = (b1, a1, A1, rhs1, theta1, cost1)
+        if done:
+            break
+    return (*best, k)
+
+
+def _held_out_percent(data, regs, theta, offset, b, a, first):
+    """RMS residual [% of stroke] of each record from sample ``first[i]`` on, pooled."""
+    out = []
+    for (v, x, used), (Y, weight), k in zip(data, regs, first):
+        xm = _filter_at_rest(b, a, Y) @ theta[:Y.shape[1]] + (theta[-1] if offset else 0.0)
+        out.append(100 * math.sqrt(float(np.mean((xm[k:] - x[k:]) ** 2))) / np.ptp(x))
+    return math.sqrt(float(np.mean(np.square(out))))
+
+
+def _choose_order(data, r, start, offset, delay, orders, iterations, tol):
+    """The order whose fit before each record's middle turning point predicts best after it.
+
+    Returns the order and {order: held-out RMS %}.
+    """
+    cut = [split_record(v, x, 0.5)[1][2] for v, x, used in data]
+    early = [(v, x, used[used <= k]) for (v, x, used), k in zip(data, cut)]
+    regs = pi_regressors(data, r, start)
+    _, _, theta0 = _weights_step(_quasi_static_rows(early), regs, np.r_[np.zeros(delay), 1.0],
+                                 np.array([1.0]), offset, r.size)
+    scores, costs = {}, {}
+    for na, nb in orders:
+        b, a, A, rhs, theta, costs[(na, nb)], k = _alternate(early, regs, theta0, offset, r.size,
+                                                             na, nb, delay, iterations, tol)
+        scores[(na, nb)] = _held_out_percent(data, regs, theta, offset, b, a, cut)
+    # the samples after the middle rarely hold a step: among the orders that predict them
+    # (within 5 % of the best) the one that fits the fitted part, ringing included, best
+    best = min(scores.values())
+    chosen = min((o for o in orders if scores[o] <= 1.05 * best), key=lambda o: costs[o])
+    return chosen, scores
+
+
+def _dynamics_warnings(b, a, fs, data, slope_loops, slope_model):
+    """What the record leaves unidentified: the dynamics' gain where the record moves, the slope."""
+    notes = []
+    turns = [np.flatnonzero(np.diff(np.sign(np.diff(v))) != 0).size for v, x, used in data]
+    f_exc = max(0.5 * max(turns) * fs / max(v.size for v, x, used in data), fs * 1e-6)
+    w = 2 * math.pi * f_exc / fs
+    gain = abs(np.polyval(np.asarray(b)[::-1], np.exp(-1j * w))
+               / np.polyval(np.asarray(a)[::-1], np.exp(-1j * w)))
+    if not 0.5 <= gain <= 2.0:
+        notes.append(f"the dynamics are not identified: their gain at the record's "
+                     f"{f_exc:.3g} Hz is {gain:.3g}, not about 1 (a record that does not "
+                     f"excite them; give the dynamics, e.g. an identified G)")
+    if slope_loops > 0 and not 0.8 <= slope_model / slope_loops <= 1.25:
+        notes.append(f"the slope is not identified: the model's {slope_model:.4g} x/v against "
+                     f"the loops' {slope_loops:.4g} x/v")
+    return notes
+
+
+def fit_hammerstein(loops, fs, order="auto", n_plays=10, dynamics=None, delay=1, offset=True,
                     start="auto", discard=0, thresholds=None, iterations=30, tol=1e-6):
     """Fit a PI operator followed by linear dynamics to records at their full rate.
+
+    The first weights (and the start state) come from the records' loops:
+    a PI fit through a delay of ``delay`` samples on every sample but the
+    ringing after input jumps.  From them the fit alternates the dynamics
+    (Steiglitz-McBride passes from p to x) and the weights (bounded least
+    squares through the dynamics) until the residual stops falling.  With
+    ``order="auto"`` each of :data:`AUTO_ORDERS` is fitted to the samples
+    before each record's middle turning point and scored on those after it;
+    of the orders within 5 % of the best score, the one with the smallest
+    residual on the fitted part (where the step and its ringing are) is
+    refitted to the whole records.
 
     Parameters
     ----------
@@ -274,9 +400,9 @@ def fit_hammerstein(loops, fs, order=(4, 4), n_plays=10, dynamics=None, delay=1,
         pair); whole raw records, rest and steps included, are fine.
     fs : float
         Sampling rate of the records [Hz].
-    order : (int, int), optional
+    order : "auto" or (int, int), optional
         (na, nb): poles and numerator terms of the discrete dynamics when
-        ``dynamics`` is not given.
+        ``dynamics`` is not given; "auto" chooses by validation.
     n_plays : int, optional
         Play operators including the linear one; thresholds as in
         :func:`~piezolib.hysteresis.pi.fit_pi`.
@@ -288,8 +414,9 @@ def fit_hammerstein(loops, fs, order=(4, 4), n_plays=10, dynamics=None, delay=1,
         k - 1, a sampled stage).
     offset : bool, optional
         Fit the output offset x0.
-    start : {"auto", "rest", "virgin"}, optional
-        Initial play state; "auto" fits from both and keeps the better.
+    start : {"auto", "rest", "virgin", "maximum"}, optional
+        Initial play state (:data:`~piezolib.hysteresis.pi.PI_STARTS`);
+        "auto" takes the one whose first PI fit is best.
     discard : int, optional
         Samples at the start of each record left out of the residuals.
     thresholds : array_like, optional
@@ -303,7 +430,9 @@ def fit_hammerstein(loops, fs, order=(4, 4), n_plays=10, dynamics=None, delay=1,
     -------
     HammersteinFit
         A :class:`~piezolib.hysteresis.common.FitWarning` names every weight
-        on its bound 0 and every parameter not identifiable.
+        on its bound 0, every parameter not identifiable, dynamics whose gain
+        at the records' excitation frequency is not about 1 and a slope (sum
+        of the weights) more than 25 % off the loops' slope.
 
     Raises
     ------
@@ -335,48 +464,48 @@ def fit_hammerstein(loops, fs, order=(4, 4), n_plays=10, dynamics=None, delay=1,
     delay = check_integer("delay", delay, minimum=0)
     iterations = check_integer("iterations", iterations, minimum=1)
     tol = check_positive("tol", tol)
+    orders = ()
     if dynamics is not None:
-        b0, a0 = unit_dc_dynamics(dynamics, fs)
-        na = nb = 0
+        b_known, a_known = unit_dc_dynamics(dynamics, fs)
+    elif isinstance(order, str) and order == "auto":
+        orders = AUTO_ORDERS
     else:
         if not isinstance(order, (tuple, list)) or len(order) != 2:
-            raise TypeError(f"order must be a pair (na, nb), got {order!r}")
-        na = check_integer("order[0] (na)", order[0], minimum=1)
-        nb = check_integer("order[1] (nb)", order[1], minimum=1)
-        b0, a0 = np.r_[np.zeros(delay), 1.0], np.array([1.0])
+            raise TypeError(f"order must be 'auto' or a pair (na, nb), got {order!r}")
+        orders = ((check_integer("order[0] (na)", order[0], minimum=1),
+                   check_integer("order[1] (nb)", order[1], minimum=1)),)
     if thresholds is None:
         n_plays = check_integer("n_plays", n_plays, minimum=1)
         half = max(float(np.ptp(v)) for v, x, used in data) / 2.0
         thresholds = half * np.arange(n_plays) / n_plays
     thresholds = check_finite_array("thresholds", thresholds, ndim=1, min_length=1, real=True)
     r = np.asarray(PIModel(tuple(thresholds), tuple(np.ones(thresholds.size))).thresholds)
-    if any(v.size < 4 * (na + nb + 1) for v, x, used in data):
-        raise ValueError("each record needs at least 4 x (na + nb + 1) samples")
+    need = 4 * (max((na + nb for na, nb in orders), default=0) + 1)
+    if any(v.size < need for v, x, used in data):
+        raise ValueError(f"each record needs at least {need} samples (4 x (na + nb + 1))")
 
-    def solve(start0):
-        regs = pi_regressors(data, r, start0)
-        b, a = b0, a0
-        A, rhs, theta = _weights_step(data, regs, b, a, offset, r.size)
-        cost, k = _cost(A, rhs, theta), 0
-        if dynamics is None:
-            for k in range(1, iterations + 1):
-                x0 = float(theta[-1]) if offset else 0.0
-                b1, a1 = _dynamics_step(data, regs, theta[:r.size], x0, b, a, na, nb, delay)
-                A1, rhs1, theta1 = _weights_step(data, regs, b1, a1, offset, r.size)
-                cost1 = _cost(A1, rhs1, theta1)
-                if cost1 > cost:                            # no better: keep the last
-                    break
-                done = cost - cost1 <= tol * cost
-                b, a, A, rhs, theta, cost = b1, a1, A1, rhs1, theta1, cost1
-                if done:
-                    break
-        return b, a, A, rhs, theta, cost, k
-
+    # the first weights and the start state: PI through a delay, on the quasi-static samples
+    quiet = _quasi_static_rows(data)
+    delayed = (np.r_[np.zeros(delay), 1.0], np.array([1.0]))
     starts = PI_STARTS if start == "auto" else (start,)
-    solved = {s0: solve(s0) for s0 in starts}
-    scores = {s0: math.sqrt(sol[5]) for s0, sol in solved.items()}
+    first = {s0: _weights_step(quiet, pi_regressors(data, r, s0), *delayed, offset, r.size)
+             for s0 in starts}
+    scores = {s0: math.sqrt(_cost(*sol)) for s0, sol in first.items()}
     start = min(starts, key=lambda s0: scores[s0])
-    b, a, A, rhs, theta, cost, k = solved[start]
+    regs = pi_regressors(data, r, start)
+    slope_loops = float(np.sum(first[start][2][:r.size]))
+    order_scores = {}
+    if dynamics is not None:
+        b, a = b_known, a_known
+        A, rhs, theta = _weights_step(data, regs, b, a, offset, r.size)
+        k = 0
+    else:
+        chosen = orders[0]
+        if len(orders) > 1:
+            chosen, order_scores = _choose_order(data, r, start, offset, delay, orders,
+                                                 iterations, tol)
+        b, a, A, rhs, theta, cost, k = _alternate(data, regs, first[start][2], offset, r.size,
+                                                  *chosen, delay, iterations, tol)
     x0 = float(theta[-1]) if offset else 0.0
     w = theta[:r.size].copy()
     w[w <= 1e-12 * float(np.sum(w))] = 0.0
@@ -387,14 +516,19 @@ def fit_hammerstein(loops, fs, order=(4, 4), n_plays=10, dynamics=None, delay=1,
     names = [f"w_{i} (r = {ri:.4g})" for i, ri in enumerate(r)] + (["x0"] if offset else [])
     units = ["x/v"] * r.size + (["x"] if offset else [])
     parameters = estimates(names, units, theta, [False] * theta.size, cov, at_bound)
-    warn_about(parameters, f"fit_hammerstein (start {start!r})")
+    what = f"fit_hammerstein (start {start!r}, dynamics of order {len(a) - 1})"
+    warn_about(parameters, what)
+    if dynamics is None:
+        for note in _dynamics_warnings(b, a, fs, data, slope_loops, float(np.sum(w))):
+            warnings.warn(f"{what}: {note}", FitWarning, stacklevel=2)
     pairs = [(np.asarray(p[0], dtype=float), np.asarray(p[1], dtype=float))
              for p in _pairs(loops)]
     x_model = [model.simulate(v) for v, x in pairs]
     res, rms, rms_pct, max_pct = loop_errors(x_model, pairs, discard)
     return HammersteinFit(model=model, x_model=x_model, residuals=res, rms=rms,
                           rms_percent=rms_pct, max_percent=max_pct,
-                          parameters=tuple(parameters), iterations=k, start_scores=scores)
+                          parameters=tuple(parameters), iterations=k, start_scores=scores,
+                          order_scores=order_scores)
 
 
 def _pairs(loops):

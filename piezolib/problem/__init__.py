@@ -20,6 +20,8 @@ fsm_benchmark    the CubeSpec fine steering mirror benchmark: data, metric, base
 fsm_models       the benchmark's models step by step (BLAs, linear, nonlinear, scores), with checks
 fsm_control      a mu controller for one mirror axis: nominal, design, verification, coupling
 paths            where the checkout and its ``data/`` folder are
+foreign_hysteresis  raw records of Bouc-Wen, Preisach and Duhem hysteresis through a resonance,
+                 and the best error a fit of them can reach
 published_audit  notebook 00: the published design audited (units, poles, nominal loop, Tables 4-5)
 stage_identification  notebook 01: the virtual stage's calibration and identification (Sec. III-A)
 coefficient_set  notebook 02: the 729-model set, E_m, H_m's coverage, the exact margin of a loop
@@ -36,4 +38,5 @@ __all__ = ["paper", "genplant", "stage", "stage_batch", "stage_loop_kernel", "st
            "hysteresis_fits", "dahl_audit", "hysteresis_choice",
            "weighting", "fsm_benchmark", "paths",
            "fsm_models", "fsm_control",
-           "published_audit", "stage_identification", "coefficient_set", "coefficient_box"]
+           "published_audit", "stage_identification", "coefficient_set", "coefficient_box",
+           "foreign_hysteresis"]
