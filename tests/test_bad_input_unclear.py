@@ -111,3 +111,21 @@ def test_mixed_musyn_checks_dk_options():
 def test_export_meta_stays_strict_json(tmp_path):
     robust.export_controller(KD, tmp_path, "K", meta={"x": 1.5})
     json.loads((tmp_path / "K.json").read_text(), parse_constant=lambda c: pytest.fail(c))
+
+
+def test_axis_design_plant_refuses_an_unstable_weight():
+    from piezolib.problem import fsm_benchmark
+    good = dict(G=ct.tf([2e7], [1.0, 400.0, 4e7]), W_m=ct.tf([0.1], [1.0]),
+                W_S=ct.tf([1.0], [1.0, 1.0]), W_T=ct.tf([0.1], [1.0]), W_u=ct.tf([0.01], [1.0]),
+                fs=6400.0)
+    with pytest.raises(ValueError, match="W_S must be stable"):
+        fsm_benchmark.axis_design_plant(**{**good, "W_S": ct.tf([1.0], [1.0, -1.0])})
+
+
+@pytest.mark.parametrize("text", ["time,u,y\n0,1,2\n", '{"cells": [{"cell_type": "co'])
+def test_build_names_an_executed_file_that_is_no_notebook(text, tmp_path):
+    from piezolib.workbook import document
+    path = tmp_path / "report.ipynb"
+    path.write_text(text)
+    with pytest.raises(ValueError, match=rf"{path} is not a readable Jupyter notebook"):
+        document.build(executed=path, output=tmp_path / "out")

@@ -31,7 +31,7 @@ import numpy as np
 
 from piezolib import metrics
 from piezolib._checks import (check_integer, check_positive, check_proper, check_siso,
-                              check_type)
+                              check_stable, check_type)
 from piezolib.identification import freqfit
 from piezolib.robust.lti import balance
 from piezolib.problem import paths
@@ -440,6 +440,8 @@ def axis_design_plant(G, W_m, W_S, W_T, W_u, *, fs, delay_samples=1, pade_order=
     (['u_Delta', 'v_r', 'u_b'], ['y_Delta', 'y1', 'y2', 'y_u', 'v_e'])
     """
     _check_axis_models(G=G, W_m=W_m, W_S=W_S, W_T=W_T, W_u=W_u)
+    for name, W in (("W_m", W_m), ("W_S", W_S), ("W_T", W_T), ("W_u", W_u)):
+        check_stable(name, W)       # an unstable weight leaves no stabilising controller
     fs = check_positive("fs", fs)
     pade_order = check_integer("pade_order", pade_order, minimum=1)
     if delay_samples is None:

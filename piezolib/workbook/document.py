@@ -165,7 +165,13 @@ def _read_executed(path):
     path = check_path("path", path)
     if not path.is_file():
         raise ValueError(f"executed notebook: there is no file at path {path}")
-    nb = nbformat.read(path, as_version=4)
+    try:
+        nb = nbformat.read(path, as_version=4)
+    except (ValueError, KeyError, AttributeError, TypeError) as exc:
+        # a CSV, a truncated file or another JSON (NotJSONError, JSONDecodeError and
+        # UnicodeDecodeError are ValueErrors): name the file, not nbformat's internals
+        raise ValueError(f"executed notebook: {path} is not a readable Jupyter notebook "
+                         f"({type(exc).__name__}: {str(exc)[:120]})") from None
     if not any(cell.get("outputs") for cell in nb.cells if cell.cell_type == "code"):
         raise ValueError(f"executed notebook: {path} has no outputs; execute it first "
                          "(or leave --executed out and the report is executed)")
