@@ -129,3 +129,28 @@ def test_build_names_an_executed_file_that_is_no_notebook(text, tmp_path):
     path.write_text(text)
     with pytest.raises(ValueError, match=rf"{path} is not a readable Jupyter notebook"):
         document.build(executed=path, output=tmp_path / "out")
+
+
+def _periodic_records():
+    N, lines = 64, np.arange(1, 11)
+    rng = np.random.default_rng(0)
+    u = np.zeros((N, 1, 2, 2))
+    for r in range(2):
+        phases = rng.uniform(0, 2 * np.pi, lines.size)
+        u[:, 0, r, :] = np.cos(2 * np.pi * np.outer(np.arange(N), lines) / N
+                               + phases).sum(1)[:, None]
+    return u, 0.5 * u + 0.5 * np.roll(u, 1, axis=0)
+
+
+def test_bla_periodic_refuses_a_repeated_line():
+    u, y = _periodic_records()
+    with pytest.raises(ValueError, match=r"lines must name each DFT line once, got \[3\]"):
+        ident.bla_periodic(u, y, 64.0, lines=[3, 3, 5])
+
+
+def test_bla_labels_name_each_signal_once():
+    bla = ident.bla_periodic(*_periodic_records(), 64.0)
+    for labels in (["u", "u"], []):
+        with pytest.raises(ValueError, match="input_labels must name each of the 1 signals once"):
+            bla.frd(input_labels=labels)
+    assert bla.frd(input_labels=["v_a"]).input_labels == ["v_a"]

@@ -137,8 +137,20 @@ class BLA:
         """
         n_y, n_u, _ = self.G.shape
         return ct.frd(self.G, 2 * np.pi * self.frequency_Hz,
-                      inputs=input_labels or [f"u[{i}]" for i in range(n_u)],
-                      outputs=output_labels or [f"y[{i}]" for i in range(n_y)])
+                      inputs=_labels("input_labels", input_labels, n_u, "u"),
+                      outputs=_labels("output_labels", output_labels, n_y, "y"))
+
+
+def _labels(name, labels, count, stem):
+    """``count`` distinct signal names (default ``stem[i]``)."""
+    if labels is None:
+        return [f"{stem}[{i}]" for i in range(count)]
+    if isinstance(labels, str) or not all(isinstance(x, str) for x in labels):
+        raise TypeError(f"{name} must be a list of {count} signal names (str), got {labels!r}")
+    labels = list(labels)
+    if len(labels) != count or len(set(labels)) != count:
+        raise ValueError(f"{name} must name each of the {count} signals once, got {labels}")
+    return labels
 
 
 def _as_periodic(name, x, ndim_min=2):
@@ -263,7 +275,10 @@ def bla_periodic(u, y, fs, lines=None, relative_threshold=1e-3):
         lines = check_finite_array("lines", lines, ndim=1, min_length=1, real=True)
         if np.any(lines != np.round(lines)) or lines.min() < 1 or lines.max() > N // 2:
             raise ValueError(f"lines must be integers in 1 .. {N // 2}")
-        lines = np.unique(lines.astype(int))
+        lines, counts = np.unique(lines.astype(int), return_counts=True)
+        if np.any(counts > 1):          # a repeated line would count twice in every mean
+            raise ValueError(f"lines must name each DFT line once, got "
+                             f"{lines[counts > 1].tolist()} more than once")
     M = R // n_u
     U = np.fft.rfft(u, axis=0)[lines]                   # (F, n_u, R, P)
     Y = np.fft.rfft(y, axis=0)[lines]                   # (F, n_y, R, P)
