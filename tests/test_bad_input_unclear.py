@@ -154,3 +154,11 @@ def test_bla_labels_name_each_signal_once():
         with pytest.raises(ValueError, match="input_labels must name each of the 1 signals once"):
             bla.frd(input_labels=labels)
     assert bla.frd(input_labels=["v_a"]).input_labels == ["v_a"]
+
+
+def test_a_latin_1_study_file_is_named(tmp_path):
+    from piezolib.workbook import study
+    path = tmp_path / "x.toml"
+    path.write_bytes('name = "x"\n# café\n'.encode("latin-1"))
+    with pytest.raises(ValueError, match=rf"{path}: not UTF-8 text"):
+        study.load(path)

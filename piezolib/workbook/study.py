@@ -475,6 +475,9 @@ def load(spec=REFERENCE):
         raise StudyError(f"study file {path} does not exist")
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except UnicodeDecodeError as exc:       # e.g. saved as latin-1: TOML files are UTF-8
+        raise StudyError(f"{path}: not UTF-8 text (byte {exc.start}: {exc.reason}); save "
+                         "the study file as UTF-8") from None
     except tomllib.TOMLDecodeError as exc:
         raise StudyError(f"{path}: not valid TOML ({exc})") from None
     try:
