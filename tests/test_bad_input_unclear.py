@@ -162,3 +162,10 @@ def test_a_latin_1_study_file_is_named(tmp_path):
     path.write_bytes('name = "x"\n# café\n'.encode("latin-1"))
     with pytest.raises(ValueError, match=rf"{path}: not UTF-8 text"):
         study.load(path)
+
+
+def test_fit_pi_bounds_the_plays_before_any_work():
+    from piezolib.hysteresis import fit_pi
+    v = np.r_[np.linspace(0, 4, 21), np.linspace(3.8, 0, 20)]
+    with pytest.raises(ValueError, match="n_plays must be at most 1,000"):
+        fit_pi((v, v), n_plays=10 ** 7)

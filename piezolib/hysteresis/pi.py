@@ -18,19 +18,23 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.optimize as opt
 
-from piezolib._checks import check_finite_array, check_integer
+from piezolib._checks import check_count, check_finite_array, check_integer
 from piezolib.hysteresis.common import (FitScores, FitWarning, check_loops, covariance, estimates,
                                         loop_errors, warn_about)
 from piezolib.hysteresis.dahl import NotInvertibleError, strokes
 
 # pi_regressors is shared with hammerstein.py (checked inputs), not part of the API
-__all__ = ["PI_STARTS", "PIModel", "PIFit", "play_outputs", "fit_pi", "FitWarning"]
+__all__ = ["PI_STARTS", "MAX_PLAYS", "PIModel", "PIFit", "play_outputs", "fit_pi",
+           "FitWarning"]
 
 #: Initial play states: "rest" as if lowered to the first input (y_i = v_0 + r_i, the
 #: descending branch: a stage at rest, or a record cut at an input minimum), "virgin" every
 #: play centred on it (y_i = v_0), "maximum" as if raised to it (y_i = v_0 - r_i, the
 #: ascending branch: a record cut at an input maximum).
 PI_STARTS = ("rest", "virgin", "maximum")
+#: Most play operators of a fit: its regressor holds one column per play and sample (1000
+#: plays of a 100,000-sample record: 0.8 GB).
+MAX_PLAYS = 1000
 
 
 def play_outputs(v, thresholds, y0):
@@ -345,8 +349,8 @@ def fit_pi(loops, n_plays=10, offset=True, start="auto", discard=0, thresholds=N
     loops : sequence of (v, x)
         Input [v-unit] and measured output [x-unit] records (or one pair).
     n_plays : int, optional
-        Number of play operators, including the linear one (r = 0).
-        Default thresholds r_i = i / n_plays * (largest input range) / 2.
+        Number of play operators, including the linear one (r = 0), at most
+        :data:`MAX_PLAYS`.  Default thresholds r_i = i / n_plays * (largest input range) / 2.
     offset : bool, optional
         Fit the output offset x0 (default True).
     start : {"auto", "rest", "virgin", "maximum"}, optional
@@ -399,10 +403,13 @@ def fit_pi(loops, n_plays=10, offset=True, start="auto", discard=0, thresholds=N
     if not isinstance(offset, (bool, np.bool_)):
         raise TypeError(f"offset must be True or False, got {offset!r}")
     if thresholds is None:
-        n_plays = check_integer("n_plays", n_plays, minimum=1)
+        n_plays = check_count("n_plays", n_plays, maximum=MAX_PLAYS,
+                              why="the regressor has a column per play and sample")
         half = max(float(np.ptp(v)) for v, x, used in data) / 2.0
         thresholds = half * np.arange(n_plays) / n_plays
     thresholds = check_finite_array("thresholds", thresholds, ndim=1, min_length=1, real=True)
+    if thresholds.size > MAX_PLAYS:
+        raise ValueError(f"thresholds must hold at most {MAX_PLAYS} plays, got {thresholds.size}")
     r = np.asarray(PIModel(tuple(thresholds), tuple(np.ones(thresholds.size))).thresholds)
     scores = {}
     if start == "auto":
