@@ -310,7 +310,8 @@ def frf_error(model, G, frequency_Hz, weight=None):
     check_type("model", model, (ct.StateSpace, ct.TransferFunction), "a discrete LTI model")
     if not model.isdtime(strict=True):
         raise ValueError("model must be discrete-time (dt > 0)")
-    f_top = np.max(np.asarray(frequency_Hz, dtype=float)) if np.size(frequency_Hz) else 0.0
+    f = check_finite_array("frequency_Hz", frequency_Hz, ndim=1, min_length=2, real=True)
+    f_top = float(f.max())
     if f_top >= 0.5 / model.dt:      # the FRF's lines lie past the model's own Nyquist frequency
         raise ValueError(f"model is sampled at {1 / model.dt:g} Hz (dt = {model.dt:g} s), but "
                          f"frequency_Hz reaches {f_top:g} Hz, at or above its Nyquist frequency "
