@@ -9,6 +9,7 @@ parametric   the coefficient box as an LFT with one real block per coefficient, 
              robust-stability margin by mixed mu
 sampled      the members at a sampling rate: exact ZOH models, sampled loops with a delay,
              random draws from the box
+sampled_margin  the sampled loop's parametric stability margin (vertices, edges, a sample)
 polynomials  polynomial helpers shared by the modules above
 
 Every model is passed explicitly; nothing here knows the paper.  Methods and
@@ -28,6 +29,7 @@ from piezolib.uncertainty.margin import (
 from piezolib.uncertainty.sampled import (
     member_zoh_coefficients, random_model_set, sampled_loop_poles, sampled_loop_spread,
     sampled_loop_unstable)
+from piezolib.uncertainty.sampled_margin import SampledMargin, sampled_parametric_margin
 
 __all__ = [
     "ModelSet", "model_set", "level_offsets", "perturbed_plant", "set_response",
@@ -38,5 +40,5 @@ __all__ = [
     "ParametricMargin", "stability_gauge", "parametric_stability_margin",
     "small_gain_spread", "weight_certified_spread", "MAX_MEMBERS",
     "random_model_set", "member_zoh_coefficients", "sampled_loop_poles", "sampled_loop_unstable",
-    "sampled_loop_spread",
+    "sampled_loop_spread", "SampledMargin", "sampled_parametric_margin",
 ]
