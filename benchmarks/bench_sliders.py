@@ -129,14 +129,25 @@ def press_redesign(page, timeout_s):
     page.locator("[data-bench=panel] button", has_text="re-design").first.click()
     page.wait_for_function("() => window.__bench.done.length > 0", timeout=timeout_s * 1000,
                            polling=500)
-    page.wait_for_timeout(5000)                          # a figure drawn after the line
+    try:                                                 # a figure drawn after the line
+        page.wait_for_function("() => window.__bench.frames.some(t => t > window.__bench.done[0])",
+                               timeout=30_000, polling=250)
+    except Exception:                                    # noqa: BLE001 -- none within 30 s
+        pass
     state = page.evaluate(STATE_JS)
+    done = state["done"][0]
     frames = [t for t in state["frames"] if t > start]
     if not frames:
         return "re-design: no new figure"
-    gap = (state["done"][0] - frames[0]) / 1e3
-    return (f"re-design: {(state['done'][0] - start) / 1e3:.1f} s; done line "
-            f"{abs(gap):.2f} s {'after' if gap >= 0 else 'BEFORE'} the new figure")
+    before = [t for t in frames if t <= done]
+    after = [t for t in frames if t > done]
+    text = f"re-design: {(done - start) / 1e3:.1f} s; new figures: {len(before)} before"
+    if before:
+        text += f" (the last {(done - before[-1]) / 1e3:.2f} s before)"
+    text += f" and {len(after)} after the done line"
+    if after:
+        text += f" (the first {(after[0] - done) / 1e3:.2f} s after)"
+    return text
 
 
 def bench_notebook(browser, base, token, name, args):

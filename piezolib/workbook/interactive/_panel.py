@@ -31,7 +31,7 @@ from piezolib.workbook.style import db, unit_text
 
 __all__ = ["STATIC_ENV", "interactive_available", "static_figure", "want_widget",
            "import_ipywidgets", "panel_figure", "png_bytes", "magnitude", "curve_db",
-           "apply_unit_text_to", "LivePanel", "redrawn", "panel_box", "log_slider",
+           "apply_unit_text_to", "REST_S", "LivePanel", "redrawn", "panel_box", "log_slider",
            "linear_slider", "finish"]
 
 #: MIME type of a widget view in a notebook output.
@@ -162,6 +162,10 @@ def apply_unit_text_to(artists):
                 text.set_text(new)
 
 
+#: Seconds without a new value before a live panel computes the slow stage of a view.
+REST_S = 0.3
+
+
 # --------------------------------------------------------------------------- widgets
 class LivePanel:
     """Sliders -> callback -> figure (as a PNG in an Image widget) and a summary line.
@@ -176,7 +180,9 @@ class LivePanel:
     frame repaints only the plot's moving artists over a picture of the rest
     taken once (blitting), and a callback that yields several views (a quick
     one, then the complete one) has each drawn in turn, unless a newer value
-    is waiting by then.
+    is waiting by then; the next view is computed once no new value has come
+    for :data:`REST_S` (while the keys are pressed the quick view follows them,
+    and the slow one is not computed for values already left).
 
     Parameters
     ----------
@@ -209,6 +215,7 @@ class LivePanel:
         self.png = None
         self.frames = 0
         self._background = None
+        self.rest_s = REST_S
         self.worker = LatestOnly(self._render)
         for slider in sliders.values():
             slider.observe(self.refresh, names="value")
@@ -236,15 +243,19 @@ class LivePanel:
 
     def draw_now(self):
         """Compute and draw the sliders' values in this thread (the first figure)."""
-        self._render(self.values(), lambda: False)
+        self._render(self.values(), lambda within=0.0: False)
 
     def _render(self, values, superseded):
         try:
             views = self.compute(values)
-            for view in views if inspect.isgenerator(views) else [views]:
+            staged = inspect.isgenerator(views)
+            for view in views if staged else [views]:
                 if superseded():
                     return
                 self._show(view)
+                # the next stage is the slow one: it starts once the slider rests
+                if staged and superseded(within=self.rest_s):
+                    return
         # a widget callback's exception only reaches the kernel log, which nobody
         # watches: say what went wrong under the figure and keep the last one
         except Exception as exc:        # noqa: BLE001

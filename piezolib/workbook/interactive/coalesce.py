@@ -35,7 +35,7 @@ class LatestOnly:
     work : callable
         Called as ``work(value, superseded)``; ``superseded()`` is True once a
         newer value waits, so a run in stages can stop early (its result
-        would be stale).
+        would be stale); ``superseded(within=s)`` waits up to s seconds for one.
     settle_s : float, optional
         Quiet time [s] before a run starts (default 0.04 s).
     max_wait_s : float, optional
@@ -98,10 +98,17 @@ class LatestOnly:
                 self._thread.start()
             self._lock.notify_all()
 
-    def superseded(self):
-        """True when a value waits that was submitted after the one running."""
+    def superseded(self, within=0.0):
+        """True when a value waits that was submitted after the one running, or arrives
+        ``within`` seconds (a run in stages waits so before its slow stage)."""
+        deadline = time.monotonic() + within
         with self._lock:
-            return self._pending is not _NOTHING
+            while self._pending is _NOTHING:
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    return False
+                self._lock.wait(left)
+            return True
 
     @property
     def busy(self):

@@ -196,10 +196,10 @@ class _DahlPlot:
 
     @property
     def moving(self):
-        """The artists a new model changes: the curves (the limits follow them), the axes,
-        the legend and the titles."""
+        """The artists a new model changes: the curves (the y limits follow them), the y axes,
+        the legend and the titles (u_c and t, along x, stay)."""
         ax_loop, ax_err = self.axes
-        return [self.measured, self.model, self.error, self.zero, *(ax.xaxis for ax in self.axes),
+        return [self.measured, self.model, self.error, self.zero,
                 *(ax.yaxis for ax in self.axes), ax_loop.get_legend(), ax_err.title,
                 self.suptitle]
 

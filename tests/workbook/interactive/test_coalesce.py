@@ -90,6 +90,22 @@ def test_a_stage_can_see_it_is_superseded():
     assert seen == [("first", False), ("after", True), ("second", False)]
 
 
+def test_a_stage_can_wait_for_a_newer_value():
+    seen = []
+
+    def work(value, superseded):
+        if value == "first":
+            threading.Timer(0.05, latest.submit, ["second"]).start()
+            seen.append(superseded(within=2.0))
+        else:
+            seen.append(superseded(within=0.05))
+
+    latest = LatestOnly(work, settle_s=0.0)
+    latest.submit("first")
+    assert latest.wait(5.0)
+    assert seen == [True, False]           # "second" came within 2 s; nothing after it
+
+
 def test_then_runs_after_the_frame_it_waits_for_not_before():
     events = []
     draw_started = threading.Event()

@@ -187,3 +187,38 @@ def test_a_frame_blitted_over_the_background_is_the_full_figure(widgets):
     assert blitted.shape == full.shape
     # the line is drawn after the frame of the axes here, before it in a full draw
     assert np.mean(np.abs(blitted - full).max(axis=2) > 40) < 0.005
+
+
+class _LinePlot:
+    """A small plot of one line whose end follows the view (a float, or (stage, float))."""
+
+    def __init__(self, view, fig):
+        self.figure, (ax,) = _panel.panel_figure(fig, 1, (1.0, 1.0))
+        (self.line,) = ax.plot([0, 1], [0, 0])
+        self.moving = [self.line]
+        self.show(view)
+
+    def show(self, view):
+        self.line.set_ydata([0, view[-1] if isinstance(view, tuple) else view])
+        return True
+
+
+def test_the_slow_stage_waits_until_the_slider_rests(widgets):
+    """Values 0.12 s apart: the quick view follows them, the slow one is computed once."""
+    sliders = {"a": _panel.linear_slider(widgets, "a", 1.0, 0.0, 3.0, 0.1)}
+    slow = []
+
+    def compute(values):
+        yield ("quick", values["a"])
+        slow.append(values["a"])
+        time.sleep(0.05)
+        yield ("complete", values["a"])
+
+    panel = _panel.LivePanel(widgets, sliders, compute, _LinePlot, str)
+    _panel.finish(panel, panel.box())
+    slow.clear()
+    for _ in range(4):
+        sliders["a"].value = round(sliders["a"].value + 0.1, 1)
+        time.sleep(0.12)
+    assert panel.wait(10)
+    assert slow == [pytest.approx(1.4)] and panel.view == ("complete", pytest.approx(1.4))
