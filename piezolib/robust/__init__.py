@@ -4,6 +4,7 @@ General tools for any plant; nothing here knows the paper.  Every model is
 passed explicitly and every numerical scaling is chosen from the model given.
 
 lti         time scaling, balancing, realisation, loop functions, norms
+matrix_exponential  exp of a stack of matrices at once (the members of a model set)
 lft         lower linear fractional transformation and its frequency response
 blocks      uncertainty-block type ``Block`` and the MATLAB ``blk`` parser
 hinf        verified H-infinity synthesis by gamma-iteration (``hinfsyn``)
@@ -37,6 +38,7 @@ Derivations and design notes: ``docs/robust.md``; one line per module:
 """
 
 from piezolib.robust.lti import *          # noqa: F401,F403
+from piezolib.robust.matrix_exponential import *   # noqa: F401,F403
 from piezolib.robust.lft import *          # noqa: F401,F403
 from piezolib.robust.blocks import *       # noqa: F401,F403
 from piezolib.robust.mu import *           # noqa: F401,F403
@@ -53,10 +55,11 @@ from piezolib.robust.performance_weights import *  # noqa: F401,F403
 from piezolib.robust.export import *       # noqa: F401,F403
 from piezolib.robust.preview import *      # noqa: F401,F403
 from piezolib.robust import (achievable, blocks, dfit, dgk, discrete, dk, export, fixed_order,
-                             hinf, lft, lti, margins, mu, performance_weights, preview,
-                             reduction)
+                             hinf, lft, lti, margins, matrix_exponential, mu,
+                             performance_weights, preview, reduction)
 
-__all__ = (lti.__all__ + lft.__all__ + blocks.__all__ + mu.__all__ + hinf.__all__
+__all__ = (lti.__all__ + matrix_exponential.__all__ + lft.__all__ + blocks.__all__ + mu.__all__
+           + hinf.__all__
            + dfit.__all__ + dk.__all__ + fixed_order.__all__ + dgk.__all__ + reduction.__all__
            + discrete.__all__ + margins.__all__ + achievable.__all__ + export.__all__
            + performance_weights.__all__ + preview.__all__)

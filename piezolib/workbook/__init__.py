@@ -2,6 +2,7 @@
 
 study        studies: every choice of the pipeline in one serialisable object
 pipeline     the pipeline's products, computed once per study and reused
+design_run   the record of the design searches notebook 05 shows (committed: reference)
 loop         the 10 kHz loop of Fig. 1 on the virtual stage
 experiments  Cases I-III of Sec. V: the Table 4 and Table 5 experiments
 report       paper-versus-reproduced comparison tables, the report's findings sections
@@ -35,4 +36,5 @@ __all__ = ["study", "pipeline", "loop", "experiments", "report", "style", "plott
            "reproduce", "cli", "outputs", "session", "interactive", "feedforward_cases",
            "weighting_findings", "tracking_setup", "tracking_study",
            "case_comparison", "fsm_findings", "your_stage",
-           "your_stage_hysteresis", "your_stage_control", "your_stage_claims", "sweep_spec"]
+           "your_stage_hysteresis", "your_stage_control", "your_stage_claims", "sweep_spec",
+           "design_run"]

@@ -152,14 +152,15 @@ def _list_studies(stream):
 
 
 def _controllers(args, stream):
-    from piezolib.workbook import pipeline
+    from piezolib.workbook import design_run, pipeline
 
     if args.write_reference:
-        path = pipeline.write_reference_design()
+        path, found = pipeline.write_reference_design()
+        record = design_run.write_reference_record(found)
         print(f"wrote {path}, the section exports "
               + ", ".join(f"{stem}.json/.h" for stem in (*pipeline.SECTION_FILES,
                                                          pipeline.FEEDFORWARD_FILE))
-              + " and the workbook Dahl model", file=stream)
+              + f", the workbook Dahl model and the searches' record {record}", file=stream)
     if args.write_mixed and not args.write_reference:
         path = pipeline.write_reference_mixed_designs()
         print(f"wrote {path} and the sections {pipeline.MIXED_SECTIONS_FILE}.json/.h", file=stream)

@@ -464,7 +464,10 @@ def write_reference_design(cache=False):
 
     The workbook Dahl model (:func:`piezolib.problem.hysteresis_fits.write_workbook_dahl`),
     the controllers (:func:`reference_design_path`) and their exported sections
-    (:func:`export_sections`): inputs of the reference study that no rerun rewrites.
+    (:func:`export_sections`) and the mixed-mu designs: inputs of the reference study that
+    no rerun rewrites.  Returns the controllers' path and the :class:`StudyControllers`
+    derived (with their design records, for
+    :func:`piezolib.workbook.design_run.write_reference_record`).
     """
     write_workbook_dahl()
     reference = studies.load(studies.REFERENCE)
@@ -473,7 +476,7 @@ def write_reference_design(cache=False):
     export_sections(reference, outputs.study_controllers_dir(reference.name), found)
     export_feedforward_sections(reference, outputs.study_controllers_dir(reference.name))
     write_reference_mixed_designs(found)
-    return path
+    return path, found
 
 
 def write_reference_mixed_designs(controllers=None):

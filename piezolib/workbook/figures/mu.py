@@ -7,6 +7,7 @@ from matplotlib.lines import Line2D
 
 from piezolib.robust.lti import loop_functions
 from piezolib.workbook import plotting
+from piezolib.workbook.design_run import SearchRecord
 from piezolib.workbook.style import new_figure, plot_magnitude
 from piezolib.workbook.figures.audit import STEP_TITLES
 
@@ -19,22 +20,24 @@ def extra_d_scaling_fit(mu_run):
 
     Parameters
     ----------
-    mu_run : piezolib.robust.dk.MusynResult
-        A DK-iteration result (its grid ``omega`` [rad/s], ``d_scalings`` and ``mu``).
+    mu_run : piezolib.robust.dk.MusynResult or piezolib.workbook.design_run.SearchRecord
+        A DK-iteration result or its record (its grid ``omega`` [rad/s], the optimal
+        d(omega) and the fitted d(s) of the last K-step).
 
     Returns
     -------
     matplotlib.figure.Figure
         Saved as ``extra_d_scaling_fit.png``.
     """
-    omega = mu_run.omega
-    s = 1j * omega
+    record = mu_run if isinstance(mu_run, SearchRecord) else SearchRecord.of_dk(mu_run)
+    if record.d_fit is None:
+        raise ValueError("mu_run has no fitted D-scaling (its first, unscaled K-step was "
+                         "the best): nothing to compare")
+    omega = record.omega
     fig, ax = new_figure(figsize=(6.5, 3.4))
-    plot_magnitude(ax, omega, mu_run.mu.d[:, 0], label="optimal d(omega) for the final K")
-    fit = mu_run.d_scalings[0]
-    order = len(ct.poles(fit))
-    plot_magnitude(ax, omega, np.ravel(fit(s)),
-                            label=f"order-{order} fit used in the last K-step", ls="--")
+    plot_magnitude(ax, omega, record.optimal_d, label="optimal d(omega) for the final K")
+    plot_magnitude(ax, omega, record.d_fit,
+                   label=f"order-{record.d_fit_order} fit used in the last K-step", ls="--")
     ax.set_ylabel("|d| [dB]")
     ax.legend()
     plotting.name_figure(fig, None, "d_scaling_fit")
