@@ -72,6 +72,11 @@ INSTRUMENT_JS = """(label) => {
   return true;
 }"""
 
+# the text of the notebook's error and stderr outputs
+ERRORS_JS = """() => [...document.querySelectorAll('.jp-Notebook .jp-OutputArea-output'
+  + '[data-mime-type="application/vnd.jupyter.error"], .jp-Notebook .jp-OutputArea-output'
+  + '[data-mime-type="application/vnd.jupyter.stderr"]')].map(e => e.innerText).join('\\n')"""
+
 STATE_JS = """() => {
   const out = document.querySelector('[data-bench=panel]');
   const readout = out.querySelector('[data-bench=slider] .widget-readout');
@@ -106,7 +111,9 @@ def wait_for_quiet(page, quiet_s, timeout_s):
 def press_slider(page, label, presses, quiet_s, timeout_s):
     """Press the right arrow on the slider ``label`` ``presses`` times; return the record."""
     if not page.evaluate(INSTRUMENT_JS, label):
-        raise RuntimeError(f"no live slider {label!r} (was the control drawn as a figure?)")
+        errors = page.evaluate(ERRORS_JS)
+        raise RuntimeError(f"no live slider {label!r} (was the control drawn as a figure?)"
+                           + (f"; an error output ends: {errors[-300:]}" if errors else ""))
     handle = page.locator("[data-bench=slider] .noUi-handle").first
     handle.scroll_into_view_if_needed()
     page.wait_for_timeout(2000)                          # the page settles

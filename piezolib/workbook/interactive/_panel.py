@@ -14,7 +14,6 @@ import base64
 import functools
 import html
 import importlib.util
-import inspect
 import io
 import os
 
@@ -31,7 +30,7 @@ from piezolib.workbook.style import db, unit_text
 
 __all__ = ["STATIC_ENV", "interactive_available", "static_figure", "want_widget",
            "import_ipywidgets", "panel_figure", "png_bytes", "magnitude", "curve_db",
-           "apply_unit_text_to", "REST_S", "LivePanel", "redrawn", "panel_box", "log_slider",
+           "apply_unit_text_to", "REST_S", "LivePanel", "complete_view", "redrawn", "panel_box", "log_slider",
            "linear_slider", "finish"]
 
 #: MIME type of a widget view in a notebook output.
@@ -178,11 +177,11 @@ class LivePanel:
     worker thread computes and draws the latest values when it is free, so
     a burst of key presses costs one or two frames, not one per press.  A
     frame repaints only the plot's moving artists over a picture of the rest
-    taken once (blitting), and a callback that yields several views (a quick
-    one, then the complete one) has each drawn in turn, unless a newer value
-    is waiting by then; the next view is computed once no new value has come
-    for :data:`REST_S` (while the keys are pressed the quick view follows them,
-    and the slow one is not computed for values already left).
+    taken once (blitting), and a callback in stages (a quick view, then the
+    complete one) has each drawn in turn, unless a newer value is waiting by
+    then; a later stage starts once no new value has come for :data:`REST_S`
+    (while the keys are pressed the quick view follows them, and the slow one
+    is not computed for values already left).
 
     Parameters
     ----------
@@ -191,8 +190,9 @@ class LivePanel:
     sliders : dict
         {name: slider}; their values go to ``compute`` as {name: float}.
     compute : callable
-        ``compute(values)`` returns a view, or yields views of increasing
-        completeness.
+        ``compute(values)`` returns a view, or a list of stages, functions
+        that make the next view from the one before (the first gets None):
+        a quick view first, the complete one last (:func:`complete_view`).
     plot : callable
         ``plot(view, fig)`` returns a plot of ``view`` drawn into ``fig``
         (None: a new figure), an object with ``figure``, ``moving`` (the
@@ -247,15 +247,17 @@ class LivePanel:
 
     def _render(self, values, superseded):
         try:
-            views = self.compute(values)
-            staged = inspect.isgenerator(views)
-            for view in views if staged else [views]:
+            result = self.compute(values)
+            stages = result if isinstance(result, list) else [lambda _: result]
+            view = None
+            for k, stage in enumerate(stages):
+                # a later stage is the slow one: it starts once the slider rests
+                if k and superseded(within=self.rest_s):
+                    return
+                view = stage(view)
                 if superseded():
                     return
                 self._show(view)
-                # the next stage is the slow one: it starts once the slider rests
-                if staged and superseded(within=self.rest_s):
-                    return
         # a widget callback's exception only reaches the kernel log, which nobody
         # watches: say what went wrong under the figure and keep the last one
         except Exception as exc:        # noqa: BLE001
@@ -316,6 +318,14 @@ class LivePanel:
         summary = html.unescape(self.summary.value) or "no figure drawn yet"
         bundle["text/plain"] = f"interactive control (figure for the values shown): {summary}"
         return bundle
+
+
+def complete_view(stages):
+    """The last view of a :class:`LivePanel` callback's ``stages`` (each run in turn)."""
+    view = None
+    for stage in stages:
+        view = stage(view)
+    return view
 
 
 class _Redrawn:

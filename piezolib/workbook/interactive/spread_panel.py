@@ -22,9 +22,10 @@ from piezolib import uncertainty as unc
 from piezolib._checks import (check_frequency_grid, check_integer, check_positive, check_siso,
                               check_type)
 from piezolib.robust.lti import frequency_grid
-from piezolib.workbook.interactive._panel import (LivePanel, apply_unit_text_to, curve_db, finish,
-                                                  import_ipywidgets, linear_slider, magnitude,
-                                                  panel_figure, static_figure, want_widget)
+from piezolib.workbook.interactive._panel import (LivePanel, apply_unit_text_to, complete_view,
+                                                  curve_db, finish, import_ipywidgets,
+                                                  linear_slider, magnitude, panel_figure,
+                                                  static_figure, want_widget)
 from piezolib.workbook.style import PALETTE, STYLE, apply_unit_text, unit_text
 
 __all__ = ["SpreadView", "spread_view", "spread_view_from", "draw_spread", "spread_control"]
@@ -323,23 +324,20 @@ def spread_control(G, H_m, omega=None, spread=paper.UNCERTAINTY_SPREAD, *, level
             raise ValueError("start was computed on another grid than omega: pass the grid "
                              "of its cover (or omega=None)")
 
-    def views_of(value):
-        """The views of one spread: ``start`` for its own, else the envelope, then with its
-        fitted weight (the fit takes the longest: the set is shown before it)."""
+    def stages_of(value):
+        """The stages of one spread's view: ``start`` for its own, else the envelope, then
+        with its fitted weight (the fit takes the longest: the set is shown before it)."""
         if start is not None and np.isclose(value, start.spread):
-            yield start
-            return
-        view = _envelope_view(G, value, omega, levels)
-        yield view
-        yield _with_weight(view)
+            return [lambda _: start]
+        return [lambda _: _envelope_view(G, value, omega, levels), _with_weight]
 
     if not want_widget(interactive):
-        return static_figure(draw_spread(list(views_of(spread))[-1], H_m))
+        return static_figure(draw_spread(complete_view(stages_of(spread)), H_m))
     w = import_ipywidgets()
     slider = linear_slider(w, "spread", 100 * spread, 0.5, 10.0, 0.1,
                            description="spread +- [%]")
     slider.description = unit_text(slider.description)
-    panel = LivePanel(w, {"spread": slider}, lambda values: views_of(values["spread"] / 100),
+    panel = LivePanel(w, {"spread": slider}, lambda values: stages_of(values["spread"] / 100),
                       lambda view, fig: _SpreadPlot(view, H_m, fig),
                       lambda view: _spread_summary(view, H_m))
     return finish(panel, panel.box())

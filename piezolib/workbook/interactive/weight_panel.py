@@ -471,9 +471,8 @@ def weight_design_control(G, H_m, K, params=None, omega=None, *, design_options=
         K_now = controllers[label]
         if label not in curves:
             curves[label] = _loop_curves(G, K_now, grid)
-        view = _curves_view(values, grid, label, curves[label])
-        yield view
-        yield _with_analysis(view, G, H_m, K_now)
+        return [lambda _: _curves_view(values, grid, label, curves[label]),
+                lambda view: _with_analysis(view, G, H_m, K_now)]
 
     panel = LivePanel(w, sliders, compute, _WeightPlot, _weight_summary)
     menu.observe(panel.refresh, names="value")

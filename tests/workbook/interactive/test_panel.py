@@ -208,11 +208,13 @@ def test_the_slow_stage_waits_until_the_slider_rests(widgets):
     sliders = {"a": _panel.linear_slider(widgets, "a", 1.0, 0.0, 3.0, 0.1)}
     slow = []
 
-    def compute(values):
-        yield ("quick", values["a"])
-        slow.append(values["a"])
+    def complete(view):
+        slow.append(view[1])
         time.sleep(0.05)
-        yield ("complete", values["a"])
+        return ("complete", view[1])
+
+    def compute(values):
+        return [lambda _: ("quick", values["a"]), complete]
 
     panel = _panel.LivePanel(widgets, sliders, compute, _LinePlot, str)
     _panel.finish(panel, panel.box())
