@@ -26,6 +26,7 @@ _EDGE_POINTS = 7        # interior points per edge of the box
 _MAX_COEFFICIENTS = 12  # 2^n vertices and n 2^(n-1) edges: bounded before any work
 _MAX_SAMPLE = 100_000   # random interior members
 _MAX_DELAY = 1000       # samples of delay (the loop's polynomial grows with it)
+_MAX_RESTARTS = 8       # bisections restarted below a member the local search destabilised
 
 
 @dataclass(frozen=True)
@@ -226,7 +227,7 @@ def sampled_parametric_margin(G, Kd, delay_samples=1, *, spread_max=0.5, rtol=1e
         return SampledMargin(spread_max, np.nan, np.zeros(n), np.nan, np.nan, d,
                              corners.shape[0] + samples, np.nan, True, False)
     low, high, critical = 0.0, spread_max, top
-    while True:
+    for attempt in range(_MAX_RESTARTS):
         while high - low > rtol * high:
             mid = 0.5 * (low + high)
             found = unstable(mid)
@@ -236,7 +237,8 @@ def sampled_parametric_margin(G, Kd, delay_samples=1, *, spread_max=0.5, rtol=1e
                 high, critical = mid, found
         # the local search from the most unstable member at the bracket's stable end;
         # a member it destabilises there moves the bracket down
-        found = unstable(low, refine=True) if low > 0 else None
+        last = attempt == _MAX_RESTARTS - 1
+        found = unstable(low, refine=True) if low > 0 and not last else None
         if found is None:
             break
         low, high, critical = 0.0, low, found

@@ -91,8 +91,14 @@ def test_the_chosen_design_is_checked_and_claimed(chosen):
     assert list(chosen.box.columns) == [box.DEPLOYED, box.MIXED]
     assert chosen.table()["mu_RS upper, exact delay"] <= 0.05 / chosen.margin(1) * (1 + 1e-3)
     claims = box.mixed_claims(chosen, TRACKING)
-    assert len(claims) == 11
-    assert claims[1]["quantity"] == "mixed-mu K: unstable of 27, sampled loop, delay 0"
+    assert len(claims) == 15
+    # the sampled loop's margin leads, the continuous stand-in is named for what it is
+    assert claims[0]["quantity"] == "mixed-mu K: sampled-loop parametric margin, delay 0"
+    assert claims[0]["ours"] == chosen.sampled_margin(0) == chosen.sampled[box.MIXED][0].spread
+    assert claims[1]["quantity"] == "mixed-mu K: continuous stand-in margin, delay 0"
+    assert claims[2]["quantity"] == "mixed-mu K: unstable of 27, sampled loop, delay 0"
+    assert chosen.box.loc["sampled-loop margin, delay 1 [%]", box.MIXED] == pytest.approx(
+        100 * chosen.sampled_margin(1))
     assert claims[-2]["ours"] == 0.8 and claims[-1]["ours"] == 2.5     # the mixed-mu K row
 
 
