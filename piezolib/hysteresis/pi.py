@@ -32,9 +32,10 @@ __all__ = ["PI_STARTS", "MAX_PLAYS", "PIModel", "PIFit", "play_outputs", "fit_pi
 #: play centred on it (y_i = v_0), "maximum" as if raised to it (y_i = v_0 - r_i, the
 #: ascending branch: a record cut at an input maximum).
 PI_STARTS = ("rest", "virgin", "maximum")
-#: Most play operators of a fit: its regressor holds one column per play and sample (1000
-#: plays of a 100,000-sample record: 0.8 GB).
-MAX_PLAYS = 1000
+#: Most play operators of a fit: its regressor holds one column per play and sample, and
+#: the fit's time grows faster than the plays (a 20,000-sample loop: 1000 plays 6 min and
+#: 1.1 GB, 100 plays 22 s, on a shared 2-core machine, ``benchmarks/bench_size_limits.py``).
+MAX_PLAYS = 100
 
 
 def play_outputs(v, thresholds, y0):

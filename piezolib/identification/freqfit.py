@@ -58,8 +58,9 @@ __all__ = ["fit_frf", "frf_error", "select_order", "OrderSelection", "simulate_d
 #: Largest pole radius the fitted model may have.
 MAX_POLE_RADIUS = 0.9995
 #: Most block rows of the subspace step: its block-Hankel matrix has n_rows (n_y + n_u) rows
-#: and F n_u columns (400 rows of a 3 x 3 FRF on 2000 lines: about 0.2 GB, seconds).
-MAX_ROWS = 400
+#: and F n_u columns (a 3 x 3 FRF on 2000 lines: 400 rows 93 s and 0.9 GB, 100 rows 32 s
+#: and 0.2 GB on a shared 2-core machine, ``benchmarks/bench_size_limits.py``).
+MAX_ROWS = 100
 
 
 def _check_frf(G, frequency_Hz, fs, name="G"):

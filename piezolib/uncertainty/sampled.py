@@ -29,8 +29,10 @@ __all__ = ["random_model_set", "member_zoh_coefficients", "sampled_loop_poles",
 #: Most members of a random model set (its offsets take 8 n bytes a member, and every
 #: analysis of the set loops over the members).
 MAX_MEMBERS = 1_000_000
-#: Most samples of computation delay of a sampled loop (its matrix grows by one per sample).
-MAX_DELAY_SAMPLES = 1_000
+#: Most samples of computation delay of a sampled loop: its matrix grows by a state per
+#: sample and its eigenvalues cost the cube (1000 samples: 74 s for two members here,
+#: ``benchmarks/bench_size_limits.py``).
+MAX_DELAY_SAMPLES = 100
 
 
 def random_model_set(G, spread, count, seed=0):
