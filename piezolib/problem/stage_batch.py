@@ -262,7 +262,7 @@ class StageBatch:
         u = check_finite_array("u_c", u_c, ndim=1, min_length=1, real=True)
         n = len(u)
         t = np.arange(n) / self.fs
-        records, fronts, truths = [], {}, {}
+        records, fronts, truths, draws = [], {}, {}, {}
         for st in self.stages:
             # the hysteresis is shared by members that differ only in the plant (a model set)
             front_key, plant_key = self._truth_key(st)
@@ -273,7 +273,9 @@ class StageBatch:
                 truths[front_key, plant_key] = st._plant_output(v_h)
             y = truths[front_key, plant_key]
             # the arithmetic of VirtualStage.run, member by member
-            noise = st.noise_rms * np.random.default_rng(st.seed).standard_normal(n)
+            if st.seed not in draws:        # members of a model set share the stage's seed
+                draws[st.seed] = np.random.default_rng(st.seed).standard_normal(n)
+            noise = st.noise_rms * draws[st.seed]
             analog = y + noise
             v_y = st.adc.convert(analog)
             sat_adc = Saturation.of("ADC", st.adc.limits, analog)
@@ -351,7 +353,12 @@ class StageBatchSimulation:
             raise TypeError(f"batch must be a StageBatch, got {type(batch).__name__}")
         self._batch = bt = batch
         n = bt.size
-        self._rngs = [np.random.default_rng(st.seed) for st in bt.stages]
+        # one generator per distinct seed: members of a model set share the stage's seed,
+        # and each of their streams is that seed's stream (drawn once, scaled per member)
+        seeds = [st.seed for st in bt.stages]
+        self._rngs = {seed: np.random.default_rng(seed) for seed in dict.fromkeys(seeds)}
+        self._member_stream = [list(self._rngs).index(seed) for seed in seeds]
+        self._noise_rms = np.array([st.noise_rms for st in bt.stages])
         # states and coefficients are held transposed, (order or n_plays, N): row j is
         # one state of every member.  Constants are 0-d arrays: a ufunc takes them
         # faster than Python floats, with the same values.
@@ -391,10 +398,10 @@ class StageBatchSimulation:
 
     def _new_block(self):
         bt = self._batch
-        noise = np.empty((self._BLOCK, bt.size))
-        for i, (rng, st) in enumerate(zip(self._rngs, bt.stages)):
-            noise[:, i] = st.noise_rms * rng.standard_normal(self._BLOCK)
-        self._noise = noise
+        draws = np.stack([rng.standard_normal(self._BLOCK) for rng in self._rngs.values()],
+                         axis=1)
+        # member i: noise_rms_i * its seed's draws, the product StageSimulation forms
+        self._noise = self._noise_rms * draws[:, self._member_stream]
         self._log = np.empty((len(self._SIGNALS), self._BLOCK, bt.size))
         self._blocks.append(self._log)
 
