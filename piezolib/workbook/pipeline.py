@@ -449,7 +449,7 @@ def study_controllers(study, cache=True):
                 "controllers --write-reference`")
         return found
     path = reference_design_path()
-    if path.is_file() and read_controllers(path).digest == design_digest(study):
+    if _has_reference_design(study):
         # the reference's design choices: its committed controllers, so
         # that the study differs from the reference only by what it changes
         found = read_controllers(path)
@@ -457,6 +457,13 @@ def study_controllers(study, cache=True):
         found = derive_controllers(study, cache=cache)
     write_controllers(found, study.output_dir / "artifacts" / "controllers.json", study)
     return found
+
+
+def _has_reference_design(study):
+    """Whether ``study`` makes the reference's design choices (its committed controllers
+    and mixed designs then serve it)."""
+    path = reference_design_path()
+    return path.is_file() and read_controllers(path).digest == design_digest(study)
 
 
 def write_reference_design(cache=False):
@@ -805,10 +812,13 @@ def read_mixed_designs(path):
 
 
 def study_mixed_designs(study):
-    """The mixed-mu designs of ``study``: committed for the reference, else designed (minutes)
-    and written to ``runs/<study>/artifacts/mixed_design.json``, which later calls read."""
+    """The mixed-mu designs of ``study``: committed for the reference, and for any study with
+    the reference's design choices (same :func:`design_digest`: the designs depend on the
+    plant, the weights, the deployed controller and the loop rate only, the box being the
+    paper's); else designed (minutes) and written to
+    ``runs/<study>/artifacts/mixed_design.json``, which later calls read."""
     study = studies.load(study)
-    if study.is_reference:
+    if study.is_reference or _has_reference_design(study):
         path = mixed_design_path()
         if not path.is_file():
             raise ArtifactError(f"{path} is missing: run `{_WRITE_REFERENCE}`")
@@ -843,6 +853,6 @@ def study_mixed_sections(study):
         None when no design of the study is certified for the box.
     """
     study = studies.load(study)
-    if study.is_reference:
-        return _committed_sections(study, MIXED_SECTIONS_FILE)
+    if study.is_reference or _has_reference_design(study):
+        return _committed_sections(studies.load(studies.REFERENCE), MIXED_SECTIONS_FILE)
     return _export_mixed_sections(study, study_mixed_designs(study))

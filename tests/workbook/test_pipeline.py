@@ -129,6 +129,24 @@ def test_a_study_with_the_reference_design_choices_uses_the_committed_controller
     assert (tmp_path / "spread" / "artifacts" / "controllers.json").is_file()
 
 
+def test_a_study_with_the_reference_design_choices_uses_the_committed_mixed_designs(
+        tmp_path, monkeypatch):
+    # the mixed designs depend on the plant, weights, deployed K and loop rate, not on the
+    # study's uncertainty: a changed spread must not re-run nine D,G-K searches
+    monkeypatch.setattr(pipeline, "derive_mixed_designs",
+                        lambda *a, **k: pytest.fail("re-designed the mixed controllers"))
+    monkeypatch.setattr(study.Study, "output_dir", property(lambda s: tmp_path / s.name))
+    spread = study.Study().replace(name="spread", uncertainty={"spread": 0.03})
+    found, committed = pipeline.study_mixed_designs(spread), pipeline.study_mixed_designs(
+        "reference")
+    assert [d.mu_peak for d in found.designs] == [d.mu_peak for d in committed.designs]
+    assert np.array_equal(pipeline.study_mixed_sections(spread).sos,
+                          pipeline.study_mixed_sections("reference").sos)
+    other = study.Study().replace(name="wide", weights={"M_e": 3.0})
+    with pytest.raises(pytest.fail.Exception, match="re-designed"):
+        pipeline.study_mixed_designs(other)
+
+
 def test_reference_sections_are_the_committed_exports(tmp_path, monkeypatch):
     from piezolib.robust import export
 
