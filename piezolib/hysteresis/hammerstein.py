@@ -16,7 +16,9 @@ weights are one bounded linear least-squares problem, as in
 fit alternates: the weights for fixed dynamics (bounded least squares on
 the play outputs filtered by G), then the dynamics for fixed weights by
 Steiglitz-McBride passes (an output-error fit of B/A from p to x), until the
-residual stops falling.
+residual stops falling; Gauss-Newton steps on the output error itself (the
+weights projected out) then finish the dynamics where the alternation stops
+short.
 """
 
 import math
@@ -120,8 +122,8 @@ class HammersteinModel:
     >>> x = true.simulate(v)
     >>> x[:4].round(4)                          # the PI output delayed and smoothed
     array([0.  , 0.  , 0.1 , 0.25])
-    >>> true.dynamics.dt, float(ct.dcgain(true.dynamics))
-    (0.01, 1.0)
+    >>> true.dynamics.dt, float(ct.dcgain(true.dynamics)), true.static_part
+    (0.01, 1.0, (1.5, 0.0))
     """
 
     hysteresis: PIModel
@@ -163,6 +165,11 @@ class HammersteinModel:
         h = self.hysteresis
         p = h.simulate(v) - h.x0
         return h.x0 + _filter_at_rest(np.asarray(self.b), np.asarray(self.a), p)
+
+    @property
+    def static_part(self):
+        """(W, x0) of the hysteresis part (:attr:`PIModel.static_part`): G has unit DC gain."""
+        return self.hysteresis.static_part
 
     def feedforward(self, x_r):
         """Quasi-static feedforward [v-unit]: the PI model's exact inverse of ``x_r``.
@@ -253,6 +260,20 @@ def _compressed(A, rhs):
         return R, Q.T @ rhs
 
 
+def _lstsq(M, rhs):
+    """Least-squares solution of M t = rhs through the normal equations (:func:`_compressed`).
+
+    M has few columns and many rows (a record): the Cholesky route costs a
+    tenth of an SVD-based solve.  It squares M's condition number, so it
+    serves for search directions that a line search then checks.
+    """
+    R, y = _compressed(M, rhs)
+    try:
+        return sla.solve_triangular(R, y)
+    except (np.linalg.LinAlgError, ValueError):
+        return np.linalg.lstsq(M, rhs, rcond=None)[0]
+
+
 def _dynamics_step(data, regs, w, x0, b, a, na, nb, nk, passes=3):
     """Steiglitz-McBride passes for B/A from p = Y w to x - x0, from the current A."""
     for _ in range(passes):
@@ -308,7 +329,7 @@ def _quasi_static_rows(data):
     return out
 
 
-def _alternate(data, regs, theta, offset, n, na, nb, delay, iterations, tol):
+def _alternate(data, regs, theta, offset, n, na, nb, delay, iterations, tol, polish=False):
     """Dynamics (Steiglitz-McBride) and weights (bounded LS) in turn from the weights ``theta``."""
     b, a = np.r_[np.zeros(delay), 1.0], np.array([1.0])
     A, rhs, theta = _weights_step(data, regs, b, a, offset, n) if theta is None else \
@@ -326,7 +347,83 @@ def _alternate(data, regs, theta, offset, n, na, nb, delay, iterations, tol):
         best = (b1, a1, A1, rhs1, theta1, cost1)
         if done:
             break
+    if polish:
+        best = _polish(data, regs, best[0], best[1], offset, n, delay, tol=tol)
     return (*best, k)
+
+
+def _shifted(z, j):
+    """z delayed by j samples (zeros first)."""
+    return np.r_[np.zeros(j), z[:z.size - j]]
+
+
+def _dynamics_jacobian(data, regs, w, b, a, delay):
+    """d(weighted residual) / d(free dynamics coefficients) on the used rows.
+
+    The free coefficients are a_1..a_na and the terms of b after its first
+    (b_delay = A(1) - the others: unit DC gain).  For s = B/A [p - p_0]:
+    ds/da_i = -q^-i s / A, ds/db_j = q^-j (p - p_0) / A, and b_delay moves
+    with each of them through the unit-gain constraint.
+    """
+    na, nbt = len(a) - 1, len(b) - delay
+    rows = []
+    for (v, x, used), (Y, weight) in zip(data, regs):
+        d = Y @ w
+        d = d - d[0]
+        sf = sg.lfilter([1.0], a, sg.lfilter(b, a, d))
+        df = sg.lfilter([1.0], a, d)
+        base = _shifted(df, delay)
+        cols = [base - _shifted(sf, i) for i in range(1, na + 1)]
+        cols += [_shifted(df, delay + j) - base for j in range(1, nbt)]
+        rows.append(weight * np.column_stack(cols)[used])
+    return np.vstack(rows)
+
+
+def _polish(data, regs, b, a, offset, n, delay, iterations=20, tol=1e-6):
+    """Dynamics refined on the output error itself by Gauss-Newton steps, weights projected out.
+
+    The alternation of :func:`_alternate` descends one block at a time, and
+    a Steiglitz-McBride pass minimises a filtered equation error, not the
+    output error: near the optimum its step can raise the output error, and
+    the alternation then stops short (on a Preisach record at 20 kHz:
+    0.408 % of stroke against 0.307 % with the true dynamics).  Here each
+    step solves the linearised output error for the dynamics and the free
+    weights together (variable projection), then the weights exactly for the
+    new dynamics (bounded least squares), halving the step until the
+    residual falls and the dynamics stay stable.  Returns (b, a, A, rhs,
+    theta, cost) as the alternation does.
+    """
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    na = a.size - 1
+    if na + b.size - delay - 1 == 0:
+        return (b, a, *_solved_with_cost(data, regs, b, a, offset, n))
+    A, rhs, theta, cost = _solved_with_cost(data, regs, b, a, offset, n)
+    for _ in range(iterations):
+        J = _dynamics_jacobian(data, regs, theta[:n], b, a, delay)
+        free = np.r_[theta[:n] > 0, [True] if offset else []].astype(bool)
+        step = -_lstsq(np.hstack([A[:, free], J]), A @ theta - rhs)[-J.shape[1]:]
+        p = np.r_[a[1:], b[delay + 1:]]
+        for lam in 0.5 ** np.arange(6):
+            a1 = np.r_[1.0, (p + lam * step)[:na]]
+            tail = (p + lam * step)[na:]
+            b1 = np.r_[np.zeros(delay), a1.sum() - tail.sum(), tail]
+            if na and np.any(np.abs(np.roots(a1)) >= 1):
+                continue
+            trial = _solved_with_cost(data, regs, b1, a1, offset, n)
+            if trial[3] < cost:
+                break
+        else:
+            break                               # no step lowers the residual: at the optimum
+        done = cost - trial[3] <= tol * cost
+        b, a, (A, rhs, theta, cost) = b1, a1, trial
+        if done:
+            break
+    return b, a, A, rhs, theta, cost
+
+
+def _solved_with_cost(data, regs, b, a, offset, n):
+    A, rhs, theta = _weights_step(data, regs, b, a, offset, n)
+    return A, rhs, theta, _cost(A, rhs, theta)
 
 
 def _held_out_percent(data, regs, theta, offset, b, a, first):
@@ -386,7 +483,11 @@ def fit_hammerstein(loops, fs, order="auto", n_plays=10, dynamics=None, delay=1,
     a PI fit through a delay of ``delay`` samples on every sample but the
     ringing after input jumps.  From them the fit alternates the dynamics
     (Steiglitz-McBride passes from p to x) and the weights (bounded least
-    squares through the dynamics) until the residual stops falling.  With
+    squares through the dynamics) until the residual stops falling, and
+    Gauss-Newton steps on the output error (dynamics and free weights
+    linearised together, the weights then solved exactly) finish the final
+    fit: a Steiglitz-McBride pass minimises an equation error, and near the
+    optimum its step can raise the output error.  With
     ``order="auto"`` each of :data:`AUTO_ORDERS` is fitted to the samples
     before each record's middle turning point and scored on those after it;
     of the orders within 5 % of the best score, the one with the smallest
@@ -505,7 +606,7 @@ def fit_hammerstein(loops, fs, order="auto", n_plays=10, dynamics=None, delay=1,
             chosen, order_scores = _choose_order(data, r, start, offset, delay, orders,
                                                  iterations, tol)
         b, a, A, rhs, theta, cost, k = _alternate(data, regs, first[start][2], offset, r.size,
-                                                  *chosen, delay, iterations, tol)
+                                                  *chosen, delay, iterations, tol, polish=True)
     x0 = float(theta[-1]) if offset else 0.0
     w = theta[:r.size].copy()
     w[w <= 1e-12 * float(np.sum(w))] = 0.0
