@@ -111,7 +111,9 @@ MATRIX_STACK = {"nan": np.where(np.eye(3) == 1, np.nan, M3), "empty": np.zeros((
 CASES = {
     # robust
     "robust.frequency_grid": (dict(omega_min=1.0, omega_max=10.0, n=20),
-                              {"omega_min": POSITIVE, "omega_max": POSITIVE}),
+                              {"omega_min": POSITIVE, "omega_max": POSITIVE,
+                               "n": {"zero": 0, "one point": 1, "fraction": 20.5, "text": "x",
+                                     "too many": 10 ** 9}}),
     "robust.balance": (dict(sys=G), {"sys": {k: v for k, v in LTI.items() if k != "discrete"}}),  # any dt
     "robust.realize": (dict(sys=G), {"sys": LTI}),
     "robust.scale_time": (dict(sys=G, omega_s=10.0), {"sys": LTI, "omega_s": POSITIVE}),

@@ -14,8 +14,9 @@ import numpy as np
 import scipy.linalg as la
 import scipy.optimize as opt
 
-from piezolib._checks import (check_continuous, check_finite_array, check_finite_lti,
-                              check_model, check_positive, check_proper, check_siso)
+from piezolib._checks import (check_continuous, check_count, check_finite_array,
+                              check_finite_lti, check_model, check_positive, check_proper,
+                              check_siso)
 
 __all__ = [
     "frequency_grid", "scaled_coefficients", "scale_time", "balance",
@@ -37,8 +38,19 @@ True
 """
 
 
+#: Most points of a :func:`frequency_grid` (80 MB of float64).
+_MAX_GRID_POINTS = 10_000_000
+
+
 def frequency_grid(omega_min=1.0, omega_max=1e6, n=2000):
     """Logarithmic frequency grid in rad/s (explicit grids keep runs repeatable).
+
+    Parameters
+    ----------
+    omega_min, omega_max : float
+        First and last frequency [rad/s], 0 < omega_min < omega_max.
+    n : int
+        Number of points, 2 to 10,000,000.
 
     Examples
     --------
@@ -49,7 +61,9 @@ def frequency_grid(omega_min=1.0, omega_max=1e6, n=2000):
     omega_max = check_positive("omega_max", omega_max)
     if omega_max <= omega_min:
         raise ValueError(f"omega_max ({omega_max}) must exceed omega_min ({omega_min})")
-    return np.logspace(np.log10(omega_min), np.log10(omega_max), int(n))
+    # int(n) took 2.5 as 2 and 0 or 1 as a grid that spans nothing
+    n = check_count("n", n, maximum=_MAX_GRID_POINTS, minimum=2)
+    return np.logspace(np.log10(omega_min), np.log10(omega_max), n)
 
 
 def scaled_coefficients(num, den, omega_s):
