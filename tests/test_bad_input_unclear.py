@@ -164,6 +164,14 @@ def test_a_latin_1_study_file_is_named(tmp_path):
         study.load(path)
 
 
+def test_a_latin_1_sweep_file_is_named(tmp_path):
+    from piezolib.workbook import sweep_spec
+    path = tmp_path / "x.toml"
+    path.write_bytes('[grid]\n# café\n"design.order" = [4]\n'.encode("latin-1"))
+    with pytest.raises(ValueError, match=rf"{path}: not UTF-8 text"):
+        sweep_spec.load_spec(path)
+
+
 def test_fit_pi_bounds_the_plays_before_any_work():
     from piezolib.hysteresis import fit_pi
     v = np.r_[np.linspace(0, 4, 21), np.linspace(3.8, 0, 20)]

@@ -254,6 +254,9 @@ def load_spec(spec):
         raise SweepError(f"spec: sweep file {path} does not exist")
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except UnicodeDecodeError as exc:       # e.g. saved as latin-1: TOML files are UTF-8
+        raise SweepError(f"{path}: not UTF-8 text (byte {exc.start}: {exc.reason}); save "
+                         "the sweep file as UTF-8") from None
     except tomllib.TOMLDecodeError as exc:
         raise SweepError(f"{path}: not valid TOML ({exc})") from None
     if isinstance(data.get("name"), str) and data["name"] != path.stem:
