@@ -199,15 +199,10 @@ def main(argv=None):
     unknown = [p for p in args.prefixes if p not in SLIDERS]
     if unknown:
         raise SystemExit(f"no slider is known for notebooks {unknown}; known: {sorted(SLIDERS)}")
-    chromium = args.chromium or lab.find_chromium()
-    if chromium is None:
-        print("needs Chromium on the PATH (Debian: apt-get install chromium) or --chromium PATH")
+    tools = lab.browser_tools(args.chromium)
+    if tools is None:
         return 2
-    try:
-        from playwright.sync_api import sync_playwright
-    except ImportError:
-        print("needs the playwright client: pip install playwright==1.65.2")
-        return 2
+    chromium, sync_playwright = tools
     home = Path(tempfile.mkdtemp(prefix="bench_sliders_"))
     root = (checkout_at(args.at, home / "checkout") if args.at
             else lab.copy_checkout(home / "checkout"))
@@ -227,11 +222,7 @@ def main(argv=None):
                 print(line, flush=True)
             browser.close()
     finally:
-        jupyter.terminate()
-        try:
-            jupyter.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            jupyter.kill()
+        lab.stop_lab(jupyter)
         shutil.rmtree(home, ignore_errors=True)
     return 0
 

@@ -142,6 +142,30 @@ def start_lab(root, home, port, token):
     raise RuntimeError(f"JupyterLab did not answer within 120 s; see {log.name}")
 
 
+def stop_lab(process):
+    """Stop the JupyterLab ``process`` (killed if it does not end within 30 s)."""
+    process.terminate()
+    try:
+        process.wait(timeout=30)
+    except subprocess.TimeoutExpired:
+        process.kill()
+
+
+def browser_tools(chromium=None):
+    """(Chromium's path, playwright's ``sync_playwright``), or None after saying what is
+    missing; ``chromium`` overrides the browser found on the PATH."""
+    chromium = chromium or find_chromium()     # the report's --pdf looks it up the same way
+    if chromium is None:
+        print("needs Chromium on the PATH (Debian: apt-get install chromium) or --chromium PATH")
+        return None
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        print("needs the playwright client: pip install playwright==1.65.2 (see the docstring)")
+        return None
+    return chromium, sync_playwright
+
+
 def run_all_cells(page):
     """Run > Run All Cells, from the menu as a person would."""
     page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click()
@@ -283,15 +307,10 @@ def main(argv=None):
                         help="seconds one notebook may take (default 900)")
     parser.add_argument("--keep", action="store_true", help="keep the temporary copy")
     args = parser.parse_args(argv)
-    chromium = args.chromium or find_chromium()     # the report's --pdf looks it up the same way
-    if chromium is None:
-        print("needs Chromium on the PATH (Debian: apt-get install chromium) or --chromium PATH")
+    tools = browser_tools(args.chromium)
+    if tools is None:
         return 2
-    try:
-        from playwright.sync_api import sync_playwright
-    except ImportError:
-        print("needs the playwright client: pip install playwright (see the docstring)")
-        return 2
+    chromium, sync_playwright = tools
     home = Path(tempfile.mkdtemp(prefix="check_jupyterlab_"))
     root = copy_checkout(home / "checkout")
     names = notebook_names(root, args.prefixes)
@@ -316,11 +335,7 @@ def main(argv=None):
                 ok &= good
             browser.close()
     finally:
-        lab.terminate()
-        try:
-            lab.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            lab.kill()
+        stop_lab(lab)
         if args.keep:
             print(f"kept {home} (JupyterLab's log: jupyterlab.log)")
         else:
