@@ -445,7 +445,7 @@ CASES = {
                                    {"loops": LOOPS, "fs": POSITIVE,
                                     "order": {"text": "x", "one number": 3, "zero": (0, 2),
                                               "negative": (2, -1)},
-                                    "n_plays": {"zero": 0, "text": "x"},
+                                    "n_plays": {"zero": 0, "text": "x", "too many": 10 ** 6},
                                     "dynamics": {"text": "abc", "unstable": ct.tf([1.0], [1.0, -1.0]),
                                                  "another rate": ct.tf([1.0], [1.0, -0.5], 2 / FS)},
                                     "delay": {"negative": -1, "text": "x"},

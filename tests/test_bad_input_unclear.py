@@ -177,3 +177,21 @@ def test_fit_pi_bounds_the_plays_before_any_work():
     v = np.r_[np.linspace(0, 4, 21), np.linspace(3.8, 0, 20)]
     with pytest.raises(ValueError, match="n_plays must be at most 100 "):
         fit_pi((v, v), n_plays=10 ** 7)
+
+
+def test_fit_hammerstein_bounds_the_plays_before_any_work():
+    from piezolib.hysteresis import fit_hammerstein
+    v = np.r_[np.linspace(0, 4, 21), np.linspace(3.8, 0, 20)]
+    with pytest.raises(ValueError, match="n_plays must be at most 100 "):
+        fit_hammerstein((v, v), fs=100.0, order=(1, 1), n_plays=10 ** 6)
+    with pytest.raises(ValueError, match="thresholds must hold at most 100 plays"):
+        fit_hammerstein((v, v), fs=100.0, order=(1, 1), thresholds=np.arange(1000.0))
+
+
+@pytest.mark.parametrize("loops", [lambda v: (v, np.full(v.size, 2.0)),
+                                   lambda v: [(v, v), (v, np.zeros(v.size))]])
+def test_fit_hammerstein_names_a_constant_output(loops):
+    from piezolib.hysteresis import fit_hammerstein
+    v = np.r_[np.linspace(0, 4, 21), np.linspace(3.8, 0, 20)]
+    with pytest.raises(ValueError, match=r"loops\[\d\] x is constant"):
+        fit_hammerstein(loops(v), fs=100.0, order=(1, 1), n_plays=3)

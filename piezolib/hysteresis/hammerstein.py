@@ -31,10 +31,10 @@ import scipy.linalg as sla
 import scipy.optimize as opt
 import scipy.signal as sg
 
-from piezolib._checks import check_finite_array, check_integer, check_positive
+from piezolib._checks import check_count, check_finite_array, check_integer, check_positive
 from piezolib.hysteresis.common import (FitScores, FitWarning, check_loops, covariance,
                                         estimates, loop_errors, warn_about)
-from piezolib.hysteresis.pi import PI_STARTS, PIModel, pi_regressors
+from piezolib.hysteresis.pi import MAX_PLAYS, PI_STARTS, PIModel, pi_regressors
 from piezolib.hysteresis.select import split_record
 from piezolib.identification.continuous import zoh_coefficients
 
@@ -475,6 +475,24 @@ def _dynamics_warnings(b, a, fs, data, slope_loops, slope_model):
     return notes
 
 
+def _check_output_moves(loops, discard):
+    """Refuse a record whose output x is constant, naming x (:func:`check_loops`, which
+    checks the form, would ask for strokes of v)."""
+    single = isinstance(loops, tuple) and len(loops) == 2 and np.ndim(loops[0]) == 1 \
+        and np.size(loops[0]) > 2
+    pairs = [loops] if single else loops if isinstance(loops, (list, tuple)) else ()
+    for i, pair in enumerate(pairs):
+        try:
+            x = np.asarray(pair[1])[discard:]
+        except (TypeError, ValueError, IndexError, KeyError):
+            continue                    # check_loops names what is wrong with the form
+        if x.ndim == 1 and x.size > 1 and np.issubdtype(x.dtype, np.number) \
+                and np.ptp(x) == 0:
+            raise ValueError(f"loops[{i}] x is constant ({x[0]:g}) after discard={discard} "
+                             "samples: a record whose output does not move shows no "
+                             "hysteresis")
+
+
 def fit_hammerstein(loops, fs, order="auto", n_plays=10, dynamics=None, delay=1, offset=True,
                     start="auto", discard=0, thresholds=None, iterations=30, tol=1e-6):
     """Fit a PI operator followed by linear dynamics to records at their full rate.
@@ -557,6 +575,7 @@ def fit_hammerstein(loops, fs, order="auto", n_plays=10, dynamics=None, delay=1,
     (array([1. , 0.3, 0.2]), 0)
     """
     fs = check_positive("fs", fs)
+    _check_output_moves(loops, discard)
     data = check_loops(loops, discard, 1)
     if start != "auto" and start not in PI_STARTS:
         raise ValueError(f"start must be 'auto' or one of {PI_STARTS}, got {start!r}")
@@ -576,10 +595,13 @@ def fit_hammerstein(loops, fs, order="auto", n_plays=10, dynamics=None, delay=1,
         orders = ((check_integer("order[0] (na)", order[0], minimum=1),
                    check_integer("order[1] (nb)", order[1], minimum=1)),)
     if thresholds is None:
-        n_plays = check_integer("n_plays", n_plays, minimum=1)
+        n_plays = check_count("n_plays", n_plays, maximum=MAX_PLAYS,
+                              why="the regressor has a column per play and sample")
         half = max(float(np.ptp(v)) for v, x, used in data) / 2.0
         thresholds = half * np.arange(n_plays) / n_plays
     thresholds = check_finite_array("thresholds", thresholds, ndim=1, min_length=1, real=True)
+    if thresholds.size > MAX_PLAYS:
+        raise ValueError(f"thresholds must hold at most {MAX_PLAYS} plays, got {thresholds.size}")
     r = np.asarray(PIModel(tuple(thresholds), tuple(np.ones(thresholds.size))).thresholds)
     need = 4 * (max((na + nb for na, nb in orders), default=0) + 1)
     if any(v.size < need for v, x, used in data):
