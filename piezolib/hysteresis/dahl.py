@@ -2,8 +2,8 @@
 
 Two forms: ``"printed"`` (eq. 10-12 as printed) and ``"bliman_sorine"`` (the
 sign of the velocity on the state term), both with an optional output offset
-x0 (x = g_a v - H + x0; 0 is eq. 13) and an initial state ("virgin" or
-"rest").  Along each monotone stroke the model is linear in the path length
+x0 (x = g_a v - H + x0; 0 is eq. 13) and an initial state ("virgin",
+"rest" or "maximum").  Along each monotone stroke the model is linear in the path length
 and is integrated exactly (closed-form 2x2 matrix exponential); the implicit
 relation of the voltage-driven model is solved exactly too.  The model is
 unit agnostic.  Its inverse-free feedforward (eq. 14) on a record is
@@ -21,16 +21,20 @@ import numpy as np
 from piezolib._checks import check_finite_array, check_positive, check_same_length
 
 __all__ = [
-    "FORMS", "STARTS", "DahlModel", "DahlResponse", "NotInvertibleError", "strokes",
+    "FORMS", "STARTS", "DAHL_STARTS", "DahlModel", "DahlResponse", "NotInvertibleError", "strokes",
     "dahl_hysteresis", "simulate_dahl", "simulate_dahl_records", "min_stroke_slope",
     "StrokeDynamics", "check_dahl_model", "feedforward",
 ]   # initial_state_of: shared with compensator.py, not part of the API
 
 #: The two model forms: eq. 10 as printed, and the Bliman-Sorine placement.
 FORMS = ("printed", "bliman_sorine")
-#: Initial states: "virgin" z = 0 (moving up), "rest" the state after a long
-#: descending stroke (moving down), i.e. at rest after being lowered.
+#: Initial states of a record that begins with the stage's history: "virgin" z = 0 (moving
+#: up, a freshly powered actuator), "rest" the state after a long descending stroke (moving
+#: down), i.e. at rest after being lowered, or a record cut at an input minimum.
 STARTS = ("virgin", "rest")
+#: Every initial state a record can have: :data:`STARTS` and "maximum", the state after a
+#: long ascending stroke (moving up), i.e. a record cut at an input maximum.
+DAHL_STARTS = STARTS + ("maximum",)
 
 
 #: Largest scale (and inverse of the smallest) of alpha1, alpha2 and the steady
@@ -77,11 +81,13 @@ class DahlModel:
         Output offset [x-unit], x = g_a v - H + x0: the model's displacement
         (sensor) zero, a workbook extension that eq. 13 lacks.  Default 0:
         the paper's model exactly.
-    start : {"virgin", "rest"}, optional
+    start : {"virgin", "rest", "maximum"}, optional
         State every simulation and feedforward starts from unless told
         otherwise (:meth:`initial_state`): "virgin" (default) z = 0, "rest"
         the state reached after a long descending stroke, i.e. at rest after
-        the actuator was lowered.
+        the actuator was lowered (or a record cut at an input minimum),
+        "maximum" the state after a long ascending stroke (a record cut at
+        an input maximum).
 
     Examples
     --------
@@ -117,8 +123,8 @@ class DahlModel:
             object.__setattr__(self, name, float(value))
         if self.form not in FORMS:
             raise ValueError(f"form must be one of {FORMS}, got {self.form!r}")
-        if self.start not in STARTS:
-            raise ValueError(f"start must be one of {STARTS}, got {self.start!r}")
+        if self.start not in DAHL_STARTS:
+            raise ValueError(f"start must be one of {DAHL_STARTS}, got {self.start!r}")
         self._check_range()
 
     def _check_range(self):
@@ -177,10 +183,21 @@ class DahlModel:
         "virgin": z = 0, direction +1.  "rest": z = z_ss of a descending
         stroke, direction -1; in the Bliman-Sorine form H = -b2 gamma_a / a2
         there, in the printed form the common steady state (no loop).
+        "maximum": z = z_ss of an ascending stroke, direction +1 (H = +b2
+        gamma_a / a2 in the Bliman-Sorine form).
+
+        Examples
+        --------
+        >>> m = DahlModel(alpha1=3.0, alpha2=2.0, beta1=0.0, beta2=1.0, gamma_a=0.5, g_a=1.0,
+        ...               form="bliman_sorine", start="maximum")
+        >>> z, s = m.initial_state()
+        >>> z.round(3) + 0.0, s
+        (array([0.25, 0.  ]), 1)
         """
         if self.start == "virgin":
             return np.zeros(2), 1
-        return StrokeDynamics(self).z_ss[-1].copy(), -1
+        s = 1 if self.start == "maximum" else -1
+        return StrokeDynamics(self).z_ss[s].copy(), s
 
     def with_offset(self, x0):
         """The same model with output offset ``x0`` [x-unit] (0: the paper's eq. 13)."""

@@ -15,6 +15,7 @@ Method: ``docs/hysteresis.md``.
 
 import math
 import numbers
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 
@@ -24,7 +25,7 @@ import scipy.optimize as opt
 from piezolib._checks import check_integer, check_positive, check_signals
 from piezolib.hysteresis.common import (FitScores, check_loops, covariance, estimates, loop_errors,
                                         warn_about)
-from piezolib.hysteresis.dahl import (FORMS, STARTS, DahlModel, NotInvertibleError,
+from piezolib.hysteresis.dahl import (DAHL_STARTS, FORMS, DahlModel, NotInvertibleError,
                                       dahl_hysteresis, simulate_dahl, simulate_dahl_records,
                                       strokes)
 from piezolib.progress import postfix, progress
@@ -266,7 +267,7 @@ def check_fit_options(form, offset, start):
     ------
     ValueError
         ``form`` not in :data:`~piezolib.hysteresis.dahl.FORMS` or ``start``
-        not in :data:`~piezolib.hysteresis.dahl.STARTS`.
+        not in :data:`~piezolib.hysteresis.dahl.DAHL_STARTS`.
     TypeError
         ``offset`` not a bool.
 
@@ -283,8 +284,8 @@ def check_fit_options(form, offset, start):
         raise ValueError(f"form must be one of {FORMS}, got {form!r}")
     if not isinstance(offset, (bool, np.bool_)):
         raise TypeError(f"offset must be True or False, got {offset!r}")
-    if start not in STARTS:
-        raise ValueError(f"start must be one of {STARTS}, got {start!r}")
+    if start not in DAHL_STARTS:
+        raise ValueError(f"start must be one of {DAHL_STARTS}, got {start!r}")
     return form, bool(offset), start
 
 
@@ -332,10 +333,14 @@ def fit_dahl(loops, gamma_a, form="bliman_sorine", offset=False, start="virgin",
     offset : bool, optional
         Fit the output offset x0 of :class:`DahlModel` (workbook extension).
         Default False: the paper's eq. 13 exactly (x0 = 0).
-    start : {"virgin", "rest"}, optional
+    start : {"virgin", "rest", "maximum", "auto"}, optional
         The fitted model's ``start``: the state it is in at the first sample
         of every record (default "virgin": z = 0; "rest": after a long
-        descending stroke).
+        descending stroke, as at rest or at a cut at an input minimum;
+        "maximum": after a long ascending stroke, a cut at an input
+        maximum).  "auto" fits from each of
+        :data:`~piezolib.hysteresis.dahl.DAHL_STARTS` and keeps the smallest
+        residual (three fits; the warnings are the kept fit's).
     discard : int, optional
         Samples at the start of each record left out of the residuals (the
         model still runs through them), e.g. one period to skip the virgin
@@ -379,6 +384,9 @@ def fit_dahl(loops, gamma_a, form="bliman_sorine", offset=False, start="virgin",
     >>> bool(fit.pooled_rms_percent < 1e-6)
     True
     """
+    if isinstance(start, str) and start == "auto":
+        return _best_start(loops, gamma_a, form=form, offset=offset, discard=discard,
+                           stride=stride, initial=initial, starts=starts)
     form, offset, start = check_fit_options(form, offset, start)
     gamma_a = check_positive("gamma_a", gamma_a)
     if stride is None:
@@ -442,6 +450,24 @@ def fit_dahl(loops, gamma_a, form="bliman_sorine", offset=False, start="virgin",
                            rms_percent=np.zeros(0), max_percent=np.zeros(0), initial=initial,
                            result=result, offset=offset, parameters=tuple(parameters)),
                    loops, discard)
+
+
+def _best_start(loops, gamma_a, **options):
+    """:func:`fit_dahl` from each start of DAHL_STARTS; the fit of least cost, its warnings."""
+    fits, caught, failure = {}, {}, None
+    for start in DAHL_STARTS:
+        with warnings.catch_warnings(record=True) as caught[start]:
+            warnings.simplefilter("always")
+            try:
+                fits[start] = fit_dahl(loops, gamma_a, start=start, **options)
+            except ValueError as exc:      # no invertible model from this start
+                failure = exc
+    if not fits:
+        raise failure
+    best = min(fits, key=lambda s: fits[s].result.cost)     # ties: the first listed
+    for w in caught[best]:
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return fits[best]
 
 
 def _scored(fit, loops, discard):
