@@ -4,8 +4,9 @@ Clones the checkout's HEAD into a temporary folder (no disk cache, no compiled
 caches: what a fresh clone has), then, in that clone with the current
 environment:
 
-* ``python -m piezolib reproduce``: wall time, CPU time (user + system of every
-  process it starts), each notebook's seconds as ``reproduce`` prints them;
+* ``python -m piezolib reproduce --keep-going``: wall time, CPU time (user + system of
+  every process it starts), each notebook's seconds as ``reproduce`` prints them (a failing
+  notebook is reported and does not hide the others' times);
 * with ``--per-notebook``: then each notebook alone (``reproduce NN --jobs 1``,
   in order, cache kept), its wall and CPU seconds — the CPU figure of one
   notebook is the fair measure on a loaded machine;
@@ -43,13 +44,14 @@ def children_cpu():
 
 
 def timed(argv, cwd, env):
-    """(wall s, CPU s, stdout) of a command run to completion."""
+    """(wall s, CPU s, stdout) of a command run to completion (a failure is reported and
+    its time kept: the others' times still count)."""
     cpu, start = children_cpu(), time.perf_counter()
     done = subprocess.run(argv, cwd=cwd, env=env, capture_output=True, text=True)
     wall = time.perf_counter() - start
     if done.returncode:
-        print(done.stdout[-3000:], done.stderr[-3000:], sep="\n", file=sys.stderr)
-        raise SystemExit(f"{' '.join(argv)} exited with {done.returncode}")
+        print(f"{' '.join(argv[1:])} exited with {done.returncode}:\n{done.stdout[-1500:]}",
+              file=sys.stderr)
     return wall, children_cpu() - cpu, done.stdout
 
 
@@ -95,7 +97,8 @@ def main(argv=None):
         env = environment(clone, folder / "cache")
         print(f"fresh clone of {ROOT} in {clone}; load average {os.getloadavg()[0]:.2f} "
               f"on {os.cpu_count()} cores")
-        wall, cpu, out = timed([sys.executable, "-m", "piezolib", "reproduce"], clone, env)
+        wall, cpu, out = timed([sys.executable, "-m", "piezolib", "reproduce", "--keep-going"],
+                               clone, env)
         lines = notebook_lines(out)
         print(f"\n{'step':<44s} {'wall [s]':>9s}")
         for name, (seconds, status) in lines.items():
