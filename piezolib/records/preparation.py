@@ -238,13 +238,20 @@ def cut_at_turning_points(record, threshold=0.02, first=0, last=-1, skip_transie
         its ringing and the virgin stroke are dropped, the fact logged
         (logger ``piezolib.records``, level INFO) and written to
         ``metadata["dropped"]`` (one line) and ``metadata["start_up"]``
-        (the :class:`StartUp`).  Default False: every turning point counts.
+        (the :class:`StartUp`), and where the cut landed is logged too
+        (``metadata["cut_note"]``).  Default False: every turning point
+        counts.
 
     Returns
     -------
     Record
         Samples from turning point ``first`` to turning point ``last``,
-        inclusive; ``metadata["cut"]`` holds the sample indices.
+        inclusive; ``metadata["cut"]`` holds the sample indices,
+        ``metadata["starts_at"]`` whether the first sample is an input
+        "maximum" or "minimum" (the state a hysteresis fit must start from:
+        "maximum", or "rest" after a descending stroke) and
+        ``metadata["cut_note"]`` says so in one line, with the samples and
+        the reason.
 
     Raises
     ------
@@ -258,6 +265,8 @@ def cut_at_turning_points(record, threshold=0.02, first=0, last=-1, skip_transie
     >>> cut = cut_at_turning_points(Record(v, 2 * v, fs=100.0))
     >>> cut, cut.metadata["cut"]                             # peak 1 to peak 3
     (Record(201 samples at 100 Hz, u [V] -> y [V]), (50, 251))
+    >>> cut.metadata["cut_note"]
+    'cut at samples 50 to 250 (0.5 s to 2.5 s): from turning point 0 of the input, a maximum of 1 V (a fit starts from the state after an ascending stroke), to turning point 4, a maximum of 1 V'
     """
     _check_record(record)
     if not isinstance(skip_transient, (bool, np.bool_)):
@@ -275,10 +284,28 @@ def cut_at_turning_points(record, threshold=0.02, first=0, last=-1, skip_transie
     a, b = int(points[first]), int(points[last])
     if b <= a:
         raise ValueError(f"turning point last={last} is not after first={first}")
+    u, fs = record.input, record.fs
+    i, j = first % len(points), last % len(points)
+    starts_at = _extreme(u, a, points[i + 1])
+    after = " after the start-up" if skip_transient else ""
+    note = (f"cut at samples {a} to {b} ({a / fs:.4g} s to {b / fs:.4g} s): from turning point "
+            f"{i}{after} of the input, a {starts_at} of {u[a]:.4g} {record.input_unit} (a fit "
+            f"starts from the state after "
+            f"{'an ascending' if starts_at == 'maximum' else 'a descending'} stroke), to "
+            f"turning point {j}, a {_extreme(u, b, points[j - 1])} of {u[b]:.4g} "
+            f"{record.input_unit}")
     if skip_transient:
         logger.info("cut_at_turning_points dropped the %s", meta["dropped"])
+        logger.info("cut_at_turning_points %s", note)
     cut = record.segment(a, b + 1)
-    return replace(cut, metadata={**record.metadata, **meta, "cut": (a, b + 1)})
+    return replace(cut, metadata={**record.metadata, **meta, "cut": (a, b + 1),
+                                  "starts_at": starts_at, "cut_note": note})
+
+
+def _extreme(u, k, neighbour):
+    """"maximum" or "minimum": the turning point at sample ``k`` against the neighbouring one
+    (turning points alternate between the two)."""
+    return "maximum" if u[k] > u[neighbour] else "minimum"
 
 
 def detrend(record, which="output", kind="constant"):

@@ -112,6 +112,23 @@ def test_skip_transient_drops_rest_step_ringing_and_virgin_stroke(caplog):
     assert np.abs(np.diff(cut.output, 2)).max() < 8 * np.sqrt(6) * 2e-3
 
 
+def test_skip_transient_says_where_it_cut_and_from_which_extreme(caplog):
+    # the cut of a raw record that lands on an input maximum (after which every start but
+    # "maximum" fits badly) was said nowhere: only what the start-up held was logged
+    t = np.arange(int(2.2 * FS)) / FS
+    u = np.r_[np.zeros(500), 150 * np.sin(2 * np.pi * t + np.arcsin(-87 / 150))]
+    rec = R.Record(u, 0.1 * u, FS)
+    with caplog.at_level("INFO", logger="piezolib.records"):
+        cut = R.cut_at_turning_points(rec, skip_transient=True)
+    a, b = cut.metadata["cut"]
+    assert cut.metadata["starts_at"] == "maximum" and u[a] == pytest.approx(150, abs=0.1)
+    assert f"cut at samples {a} to {b - 1}" in caplog.text
+    assert "a maximum of 150 V" in caplog.text and "after an ascending stroke" in caplog.text
+    at_minimum = R.cut_at_turning_points(rec, skip_transient=True, first=1)
+    assert at_minimum.metadata["starts_at"] == "minimum"
+    assert "turning point 1 after the start-up" in at_minimum.metadata["cut_note"]
+
+
 def test_a_record_without_start_up_loses_only_its_first_stroke():
     t = np.arange(2000) / FS
     u = np.sin(2 * np.pi * 5 * t)
