@@ -30,6 +30,7 @@ is left out (``truth=None`` everywhere) together with
 """
 
 import html
+import re
 import time
 from dataclasses import dataclass
 
@@ -45,11 +46,12 @@ from piezolib import uncertainty as unc
 from piezolib._checks import (check_band, check_count, check_finite_array, check_frequency_grid,
                               check_integer, check_path, check_positive, check_type)
 from piezolib.problem.stage import VirtualStage
+from piezolib.workbook import study as studies
 from piezolib.workbook import tables
 from piezolib.workbook.outputs import data_dir
 
 __all__ = ["NO_PLANT_NOTE", "Skipped", "OwnRecords", "IdentificationData", "Identification",
-           "KnownTruth", "UncertaintyWeight", "analysis_grid", "load_records",
+           "KnownTruth", "UncertaintyWeight", "analysis_grid", "records_study", "load_records",
            "prepare_identification", "identify", "known_truth", "uncertainty_weight", "ran"]
 
 #: What a stage that needs the plant says when there is no identification record.
@@ -183,6 +185,56 @@ class OwnRecords(_Shown):
     def checks(self):
         return {"every record is sampled at the stated rate (0.1 %)":
                 all(abs(rec.fs - self.fs) < 1e-3 * self.fs for rec in self.all.values())}
+
+
+def records_study(study, folder):
+    """The study notebook 08 writes under: the one given, or one of the records' own.
+
+    The reference study's outputs (``data/results/``, ``figures/``) are the
+    committed results of the example records; a user's records never write
+    there.
+
+    Parameters
+    ----------
+    study : str, pathlib.Path, Study or None
+        As :func:`piezolib.workbook.session.start`; None: ``"reference"`` for
+        the example records, and for records of one's own a study named
+        ``own_<folder name>`` (outputs under ``runs/own_<folder name>/``).
+    folder : str, pathlib.Path or None
+        The records' folder (None: the example records).
+
+    Returns
+    -------
+    str, pathlib.Path or Study
+        What to pass to :func:`~piezolib.workbook.session.start`.
+
+    Raises
+    ------
+    ValueError
+        The reference study named for records of one's own.
+
+    Examples
+    --------
+    >>> records_study(None, None)
+    'reference'
+    >>> records_study(None, "../my stage/runs 2026").name
+    'own_runs_2026'
+    >>> records_study("wide_error_weight", "../runs")          # a study of studies/
+    'wide_error_weight'
+    """
+    if folder is None:
+        return studies.REFERENCE if study is None else study
+    folder = check_path("folder", folder)
+    if study is None:
+        name = "own_" + (re.sub(r"[^A-Za-z0-9_-]+", "_", folder.resolve().name).strip("_")
+                         or "records")
+        return studies.load(studies.REFERENCE).replace(
+            name=name, description=f"notebook 08 on the records in {folder}")
+    if studies.load(study).is_reference:
+        raise ValueError(f"study {studies.REFERENCE!r} holds the example records' committed "
+                         f"results; records of one's own ({folder}) need a study of their "
+                         "own: leave study = None (runs/own_<folder name>/) or name one")
+    return study
 
 
 def load_records(folder, chirp_file, loop_files, *, columns, fs, header=False, delimiter=",",

@@ -1,6 +1,6 @@
 """Notebook 08's hysteresis stages on a user's own records: the loops after their start-up,
-the Dahl and Prandtl-Ishlinskii fits with the model chosen by validation, and the feedforward
-cross-check.
+the Dahl, Prandtl-Ishlinskii and Hammerstein fits with the model chosen by validation, and the
+feedforward cross-check.
 
 One call per stage, each returning a result with its display and ``checks``
 (as the stages of :mod:`piezolib.workbook.your_stage`)::
@@ -41,10 +41,14 @@ class HysteresisLoops(_Shown):
         {label: (u_c [V], v_y [V])}.
     dropped : dict
         {label: what was dropped at the start} (empty without ``skip_transient``).
+    fs : float
+        Sampling rate of the loops after decimation [Hz] (the Hammerstein
+        model's dynamics are sampled at it).
     """
 
     data: dict
     dropped: dict
+    fs: float
 
     @property
     def lines(self):
@@ -76,26 +80,27 @@ def prepare_loops(records, um_per_volt, decimation, skip_transient=True):
     um_per_volt = check_positive("um_per_volt", um_per_volt)
     decimation = check_integer("decimation", decimation, 1)
     skip_transient = check_bool("skip_transient", skip_transient)
-    data, dropped = {}, {}
+    data, dropped, fs = {}, {}, records.fs / decimation
     for label, rec in records.loops.items():
         cut = recs.cut_at_turning_points(rec, skip_transient=skip_transient)
-        if cut.input[0] > cut.input[recs.turning_points(cut.input)[0]]:   # starts at a maximum
+        if cut.metadata["starts_at"] == "maximum":
             cut = recs.cut_at_turning_points(rec, first=1, skip_transient=skip_transient)
         if skip_transient:
-            dropped[label] = cut.metadata["dropped"]
+            dropped[label] = f"{cut.metadata['dropped']}; {cut.metadata['cut_note']}"
         cut = recs.decimate(cut, decimation)
         data[label] = (cut.input, cut.output / um_per_volt)
-    return HysteresisLoops(data, dropped)
+    return HysteresisLoops(data, dropped, fs)
 
 
 @dataclass(frozen=True, eq=False, repr=False)
 class HysteresisChoice(_Shown):
-    """Dahl and Prandtl-Ishlinskii fits and the model chosen by validation.
+    """Dahl, Prandtl-Ishlinskii and Hammerstein fits and the model chosen by validation.
 
     Attributes
     ----------
     fits : dict
-        {"Dahl": fit, "PI": fit} (:func:`piezolib.hysteresis.fit_dahl`, :func:`~piezolib.hysteresis.fit_pi`).
+        {"Dahl": fit, "PI": fit, "Hammerstein": fit} (:func:`piezolib.hysteresis.fit_dahl`,
+        :func:`~piezolib.hysteresis.fit_pi`, :func:`~piezolib.hysteresis.fit_hammerstein`).
     scores : pandas.DataFrame
         :func:`piezolib.hysteresis.validation_table` on the validation data.
     chosen_name : str
@@ -108,7 +113,7 @@ class HysteresisChoice(_Shown):
     warnings : tuple of str
         The fits' warnings (a parameter on a bound or not identifiable).
     seconds : dict
-        {"Dahl": s, "PI": s}.
+        {name: fit time [s]}.
     ceiling_percent : float
         Largest acceptable validation RMS [% of stroke] (a check).
     """
@@ -146,11 +151,15 @@ class HysteresisChoice(_Shown):
                        f"first half of {', '.join(self.fit_loops)} and validated on the second "
                        "half (held out in time).")
         out += [f"fit warning: {w}" for w in self.warnings]
-        d, p = self.fits["Dahl"], self.fits["PI"]
-        out.append(f"fit times: Dahl {self.seconds['Dahl']:.2f} s, PI {self.seconds['PI']:.3f} "
-                   f"s; fit RMS: Dahl {d.pooled_rms_percent:.2f} %, PI "
-                   f"{p.pooled_rms_percent:.2f} %; PI start {p.model.start!r}; validated on "
-                   f"{', '.join(self.validation_names)}; chosen: {self.chosen_name}")
+        out.append("fit times: " + ", ".join(f"{name} {s:.2f} s"
+                                             for name, s in self.seconds.items())
+                   + "; fit RMS: " + ", ".join(f"{name} {f.pooled_rms_percent:.2f} %"
+                                               for name, f in self.fits.items()))
+        starts = {name: f.model.hysteresis.start if name == "Hammerstein" else f.model.start
+                  for name, f in self.fits.items()}
+        out.append("start states: " + ", ".join(f"{name} {s!r}" for name, s in starts.items())
+                   + f"; validated on {', '.join(self.validation_names)}; chosen: "
+                   f"{self.chosen_name}")
         return tuple(out)
 
     def _tables(self):
@@ -176,11 +185,14 @@ def _labels(name, labels):
 
 
 def fit_hysteresis(loops, fit_loops, validation_loops, *, gamma_a, plays, ceiling_percent):
-    """Fit a Dahl and a Prandtl-Ishlinskii model; choose the one that validates best.
+    """Fit a Dahl, a Prandtl-Ishlinskii and a Hammerstein model; choose the one that validates best.
 
-    The Dahl model (Bliman-Sorine form, output offset, from rest) and a PI
-    model with ``plays`` plays (its start chosen by the data) are fitted to
-    ``fit_loops``; the smaller pooled RMS error on ``validation_loops`` (the
+    The Dahl model (Bliman-Sorine form, output offset, from rest), a PI
+    model with ``plays`` plays (its start chosen by the data) and a
+    Hammerstein model (the same plays followed by linear dynamics of unit DC
+    gain at the loops' rate, order chosen by validation:
+    :func:`piezolib.hysteresis.fit_hammerstein`) are fitted to
+    ``fit_loops``; the smallest pooled RMS error on ``validation_loops`` (the
     ones not fitted) decides.  With no validation record that was not fitted,
     the models are fitted to the first half of each fitted record and scored
     on its second half: never on the samples they were fitted to.
@@ -221,21 +233,24 @@ def fit_hysteresis(loops, fit_loops, validation_loops, *, gamma_a, plays, ceilin
         fit_data = [loops.data[label] for label in fit_loops]
         validation_names = [label for label in validation_loops if label not in fit_loops]
         validation_data = [loops.data[label] for label in validation_names]
-    t0 = time.perf_counter()
+    candidates = {
+        "Dahl": lambda: hy.fit_dahl(fit_data, gamma_a, form="bliman_sorine", offset=True,
+                                    start="rest"),
+        "PI": lambda: hy.fit_pi(fit_data, n_plays=plays, offset=True),   # start: by the data
+        "Hammerstein": lambda: hy.fit_hammerstein(fit_data, fs=loops.fs, n_plays=plays)}
+    fits, seconds = {}, {}
     with warnings.catch_warnings(record=True) as fit_warnings:
         warnings.simplefilter("always", hy.FitWarning)
-        dahl_fit = hy.fit_dahl(fit_data, gamma_a, form="bliman_sorine", offset=True,
-                               start="rest")
-        t_dahl = time.perf_counter() - t0
-        pi_fit = hy.fit_pi(fit_data, n_plays=plays, offset=True)     # start: by the data
-    t_pi = time.perf_counter() - t0 - t_dahl
-    fits = {"Dahl": dahl_fit, "PI": pi_fit}
+        for name, fit in candidates.items():
+            t0 = time.perf_counter()
+            fits[name] = fit()
+            seconds[name] = time.perf_counter() - t0
     scores = hy.validation_table({name: f.model for name, f in fits.items()}, validation_data,
                                  names=validation_names)
     return HysteresisChoice(fits, scores, hy.pooled_rms(scores).idxmin(), validation_data,
                             validation_names, held_out_in_time, fit_loops,
-                            tuple(str(w.message) for w in fit_warnings),
-                            {"Dahl": t_dahl, "PI": t_pi}, float(ceiling_percent))
+                            tuple(str(w.message) for w in fit_warnings), seconds,
+                            float(ceiling_percent))
 
 
 # -- 7. feedforward ----------------------------------------------------------------------------

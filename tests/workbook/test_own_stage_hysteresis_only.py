@@ -51,3 +51,42 @@ def test_notebook_08_on_hysteresis_records_only(tmp_path, monkeypatch):
     assert "raw (second half)" in text
     results = tmp_path / "root" / "runs" / "hysteresis_only" / "results" / "own_stage.csv"
     assert "held out in time" in results.read_text()
+
+
+@pytest.mark.slow
+def test_notebook_08_on_ones_own_records_leaves_the_checkout_clean(tmp_path):
+    # with the default study it rewrote data/results/own_stage.csv and two committed figures
+    import shutil
+    import subprocess
+
+    from piezolib.problem.foreign_hysteresis import foreign_raw_record
+    from piezolib.workbook.outputs import project_root, runs_dir
+
+    papermill = pytest.importorskip("papermill")
+    notebook = notebooks_dir() / "08_your_own_stage.ipynb"
+    rec = foreign_raw_record("duhem", 5000.0, periods=3.7).record     # a family no fit has
+    folder = tmp_path / f"stage_{tmp_path.name}"
+    folder.mkdir()
+    np.savetxt(folder / "raw.csv", np.column_stack([rec.time, rec.input, rec.output]),
+               delimiter=",", fmt="%.6f")
+
+    def status():      # the source trees left out: others may edit them while this runs
+        return subprocess.run(["git", "status", "--short", "--untracked-files=all", "--", "."]
+                              + [f":(exclude){d}" for d in ("piezolib", "tests", "benchmarks")],
+                              cwd=project_root(), capture_output=True, text=True,
+                              check=True).stdout
+
+    before = status()
+    own_runs = runs_dir() / f"own_{folder.name}"
+    try:
+        papermill.execute_notebook(
+            str(notebook), str(tmp_path / "out.ipynb"), kernel_name="python3",
+            progress_bar=False, cwd=str(notebook.parent),
+            parameters=dict(RECORD_DIR=str(folder), CHIRP_FILE=None,
+                            LOOP_FILES={"raw": "raw.csv"}, FIT_LOOPS=["raw"],
+                            VALIDATION_LOOPS=[]))
+        assert status() == before
+        results = (own_runs / "results" / "own_stage.csv").read_text()
+        assert "Hammerstein: validation RMS" in results
+    finally:
+        shutil.rmtree(own_runs, ignore_errors=True)

@@ -14,6 +14,7 @@ import pytest
 from piezolib import identification as ident
 from piezolib.records import Record
 from piezolib.workbook import your_stage as own
+from piezolib.workbook.outputs import notebooks_dir
 
 FS = 5000.0
 PLANT = ct.tf([800.0], [1.0, 1000.0])           # first order, DC gain 0.8, 159 Hz
@@ -30,6 +31,35 @@ def chirp_record(n=1500, seed=0):
 def write_csv(path, rec):
     np.savetxt(path, np.column_stack([rec.time, rec.input, rec.output]), delimiter=",",
                fmt="%.9g")
+
+
+# -- the study and the notebook's parameters ---------------------------------------------------
+
+def test_ones_own_records_get_a_study_of_their_own_never_the_reference(tmp_path):
+    # notebook 08 on a folder of one's own records with the default study rewrote the
+    # reference study's data/results/own_stage.csv and two committed figures
+    own_study = own.records_study(None, tmp_path / "stage 7 runs")
+    assert own_study.name == "own_stage_7_runs" and not own_study.is_reference
+    assert own.records_study(None, None) == "reference"        # the example records
+    assert own.records_study("wide_error_weight", tmp_path) == "wide_error_weight"
+    with pytest.raises(ValueError, match="need a study of their own"):
+        own.records_study("reference", tmp_path)
+
+
+def test_papermill_knows_every_parameter_of_notebook_08():
+    # "unknown parameter" warnings for INPUT_*/OUTPUT_* (assigned as tuples), and the weights
+    # written as dict(...) calls, which papermill cannot read, although all were applied
+    import ast
+    import json
+
+    papermill = pytest.importorskip("papermill")
+    path = notebooks_dir() / "08_your_own_stage.ipynb"
+    cell = next(c for c in json.loads(path.read_text())["cells"]
+                if "parameters" in c.get("metadata", {}).get("tags", []))
+    assigned = {node.targets[0].id for node in ast.parse("".join(cell["source"])).body
+                if isinstance(node, ast.Assign) and isinstance(node.targets[0], ast.Name)}
+    assert len(assigned) == len(ast.parse("".join(cell["source"])).body)   # one name each
+    assert set(papermill.inspect_notebook(str(path))) == assigned
 
 
 # -- records -----------------------------------------------------------------------------------

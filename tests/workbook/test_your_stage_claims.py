@@ -24,7 +24,7 @@ def test_without_a_plant_the_claims_are_the_rate_and_the_hysteresis_rows(monkeyp
     # fit_dahl replaced by a two-play PI fit: the rows without the slow Dahl fit
     monkeypatch.setattr(hy, "fit_dahl",
                         lambda data, gamma_a, **kw: hy.fit_pi(data, n_plays=2, offset=True))
-    loops = own_hysteresis.HysteresisLoops({"raw": loop_pair()}, {})
+    loops = own_hysteresis.HysteresisLoops({"raw": loop_pair()}, {}, 100.0)
     choice = own_hysteresis.fit_hysteresis(loops, ["raw"], [], gamma_a=30.0, plays=4,
                                            ceiling_percent=5.0)
     skipped = own.Skipped(own.NO_PLANT_NOTE)
@@ -35,8 +35,9 @@ def test_without_a_plant_the_claims_are_the_rate_and_the_hysteresis_rows(monkeyp
     assert frame.quantity.tolist() == ["record sampling rate",
                                        "Dahl: validation RMS on raw (second half)",
                                        "PI: validation RMS on raw (second half)",
+                                       "Hammerstein: validation RMS on raw (second half)",
                                        "hysteresis model chosen by validation"]
-    assert frame.note.str.contains("held out in time").sum() == 2
+    assert frame.note.str.contains("held out in time").sum() == 3
 
 
 def test_stages_not_run_have_no_checks_and_the_summary_says_why():
@@ -49,4 +50,5 @@ def test_known_truth_checks_without_a_truth_state_the_hysteresis_choice_only():
     choice = own_hysteresis.HysteresisChoice({}, pd.DataFrame(), "Dahl", [], [], False, (), (),
                                              {}, 5.0)
     assert own_claims.known_truth_checks(None, None, None, choice, None, None) == {
-        "PI chosen (the stage's hysteresis is made of plays)": False}
+        "a play-operator model chosen, PI or Hammerstein (the stage's hysteresis is made of "
+        "plays)": False}

@@ -4,6 +4,7 @@ fitted or on held-out halves, the feedforward cross-check."""
 
 import numpy as np
 import pytest
+import scipy.signal as sg
 
 from piezolib import hysteresis as hy
 from piezolib.records import Record
@@ -29,6 +30,7 @@ def test_prepare_loops_starts_each_loop_at_a_minimum_and_scales_to_sensor_volts(
                                          skip_transient=False)
     u, y = loops.data["a"]
     assert u[0] == pytest.approx(v.min(), abs=1e-3) and loops.dropped == {}
+    assert loops.fs == FS
     assert y.max() == pytest.approx(x.max())
 
 
@@ -40,18 +42,34 @@ def quick_fits(monkeypatch):
 
 def test_fit_hysteresis_holds_out_the_second_half_when_nothing_else_validates(monkeypatch):
     quick_fits(monkeypatch)
-    loops = own_hysteresis.HysteresisLoops({"raw": loop_pair()}, {})
+    loops = own_hysteresis.HysteresisLoops({"raw": loop_pair()}, {}, 100.0)
     choice = own_hysteresis.fit_hysteresis(loops, ["raw"], [], gamma_a=30.0, plays=4,
                                            ceiling_percent=5.0)
     assert choice.held_out_in_time and choice.validation_names == ["raw (second half)"]
     assert "validated on the second half (held out in time)" in str(choice)
-    assert choice.chosen_name == "PI"                     # four plays fit the four-play truth
+    assert choice.chosen_name in ("PI", "Hammerstein")    # plays fit the four-play truth
     assert all(choice.checks.values())
+
+
+def test_fit_hysteresis_has_the_hammerstein_model_among_its_candidates(monkeypatch):
+    # a stage whose plays drive a first-order lag: only the Hammerstein model follows it
+    quick_fits(monkeypatch)
+    v, p = loop_pair(n=800)
+    x = p[0] + sg.lfilter([0.0, 0.3], [1.0, -0.7], p - p[0])
+    loops = own_hysteresis.HysteresisLoops({"a": (v[:400], x[:400]), "b": (v[400:], x[400:])},
+                                           {}, 100.0)
+    choice = own_hysteresis.fit_hysteresis(loops, ("a",), ("b",), gamma_a=30.0, plays=4,
+                                           ceiling_percent=5.0)
+    assert set(choice.fits) == {"Dahl", "PI", "Hammerstein"}
+    assert choice.chosen_name == "Hammerstein"
+    assert choice.validation_rms("Hammerstein") < 0.2 * choice.validation_rms("PI")
+    assert "Hammerstein" in str(choice)
 
 
 def test_fit_hysteresis_validates_on_the_records_not_fitted(monkeypatch):
     quick_fits(monkeypatch)
-    loops = own_hysteresis.HysteresisLoops({"a": loop_pair(), "b": loop_pair(1.3, 1.2)}, {})
+    loops = own_hysteresis.HysteresisLoops({"a": loop_pair(), "b": loop_pair(1.3, 1.2)}, {},
+                                            100.0)
     choice = own_hysteresis.fit_hysteresis(loops, ("a",), ("a", "b"), gamma_a=30.0,
                                            plays=4, ceiling_percent=5.0)
     assert not choice.held_out_in_time and choice.validation_names == ["b"]
