@@ -46,9 +46,7 @@ def test_stages_not_run_have_no_checks_and_the_summary_says_why():
     assert own_claims.summary_lines(own.OwnRecords(None, {}, FS), 1.0)[0] == own.NO_PLANT_NOTE
 
 
-def test_known_truth_checks_without_a_truth_state_the_hysteresis_choice_only():
+def test_known_truth_checks_without_a_truth_state_nothing():
     choice = own_hysteresis.HysteresisChoice({}, pd.DataFrame(), "Dahl", [], [], False, (), (),
                                              {}, 5.0)
-    assert own_claims.known_truth_checks(None, None, None, choice, None, None) == {
-        "a play-operator model chosen, PI or Hammerstein (the stage's hysteresis is made of "
-        "plays)": False}
+    assert own_claims.known_truth_checks(None, None, None, choice, None, None) == {}
