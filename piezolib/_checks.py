@@ -19,7 +19,7 @@ __all__ = [
     "check_integer", "check_continuous", "check_finite_lti", "check_signals",
     "check_frequency_grid", "check_type", "check_path", "check_count", "check_bool",
     "check_positive_values", "check_integers", "check_band", "check_index_pair",
-    "check_mapping",
+    "check_mapping", "check_real",
 ]
 
 
@@ -59,6 +59,18 @@ def check_path(name, value):
     if isinstance(value, bool) or not isinstance(value, (str, os.PathLike)) or value == "":
         raise TypeError(f"{name} must be a file path (str or pathlib.Path), got {value!r}")
     return Path(value)
+
+
+def check_real(name, value):
+    """Return ``value`` as a float after checking it is a finite real number (an offset,
+    a level: any sign).
+
+    Examples
+    --------
+    >>> check_real("x_offset", -2)
+    -2.0
+    """
+    return _as_real_scalar(name, value)
 
 
 def check_positive(name, value):

@@ -47,6 +47,8 @@ def test_continuous_rejects_discrete_models():
     (C.check_positive, 0.0, ValueError), (C.check_positive, np.nan, ValueError),
     (C.check_positive, 1 + 1j, TypeError), (C.check_positive, True, TypeError),
     (C.check_nonnegative, -1e-30, ValueError), (C.check_integer, 2.0, TypeError),
+    (C.check_real, np.inf, ValueError), (C.check_real, "1", TypeError),
+    (C.check_real, np.array([1.0, 2.0]), TypeError),
 ])
 def test_scalars(check, value, exc):
     with pytest.raises(exc, match="v "):
