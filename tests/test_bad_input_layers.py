@@ -125,6 +125,18 @@ CHIRPS = {"text": "abc", "empty": {}, "not chirps": {"a": 1}}
 ORDERS = {"empty": [], "zero": [0], "text": "x"}
 PAIR = {"out of range": (3, 0), "negative": (-1, 0), "text": "x"}
 BAND = {"reversed": (50.0, 5.0), "negative": (-5.0, 50.0), "text": "x"}
+_DRUN = _mod("workbook.design_run")
+DESIGN_RUN = _DRUN.read_design_run(_DRUN.design_run_path())       # the committed record
+RAW_FOREIGN = _mod("problem.foreign_hysteresis").foreign_raw_record("bouc_wen", fs=2000.0,
+                                                                   periods=1.2)
+# a stage and sections of one member that pass closed_loop's checks (the loop is not run)
+KERNEL_STAGE = dict(dac=np.array([1e-3, -1e4, 1e4]), adc=np.array([1e-3, -1e4, 1e4]),
+                    gain=15.0, amp=False, out_lo=-30.0, out_hi=150.0, has_plays=False,
+                    r=np.zeros((0, 1)), w=np.zeros((0, 1)), w0=np.zeros(1),
+                    plays=np.zeros((0, 1)), b0=np.zeros(1), b1=np.zeros((2, 1)),
+                    a1=np.zeros((2, 1)), z=np.zeros((2, 1)), noise=np.zeros((5, 1)),
+                    log=np.zeros((7, 5, 1)), v_y=np.zeros(1))
+KERNEL_SECTIONS = (np.zeros((1, 6)), np.zeros((2, 1, 1)))
 
 
 class InTmp(str):
@@ -814,6 +826,9 @@ CASES = {
                                  {"low_rad_s": POSITIVE, "high_rad_s": {"below low": 0.5,
                                                                         "text": "x"},
                                   "points": POSITIVE_INT}),
+    "your_stage.records_study": (dict(study=None, folder="my_records"),
+                                 {"study": {**STUDY_GIVEN, "the reference": "reference"},
+                                  "folder": {"number": 3, "empty": ""}}),
     "your_stage.load_records": (
         Fill(folder=InTmp(".", None), chirp_file="chirp.csv", loop_files={"a": "a.csv"},
              columns={"time": 0, "input": 1, "output": 2}, fs=1000.0),
@@ -892,6 +907,53 @@ CASES = {
     "your_stage_claims.summary_lines": (Fill(records=bare(_OWN.OwnRecords), seconds=1.0),
                                  {"records": RESULT, "seconds": {"negative": -1.0,
                                                                  "nan": np.nan, "text": "x"}}),
+    # workbook.design_run, problem.foreign_hysteresis, stage_loop_kernel
+    "design_run.study_design_run": (dict(study="reference"), {"study": STUDY}),
+    "design_run.derive_design_run": (None, {"study": STUDY,
+                                            "cache": {"text": "yes", "number": 1},
+                                            "derived": {"text": "abc", "a record": DESIGN_RUN}}),
+    "design_run.write_design_run": (
+        dict(run=DESIGN_RUN, path=InTmp("run.json", None)),
+        {"run": {"text": "abc", "none": None, "controllers": bare(_mod("workbook.pipeline")
+                                                                  .StudyControllers)},
+         "path": {"number": 3, "empty": "", "a directory": InTmp(".", None)}}),
+    "design_run.write_reference_record": (None, {"derived": {"text": "abc", "none": None,
+                                                             "a record": DESIGN_RUN}}),
+    "design_run.read_design_run": (dict(path=_DRUN.design_run_path()), {"path": PATH_MISSING}),
+    "foreign_hysteresis.foreign_operator": (dict(family="duhem"),
+                                            {"family": {"unknown": "nope", "number": 3,
+                                                        "list": ["duhem"], "none": None}}),
+    "foreign_hysteresis.foreign_raw_record": (
+        dict(family="bouc_wen", fs=2000.0, periods=1.2),
+        {"family": {"unknown": "nope", "list": ["duhem"]},
+         "fs": {**POSITIVE, "too few samples": 10.0, "too many samples": 1e7},
+         "seed": {"negative": -1, "text": "x"}, "rest_s": POSITIVE, "periods": POSITIVE,
+         "noise_percent": POSITIVE, "x_offset": {"nan": np.nan, "inf": np.inf, "text": "x"}}),
+    # the fit takes a minute: the valid call is not run
+    "foreign_hysteresis.best_achievable": (Fill(raw=RAW_FOREIGN),
+                                           {"raw": {"text": "abc", "a record": RAW_FOREIGN.record},
+                                            "levels": {**POSITIVE_INT, "too many": 400},
+                                            "rows": POSITIVE_INT}),
+    "stage_loop_kernel.closed_loop": (
+        Fill(v_r=np.zeros(4), u_f=np.zeros(4), delay=1, stage=KERNEL_STAGE,
+             sections=KERNEL_SECTIONS, u_b=np.zeros((4, 1)), diverged_v=1e3),
+        {"v_r": {"list": [0.0] * 4, "2-D": np.zeros((4, 1)), "integers": np.zeros(4, int),
+                 "text": "abc"},
+         "u_f": {"shorter": np.zeros(3), "float32": np.zeros(4, np.float32)},
+         "delay": {"negative": -1, "fraction": 0.5},
+         "stage": {"text": "abc", "empty": {},
+                   "no log": {k: v for k, v in KERNEL_STAGE.items() if k != "log"},
+                   "other members": {**KERNEL_STAGE, "z": np.zeros((2, 2))},
+                   "short noise": {**KERNEL_STAGE, "noise": np.zeros((4, 1))},
+                   "short log": {**KERNEL_STAGE, "log": np.zeros((7, 4, 1))},
+                   "text gain": {**KERNEL_STAGE, "gain": "15"}},
+         "sections": {"text": "abc", "one array": np.zeros((1, 6)),
+                      "other members": (np.zeros((1, 6)), np.zeros((2, 1, 2))),
+                      "mixed precision": (np.zeros((1, 6), np.float32), np.zeros((2, 1, 1)))},
+         "u_b": {"other shape": np.zeros((3, 1)), "none": None},
+         "diverged_v": POSITIVE}),
+    "cli.error_line": (dict(exc=OSError(2, "No such file or directory", "x.csv")),
+                       {"exc": {"text": "abc", "none": None, "a class": OSError}}),
     # workbook.report, document, session
     "report.findings": (Fill(name="mixed_mu"), {"name": {"unknown": "nope", "number": 3},
                                                  "study": STUDY}),
@@ -920,6 +982,7 @@ EXEMPT = {
     "pipeline.library_fingerprint": "no arguments",
     "pipeline.reference_design_path": "no arguments",
     "pipeline.mixed_design_path": "no arguments",
+    "design_run.design_run_path": "no arguments",
     "pipeline.write_reference_design": "only cache, a flag (a whole design run)",
     "style.use_style": "no arguments",
     "cli.parser": "no arguments",

@@ -40,16 +40,25 @@ import scipy.optimize as opt
 import scipy.signal as sg
 
 from piezolib import records
-from piezolib._checks import check_integer, check_positive
+from piezolib._checks import check_integer, check_positive, check_real, check_type
 from piezolib.hysteresis.dahl import strokes
 from piezolib.hysteresis.pi import play_outputs
 from piezolib.hysteresis.select import split_record
 from piezolib.identification.continuous import zoh_coefficients
 
-__all__ = ["FAMILIES", "BoucWen", "SmoothPreisach", "Duhem", "foreign_operator",
-           "RawForeignRecord", "foreign_raw_record", "BestAchievable", "best_achievable"]
+__all__ = ["FAMILIES", "MIN_SAMPLES", "MAX_SAMPLES", "MAX_REGRESSOR_ENTRIES", "BoucWen",
+           "SmoothPreisach", "Duhem", "foreign_operator", "RawForeignRecord",
+           "foreign_raw_record", "BestAchievable", "best_achievable"]
 
 FAMILIES = ("bouc_wen", "preisach", "duhem")
+
+#: Fewest and most samples of a raw record (:func:`foreign_raw_record`; the most is 200 s
+#: at 5 kHz).
+MIN_SAMPLES, MAX_SAMPLES = 100, 2_000_000
+
+#: Most entries (samples x columns) of the regressor of :func:`best_achievable` (240 MB of
+#: float64, held three times: the default 16 levels on a 7.2 s record at 5 kHz is 5.5e6).
+MAX_REGRESSOR_ENTRIES = 30_000_000
 
 #: Resonance of the generating dynamics: natural frequency [Hz] and damping ratio.
 RESONANCE = (1200.0, 0.06)
@@ -227,7 +236,7 @@ def foreign_operator(family):
     'Duhem'
     """
     ops = {"bouc_wen": BoucWen, "preisach": SmoothPreisach, "duhem": Duhem}
-    if family not in ops:
+    if not isinstance(family, str) or family not in ops:
         raise ValueError(f"family must be one of {FAMILIES}, got {family!r}")
     return ops[family]()
 
@@ -289,7 +298,8 @@ def foreign_raw_record(family, fs=5000.0, seed=0, *, rest_s=0.5, periods=6.7,
     ----------
     family : {"bouc_wen", "preisach", "duhem"}
     fs : float, optional
-        Sampling rate [Hz].
+        Sampling rate [Hz]; with ``rest_s`` and ``periods`` it gives
+        :data:`MIN_SAMPLES` to :data:`MAX_SAMPLES` samples.
     seed : int, optional
         Seed of the sensor noise.
     rest_s : float, optional
@@ -317,13 +327,20 @@ def foreign_raw_record(family, fs=5000.0, seed=0, *, rest_s=0.5, periods=6.7,
     fs = check_positive("fs", fs)
     seed = check_integer("seed", seed, minimum=0)
     n_rest = int(round(check_positive("rest_s", rest_s) * fs))
-    t = np.arange(int(round(check_positive("periods", periods) * fs))) / fs
+    n_sine = int(round(check_positive("periods", periods) * fs))
+    noise_percent = check_positive("noise_percent", noise_percent)
+    x_offset = check_real("x_offset", x_offset)
+    if not MIN_SAMPLES <= n_rest + n_sine <= MAX_SAMPLES:
+        raise ValueError(f"fs, rest_s and periods give {n_rest + n_sine:,} samples "
+                         f"(fs * (rest_s + periods)); a record has {MIN_SAMPLES} to "
+                         f"{MAX_SAMPLES:,}")
+    t = np.arange(n_sine) / fs
     phase = math.asin(-87.0 / 150.0)
     v = np.r_[np.zeros(n_rest), 150.0 * np.sin(2 * math.pi * t + phase)]
     b, a = resonance_dynamics(fs)
     h = operator.simulate(v)
     x_true = x_offset + h[0] + sg.lfilter(b, a, h - h[0])
-    noise_rms = check_positive("noise_percent", noise_percent) / 100 * float(np.ptp(x_true))
+    noise_rms = noise_percent / 100 * float(np.ptp(x_true))
     x = x_true + noise_rms * np.random.default_rng(seed).standard_normal(v.size)
     rec = records.Record(v, x, fs, input_unit="V", output_unit="um", input_name="v",
                          output_name="x", metadata={"family": family})
@@ -373,7 +390,9 @@ def best_achievable(raw, levels=16, rows=12000):
     ``levels`` grid over the input's range (weights >= 0 by bounded least
     squares, the elements run through the stage's history), through the
     generating dynamics, on about ``rows`` samples spread over the record
-    (every sample of the step and its ringing kept).
+    (every sample of the step and its ringing kept).  The regressor holds every
+    sample: ``levels`` is bounded so that it has at most
+    :data:`MAX_REGRESSOR_ENTRIES` entries.
 
     Examples
     --------
@@ -382,9 +401,15 @@ def best_achievable(raw, levels=16, rows=12000):
     >>> best.noise_floor_percent <= best.whole_percent < 1.0
     True
     """
+    check_type("raw", raw, RawForeignRecord, "a RawForeignRecord (foreign_raw_record)")
     levels = check_integer("levels", levels, minimum=2)
     rows = check_integer("rows", rows, minimum=100)
     v, x = raw.record.input, raw.record.output
+    columns = (levels // 2 + 1) * (levels + 1) + 2     # at most: relays, slope and offset
+    if columns * v.size > MAX_REGRESSOR_ENTRIES:
+        raise ValueError(f"levels = {levels} on a record of {v.size:,} samples needs a "
+                         f"regressor of up to {columns * v.size:,} entries, at most "
+                         f"{MAX_REGRESSOR_ENTRIES:,}: fewer levels or a shorter record")
     v_max = float(np.max(np.abs(v))) * 1.001
     cols = np.column_stack([v, _ramped_relays(v, levels, v_max)])
     filtered = cols[0] + sg.lfilter(raw.b, raw.a, cols - cols[0], axis=0)

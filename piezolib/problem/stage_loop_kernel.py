@@ -19,7 +19,13 @@ import functools
 
 import numpy as np
 
+from piezolib._checks import check_bool, check_integer, check_mapping, check_positive, check_real
+
 __all__ = ["closed_loop"]
+
+#: The entries of ``stage`` (:meth:`StageBatchSimulation.run_sections_loop`).
+_STAGE_KEYS = ("dac", "adc", "gain", "amp", "out_lo", "out_hi", "has_plays", "r", "w", "w0",
+               "plays", "b0", "b1", "a1", "z", "noise", "log", "v_y")
 
 
 @functools.cache
@@ -123,10 +129,66 @@ def closed_loop(v_r, u_f, delay, stage, sections, u_b, diverged_v):
     -------
     int
         -1, or the sample at which the outputs diverged (u_b filled up to it).
+
+    Raises
+    ------
+    TypeError, ValueError
+        Naming the argument (or the entry of ``stage``): an array of another type,
+        precision or shape than the loop indexes (it checks no bounds).
     """
+    _check_arguments(v_r, u_f, delay, stage, sections, u_b, diverged_v)
     coef, s = sections
     return _kernel()(v_r, u_f, delay, stage["dac"], stage["adc"], stage["gain"],
                      stage["amp"], stage["out_lo"], stage["out_hi"], stage["has_plays"],
                      stage["r"], stage["w"], stage["w0"], stage["plays"], stage["b0"],
                      stage["b1"], stage["a1"], stage["z"], stage["noise"], stage["log"],
                      coef, s, stage["v_y"], u_b, float(diverged_v))
+
+
+def _check_array(name, x, shape, dtypes=(np.float64,), min_rows=None):
+    """``x`` as the compiled loop indexes it (it checks no bounds): an ndarray of one of
+    ``dtypes`` and ``shape`` (None: any size), with at least ``min_rows`` rows."""
+    if not isinstance(x, np.ndarray) or x.dtype not in dtypes:
+        got = f"dtype {x.dtype}" if isinstance(x, np.ndarray) else type(x).__name__
+        want = " or ".join(np.dtype(d).name for d in dtypes)
+        raise TypeError(f"{name} must be a {want} ndarray, got {got}")
+    if x.ndim != len(shape) or any(w is not None and w != g for w, g in zip(shape, x.shape)) \
+            or (min_rows is not None and x.shape[0] < min_rows):
+        want = tuple("any" if w is None else w for w in shape)
+        rows = f" with at least {min_rows} rows" if min_rows is not None else ""
+        raise ValueError(f"{name} must have shape {want}{rows}, got {x.shape}")
+    return x
+
+
+def _check_arguments(v_r, u_f, delay, stage, sections, u_b, diverged_v):
+    """Types and shapes of :func:`closed_loop`'s arguments, naming the one that is wrong."""
+    n = _check_array("v_r", v_r, (None,)).shape[0]
+    _check_array("u_f", u_f, (n,))
+    check_integer("delay", delay, minimum=0)
+    check_mapping("stage", stage)
+    missing = [key for key in _STAGE_KEYS if key not in stage]
+    if missing:
+        raise ValueError(f"stage lacks {missing} (StageBatchSimulation.run_sections_loop)")
+    N = _check_array("stage['v_y']", stage["v_y"], (None,)).shape[0]
+    order = _check_array("stage['z']", stage["z"], (None, N)).shape[0]
+    n_plays = _check_array("stage['r']", stage["r"], (None, N)).shape[0]
+    shapes = {"dac": (3,), "adc": (3,), "w": (n_plays, N), "plays": (n_plays, N),
+              "w0": (N,), "b0": (N,), "b1": (order, N), "a1": (order, N)}
+    for key, shape in shapes.items():
+        _check_array(f"stage[{key!r}]", stage[key], shape)
+    _check_array("stage['noise']", stage["noise"], (None, N), min_rows=n + 1)
+    _check_array("stage['log']", stage["log"], (7, None, N))
+    if stage["log"].shape[1] < n + 1:
+        raise ValueError(f"stage['log'] must hold at least {n + 1} samples, got "
+                         f"{stage['log'].shape[1]}")
+    for key in ("amp", "has_plays"):
+        check_bool(f"stage[{key!r}]", stage[key])
+    for key in ("gain", "out_lo", "out_hi"):
+        check_real(f"stage[{key!r}]", stage[key])
+    if not isinstance(sections, tuple) or len(sections) != 2:
+        raise TypeError("sections must be the pair (coefficients, states) of "
+                        f"SectionFilterBatch.arrays, got {type(sections).__name__}")
+    coef = _check_array("sections[0]", sections[0], (None, 6), (np.float32, np.float64))
+    _check_array("sections[1]", sections[1], (2, coef.shape[0], N), (coef.dtype,))
+    _check_array("u_b", u_b, (n, N))
+    check_positive("diverged_v", diverged_v)

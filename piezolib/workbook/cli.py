@@ -269,6 +269,8 @@ def error_line(exc):
     >>> error_line(PermissionError(13, "Permission denied", "runs/x"))
     'runs/x: Permission denied'
     """
+    if not isinstance(exc, BaseException):     # str(exc) would pass any object on as text
+        raise TypeError(f"exc must be an exception, got {type(exc).__name__}")
     if isinstance(exc, OSError) and exc.strerror:
         text = exc.strerror
         if exc.filename is not None and str(exc.filename) not in text:

@@ -21,7 +21,7 @@ import control as ct
 import numpy as np
 import pandas as pd
 
-from piezolib._checks import check_path
+from piezolib._checks import check_bool, check_path, check_type
 from piezolib.files import atomic_write, seal, seal_problem
 from piezolib.problem import design as problem_design
 from piezolib.problem.verification import delay_sweep
@@ -192,6 +192,11 @@ def _sweep_values(problem, design_choices, delays, fingerprint):
             for d, row in table.iterrows()}
 
 
+def _check_derived(derived):
+    check_type("derived", derived, pipeline.StudyControllers,
+               "the StudyControllers of pipeline.derive_controllers")
+
+
 def derive_design_run(study, cache=True, derived=None):
     """Run the study's searches (or read them from the disk cache) and record them.
 
@@ -208,6 +213,9 @@ def derive_design_run(study, cache=True, derived=None):
     -------
     DesignRun
     """
+    cache = check_bool("cache", cache)
+    if derived is not None:
+        _check_derived(derived)
     study = studies.load(study)
     if derived is None or derived.design is None:
         derived = pipeline.derive_controllers(study, cache=cache)
@@ -249,6 +257,7 @@ def study_design_run(study):
 
 def write_design_run(run, path):
     """Write ``run`` as sealed JSON; return the path."""
+    check_type("run", run, DesignRun, "a DesignRun (derive_design_run)")
     path = check_path("path", path)
     doc = {"format": pipeline.ARTIFACT_FORMAT, "study": run.study, "digest": run.digest,
            "library": pipeline.library_fingerprint(), "mu": run.mu,
@@ -265,6 +274,7 @@ def write_reference_record(derived):
     """Record the reference study's searches (the delay sweep run here) beside the
     controllers ``derived`` just derived (:func:`pipeline.write_reference_design`);
     return the path of :func:`design_run_path`."""
+    _check_derived(derived)
     run = derive_design_run(studies.REFERENCE, derived=derived)
     return write_design_run(run, design_run_path())
 
@@ -276,6 +286,8 @@ def read_design_run(path):
     ------
     ArtifactError
         Naming the file: not a design record, or its checksum fails.
+    OSError
+        The file cannot be read (missing, a folder).
 
     Examples
     --------
@@ -286,7 +298,7 @@ def read_design_run(path):
     path = check_path("path", path)
     try:
         doc = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
+    except ValueError as exc:           # an unreadable file is the OSError naming it
         raise pipeline.ArtifactError(f"{path}: not a design record ({exc})") from None
     problem = seal_problem(doc) if isinstance(doc, dict) else "not a JSON object"
     if problem is not None:
