@@ -15,7 +15,6 @@ import pytest
 from piezolib import identification as ident
 from piezolib import robust
 from piezolib import uncertainty as unc
-from piezolib._checks import check_count
 from piezolib.hysteresis import DahlFeedforward, DahlModel
 from piezolib.problem import stage_calibration
 from piezolib.robust.dgk import mixed_musyn
@@ -90,13 +89,6 @@ def test_frf_error_blames_the_models_sample_time():
 def test_sizes_past_the_limit_are_refused_before_any_work(call, limit):
     with pytest.raises(ValueError, match=limit):
         call()
-
-
-def test_check_count_names_the_limit_and_why():
-    with pytest.raises(ValueError, match=r"rows must be at most 10 \(too slow\), got 11"):
-        check_count("rows", 11, maximum=10, why="too slow")
-    with pytest.raises(TypeError, match="rows must be an integer"):
-        check_count("rows", 2.5, maximum=10)
 
 
 def test_mixed_musyn_checks_dk_options():

@@ -83,3 +83,10 @@ def test_proper_and_stable():
 def test_the_list_and_size_checks_name_the_argument(check, args, exc, match):
     with pytest.raises(exc, match=match):
         check(*args)
+
+
+def test_check_count_names_the_limit_and_why():
+    with pytest.raises(ValueError, match=r"rows must be at most 10 \(too slow\), got 11"):
+        C.check_count("rows", 11, maximum=10, why="too slow")
+    with pytest.raises(TypeError, match="rows must be an integer"):
+        C.check_count("rows", 2.5, maximum=10)
