@@ -46,7 +46,10 @@ def test_stages_not_run_have_no_checks_and_the_summary_says_why():
     assert own_claims.summary_lines(own.OwnRecords(None, {}, FS), 1.0)[0] == own.NO_PLANT_NOTE
 
 
-def test_known_truth_checks_without_a_truth_state_nothing():
-    choice = own_hysteresis.HysteresisChoice({}, pd.DataFrame(), "Dahl", [], [], False, (), (),
-                                             {}, 5.0)
-    assert own_claims.known_truth_checks(None, None, None, choice, None, None) == {}
+def test_known_truth_checks_without_a_truth_state_the_pi_fit_only():
+    fit = hy.fit_pi([loop_pair()], n_plays=4, offset=True)
+    choice = own_hysteresis.HysteresisChoice({"PI": fit}, pd.DataFrame(), "Dahl", [], [], False,
+                                             (), (), {}, 5.0)
+    assert own_claims.known_truth_checks(None, None, None, choice, None, None) == {
+        "PI fits its loops within 0.5 % of stroke (the stage's hysteresis is made of plays)":
+        True}
