@@ -14,13 +14,6 @@ def write_notebook(path, *sources):
     nbformat.write(nb, path)
 
 
-@pytest.fixture
-def workbook(tmp_path, monkeypatch):
-    (tmp_path / "notebooks").mkdir()
-    monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
-    return tmp_path
-
-
 def test_failure_names_notebook_and_cell(workbook):
     write_notebook(workbook / "notebooks" / "00_ok.ipynb", "x = 1")
     write_notebook(workbook / "notebooks" / "01_bad.ipynb", "y = 2", "assert y == 3, 'y is 2'")

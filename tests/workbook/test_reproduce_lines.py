@@ -14,13 +14,6 @@ from piezolib.workbook import reproduce
 REPOSITORY = Path(__file__).resolve().parents[2]
 
 
-@pytest.fixture
-def workbook(tmp_path, monkeypatch):
-    (tmp_path / "notebooks").mkdir()
-    monkeypatch.setenv("PIEZOLIB_ROOT", str(tmp_path))
-    return tmp_path
-
-
 def copy_data(workbook):
     real = REPOSITORY / "data"
     (workbook / "data").mkdir()
