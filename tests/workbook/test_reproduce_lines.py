@@ -6,7 +6,6 @@ import shutil
 from pathlib import Path
 
 import nbformat
-import pytest
 
 from piezolib.problem import stage_data
 from piezolib.workbook import reproduce
