@@ -105,6 +105,14 @@ LTI_STABLE = {**LTI_PROPER, "unstable": ct.ss(ct.tf([1.0], [1.0, -1.0]))}
 LTI_DISCRETE = {"nan coefficient": ct.ss([[np.nan]], [[1.0]], [[1.0]], [[0.0]], 1 / FS),
                 "continuous": K, "not a model": np.ones((2, 2))}
 SAMPLED_CONTROLLER = {**LTI_DISCRETE, "another sample time": ct.ss(ct.c2d(K, 2 / FS, "tustin"))}
+L2 = ct.append(G, K * G)                                 # a 2 x 2 loop, stable closed loop
+I2 = ct.ss([], [], [], np.eye(2))
+LOOP_PAIR = {"nan coefficient": ct.ss([[np.nan]], [[1.0]], [[1.0]], [[0.0]]),
+             "not a model": np.ones((2, 2))}
+LOOP = {**LOOP_PAIR, "not square": ct.ss(G.A, G.B, np.r_[G.C, G.C], np.zeros((2, 1))),
+        "unstable closed loop": ct.append(ct.ss(ct.tf([20.0], [1.0, 3.0, 3.0, 1.0])), G),
+        "ill-posed": ct.ss([], [], [], -np.eye(2))}
+SKEW = {"nan": np.nan, "inf": np.inf, "text": "x"}
 MATRIX_STACK = {"nan": np.where(np.eye(3) == 1, np.nan, M3), "empty": np.zeros((0, 3, 3)),
                 "1-D": np.ones(3), "text": "abc"}
 
@@ -140,6 +148,13 @@ CASES = {
     "robust.hankel_singular_values": (dict(K=K), {"K": LTI}),
     "robust.discretize": (dict(K=K, fs=FS, check_Hz=100.0), {"K": LTI, "fs": POSITIVE}),
     "robust.loop_margins": (dict(G=G, K=K), {"G": LTI, "K": LTI}),
+    "robust.disk_margin_mimo": (dict(L=L2), {"L": LOOP, "omega": GRID, "skew": SKEW}),
+    "robust.loop_at_a_time_disk_margins": (dict(L=L2), {"L": LOOP, "omega": GRID,
+                                                         "skew": SKEW}),
+    "robust.loop_margins_mimo": (dict(P=L2, K=I2),
+                                 {"P": {**LOOP_PAIR, "wrong shape": ct.ss(G.A, G.B, np.r_[G.C, G.C, G.C], np.zeros((3, 1)))},
+                                  "K": {**LOOP_PAIR, "positive feedback": ct.ss([], [], [], -5 * np.eye(2))},
+                                  "omega": GRID, "skew": SKEW}),
     # identification
     "identification.fit_arx": (dict(u=U, y=Y, fs=FS, na=2, nb=2),
                                {"u": SIGNAL, "y": SIGNAL, "fs": POSITIVE}),

@@ -20,6 +20,8 @@ dgk         mixed-mu synthesis of a SISO controller: DK start, then D,G-K steps 
 reduction   (weighted) balanced controller reduction
 discrete    Tustin discretisation with response checks
 margins     gain, phase, delay and disk margins; sampled-loop delay tolerance
+mimo_margins
+            multi-loop and loop-at-a-time disk margins of a MIMO loop (``diskmargin``)
 achievable  lower bounds on the achievable peak mu (H-infinity certificates)
 performance_weights
             templates on S and T (``sensitivity_weight``,
@@ -50,6 +52,7 @@ from piezolib.robust.dgk import *          # noqa: F401,F403
 from piezolib.robust.reduction import *    # noqa: F401,F403
 from piezolib.robust.discrete import *     # noqa: F401,F403
 from piezolib.robust.margins import *      # noqa: F401,F403
+from piezolib.robust.mimo_margins import *  # noqa: F401,F403
 from piezolib.robust.achievable import *   # noqa: F401,F403
 from piezolib.robust.performance_weights import *  # noqa: F401,F403
 from piezolib.robust.export import *       # noqa: F401,F403
@@ -57,9 +60,11 @@ from piezolib.robust.preview import *      # noqa: F401,F403
 from piezolib.robust import (achievable, blocks, dfit, dgk, discrete, dk, export, fixed_order,
                              hinf, lft, lti, margins, matrix_exponential, mu,
                              performance_weights, preview, reduction)
+from piezolib.robust import mimo_margins
 
 __all__ = (lti.__all__ + matrix_exponential.__all__ + lft.__all__ + blocks.__all__ + mu.__all__
            + hinf.__all__
            + dfit.__all__ + dk.__all__ + fixed_order.__all__ + dgk.__all__ + reduction.__all__
            + discrete.__all__ + margins.__all__ + achievable.__all__ + export.__all__
-           + performance_weights.__all__ + preview.__all__)
+           + performance_weights.__all__ + preview.__all__
+           + mimo_margins.__all__)
