@@ -530,7 +530,9 @@ class ChosenDesignCheck:
     omega : ndarray
         The grid [rad/s] of the mu check.
     mu_rp, mu_rs : piezolib.robust.mu.MuResult or None
-        Mixed mu_RP and mu_RS with the exact delay.
+        Mixed mu_RP and mu_RS with the exact delay, bounded for their peaks
+        (``mussv(..., peak=True)``: the arrays are valid bounds at every frequency, tight
+        where a frequency could set the peak; mu_RS without its lower bound).
     box : pandas.DataFrame
         :func:`piezolib.problem.analysis.box_stability_table`, one column per controller.
     margins : pandas.DataFrame
@@ -666,8 +668,9 @@ def check_chosen_design(design, deployed, sections, G, H_e, H_y, fs, grids=CHECK
             design.spread, omega, fs=fs, delay_samples=delay_samples)
         n = M.shape[2] - 1                                  # one real block per coefficient
         blk = parametric_block_structure(n)
-        mu_rp = mussv(M, blk, omega)
-        mu_rs = mussv(M[:, :n, :n], blk[:n], omega)
+        # only the peaks are claimed: bound where a frequency can set them
+        mu_rp = mussv(M, blk, omega, peak=True)
+        mu_rs = mussv(M[:, :n, :n], blk[:n], omega, lower=False, peak=True)
     sampled = {name: {d: unc.sampled_parametric_margin(G, Kd, d,
                                                        samples=SAMPLED_MARGIN_SAMPLES)
                       for d in MARGIN_DELAYS} for name, (_, Kd) in pairs.items()}

@@ -17,7 +17,7 @@ import numpy as np
 from threadpoolctl import ThreadpoolController
 
 from piezolib._checks import check_finite_array, check_integer, check_positive
-from piezolib.robust.blocks import parse_blk
+from piezolib.robust.blocks import Block, block_slices, parse_blk
 from piezolib.robust.mu.lower import complex_lower_bound, mixed_lower_bound
 from piezolib.robust.mu.refine.branch import branch_and_bound_upper
 from piezolib.robust.mu.refine.lifted import (MAX_LIFTED_UNKNOWNS, lifted_unknowns,
@@ -167,8 +167,87 @@ def _check_refine(refine, blocks, lower):
                          "pass lower=True")
 
 
+#: frequencies bounded at a time by ``mussv(..., peak=True)``
+PEAK_CHUNK = 8
+
+
+def _descending_until(score, compute, scale, chunk=PEAK_CHUNK):
+    """Evaluate ``compute(indices)`` in descending order of ``scale * score`` until no
+    frequency left can beat the largest ``scale * value`` found: ``score`` must bound
+    ``compute`` from above, so the largest value over all frequencies is the one found
+    (``scale``: mussv's per-frequency normalisation, undone to compare frequencies).
+    Returns the evaluated indices (in that order) and the values; the caller checks the
+    bound held."""
+    score = score * scale
+    order = np.argsort(-score, kind="stable")
+    done, values, best = [], [], -np.inf
+    for start in range(0, order.size, chunk):
+        if score[order[start]] <= best:
+            break
+        idx = order[start:start + chunk]
+        v = compute(idx)
+        done.append(idx)
+        values.append(v)
+        best = max(best, float(np.max(v * scale[idx])))
+    return np.concatenate(done), np.concatenate(values)
+
+
+def _complex_relaxation(blocks):
+    """The structure with every real scalar taken as independent 1 x 1 complex scalars: its
+    D-scaled bound bounds the mixed D,G bound from above (that bound starts from it)."""
+    out = []
+    for b in blocks:
+        out.extend([Block.scalar(1)] * b.rows if b.is_real else [b])
+    return tuple(out)
+
+
+def _peak_upper(arr, blocks, scale):
+    """The mixed upper bound where it can set the peak, the complex relaxation's bound
+    elsewhere (both bound mu; the peak is the one of the mixed bound at every frequency)."""
+    nf, p, q = arr.shape
+    cu, _, cDl, cDr = complex_upper_bound(arr, _complex_relaxation(blocks))
+    d = np.full((nf, len(blocks)), np.nan)
+    g = np.full((nf, len(blocks)), np.nan)
+    for i, (b, (_, rows)) in enumerate(zip(blocks, block_slices(blocks))):
+        if b.scalar_scaling:
+            d[:, i] = cDl[:, rows.start, rows.start].real
+        if b.is_real and b.size == 1:
+            g[:, i] = 0.0
+    upper, Dl, Dr, G = cu.copy(), cDl.real.copy(), cDr.real.copy(), np.zeros((nf, q, p))
+    parts = {}
+
+    def compute(idx):
+        parts[tuple(idx)] = mixed_upper_bound(arr[idx], blocks)
+        return parts[tuple(idx)][0]
+
+    _descending_until(cu, compute, scale)
+    for idx, (u, di, gi, Dli, Dri, Gi) in parts.items():
+        idx = np.asarray(idx)
+        if np.any(u > cu[idx] * (1 + 1e-9)):        # the pruning's premise failed: bound all
+            return mixed_upper_bound(arr, blocks)
+        upper[idx], d[idx], g[idx], Dl[idx], Dr[idx], G[idx] = u, di, gi, Dli, Dri, Gi
+    return upper, d, g, Dl, Dr, G
+
+
+def _peak_lower(arr, upper, scale, bound):
+    """``bound(indices)`` -> (lower, Delta) where it can raise the largest lower bound (the
+    upper bound is above it), zero (a valid lower bound) elsewhere."""
+    nf, p, q = arr.shape
+    low, Delta = np.zeros(nf), np.zeros((nf, q, p), complex)
+    parts = {}
+
+    def compute(idx):
+        parts[tuple(idx)] = bound(idx)
+        return parts[tuple(idx)][0]
+
+    _descending_until(upper, compute, scale)
+    for idx, (lo, De) in parts.items():
+        low[list(idx)], Delta[list(idx)] = lo, De
+    return low, Delta
+
+
 def mussv(M, blk, omega=None, *, lower=True, restarts=3, iterations=60, tol=1e-12, seed=0,
-          refine=None):
+          refine=None, peak=False):
     """Upper and lower bounds of the structured singular value mu_Delta(M).
 
     Parameters
@@ -214,6 +293,16 @@ def mussv(M, blk, omega=None, *, lower=True, restarts=3, iterations=60, tol=1e-1
         Both cost far more than the plain bounds (milliseconds to seconds per refined
         frequency; measured in ``benchmarks/README.md``, "What mussv(refine=...) costs").
         Default None (the D-scaled or D,G bound only).
+    peak : bool, optional
+        Only the peaks over the grid are wanted (``upper.max()``, ``lower.max()``): the
+        expensive bounds are computed in descending order of a cheaper bound above them
+        until no frequency left can change the peak.  With real blocks, the D,G bound is
+        computed where the complex relaxation's D-scaled bound (a bound above it) exceeds the
+        largest D,G bound found, that relaxation's bound stands elsewhere (G = 0 there);
+        the lower bound is computed where the upper bound exceeds the largest lower bound
+        found, and is 0 elsewhere.  The peaks equal those of a full run's upper bound; the
+        lower bound's peak can differ from a full run's by its random starts.  Both arrays
+        stay valid bounds at every frequency.  Not with ``refine``.  Default False.
 
     Returns
     -------
@@ -250,6 +339,11 @@ def mussv(M, blk, omega=None, *, lower=True, restarts=3, iterations=60, tol=1e-1
     if not isinstance(lower, bool):
         raise TypeError(f"lower must be True or False, got {lower!r}")
     _check_refine(refine, blocks, lower)
+    if not isinstance(peak, bool):
+        raise TypeError(f"peak must be True or False, got {peak!r}")
+    if peak and refine is not None:
+        raise ValueError("peak=True does not combine with refine (refine tightens the bound "
+                         "at every frequency whose gap is wide)")
     rng = np.random.default_rng(seed)
     blk_tuple = tuple(b.blk_row for b in blocks)
     has_real = any(b.is_real for b in blocks)
@@ -262,13 +356,22 @@ def mussv(M, blk, omega=None, *, lower=True, restarts=3, iterations=60, tol=1e-1
     # the matrices are small (q is at most a few tens), so BLAS threads only add overhead:
     # on 2 cores they made refining 8 scalars 8x slower (docs/robust.md)
     with _BLAS.limit(limits=1, user_api="blas"):
-        if has_real:
+        if has_real and peak:
+            upper, d, g, Dl, Dr, G = _peak_upper(arr, blocks, c)
+        elif has_real:
             upper, d, g, Dl, Dr, G = mixed_upper_bound(arr, blocks)
         else:
             upper, d, Dl, Dr = complex_upper_bound(arr, blocks, tol)
             g = G = None
         if not lower:
             low, Delta = np.zeros(nf), np.zeros((nf, q, p), complex)
+        elif peak and has_real:
+            low, Delta = _peak_lower(arr, upper, c, lambda k: mixed_lower_bound(
+                arr[k], blocks, upper[k], iterations=iterations, rng=rng, restarts=restarts))
+        elif peak:
+            low, Delta = _peak_lower(arr, upper, c, lambda k: complex_lower_bound(
+                arr[k], blocks, Dl[k], Dr[k], upper[k], iterations=iterations, rng=rng,
+                restarts=restarts))
         elif has_real:
             low, Delta = mixed_lower_bound(arr, blocks, upper, iterations=iterations, rng=rng,
                                            restarts=restarts)

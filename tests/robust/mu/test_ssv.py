@@ -434,3 +434,45 @@ def test_mussv_computes_its_bounds_on_one_blas_thread(monkeypatch):
         outside = blas_threads()
     assert seen == [{1}, {1}, {1}]
     assert outside == {2}                   # and the caller's setting is restored
+
+
+# --- peak=True: the bounds only where a frequency can set the peak -----------------------
+
+def smooth_family(seed, nf, n):
+    """Matrices varying smoothly over nf frequencies, with entries of very different size
+    at different frequencies (mussv normalises each: the pruning must undo that)."""
+    rng = np.random.default_rng(seed)
+    w = np.linspace(0, 1, nf)
+    A = crandn(rng, 3, n, n)
+    size = np.exp(3 * np.sin(5 * w))[:, None, None]
+    return size * (A[0] + np.cos(6 * w)[:, None, None] * A[1] + np.sin(3 * w)[:, None, None] * A[2])
+
+
+@pytest.mark.parametrize("blk", [[(-1, 0), (-1, 0), (-2, 0), (1, 1)],
+                                 [(-1, 0), (-1, 0), (1, 1), (2, 2)],
+                                 [(1, 1), (2, 2), (2, 2)]])
+def test_peak_mode_has_the_full_runs_peak_and_valid_bounds(blk):
+    M = smooth_family(1, 80, 5)
+    full, peak = mussv(M, blk), mussv(M, blk, peak=True)
+    np.testing.assert_allclose(peak.upper.max(), full.upper.max(), rtol=1e-9)
+    assert peak.lower.max() >= 0.95 * full.lower.max()      # local search: its own starts
+    assert np.all(peak.upper >= full.upper * (1 - 1e-9))     # a bound above mu everywhere
+    assert np.all(peak.lower <= peak.upper * (1 + 1e-9))
+    # it pruned: the lower bound was left at zero somewhere
+    assert np.count_nonzero(peak.lower == 0) > 0
+
+
+def test_peak_mode_prunes_the_mixed_bound(monkeypatch):
+    calls = []
+    real = ssv.mixed_upper_bound
+    monkeypatch.setattr(ssv, "mixed_upper_bound",
+                        lambda M, blocks: calls.append(M.shape[0]) or real(M, blocks))
+    mussv(smooth_family(2, 80, 4), [(-1, 0), (-1, 0), (2, 2)], peak=True, lower=False)
+    assert 0 < sum(calls) < 80
+
+
+def test_peak_mode_bad_input():
+    with pytest.raises(TypeError, match="peak"):
+        mussv(np.eye(2), [(1, 1), (1, 1)], peak=1)
+    with pytest.raises(ValueError, match="peak=True does not combine with refine"):
+        mussv(np.eye(2), [(1, 1), (1, 1)], peak=True, refine=0.01)
