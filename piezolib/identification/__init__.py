@@ -20,6 +20,8 @@ freqfit     discrete MIMO state-space models fitted to an FRF (frequency-domain 
 mimo_hammerstein
             Prandtl-Ishlinskii operators ahead of MIMO linear dynamics, weights by least squares
 scheduled   linear models blended by the input's measured RMS level
+basis_model fixed-pole basis models: causal, nonlinear, LPV in a running input RMS, linear in
+            their parameters (one least-squares fit)
 
 Why output-error passes follow ARX, and why the numerator is refitted:
 ``docs/stage.md``.
@@ -45,8 +47,10 @@ from piezolib.identification.frf import *          # noqa: F401,F403
 from piezolib.identification.freqfit import *      # noqa: F401,F403
 from piezolib.identification.mimo_hammerstein import *  # noqa: F401,F403
 from piezolib.identification.scheduled import *    # noqa: F401,F403
+from piezolib.identification.basis_model import *  # noqa: F401,F403
 from piezolib.identification import (arx, continuous, oe, validation, frf, freqfit,
-                                    mimo_hammerstein, scheduled)
+                                    mimo_hammerstein, scheduled, basis_model)
 
 __all__ = [*arx.__all__, *oe.__all__, *continuous.__all__, *validation.__all__, *frf.__all__,
-           *freqfit.__all__, *mimo_hammerstein.__all__, *scheduled.__all__]
+           *freqfit.__all__, *mimo_hammerstein.__all__, *scheduled.__all__,
+           *basis_model.__all__]
