@@ -13,9 +13,9 @@ import numpy as np
 
 from piezolib._checks import check_type
 from piezolib.problem import fsm_benchmark as fsm
-from piezolib.problem import fsm_control, fsm_models
+from piezolib.problem import fsm_control, fsm_mimo, fsm_models
 
-__all__ = ["claim_rows", "summary_lines", "slashed"]
+__all__ = ["claim_rows", "summary_lines", "slashed", "mimo_claim_rows", "mimo_summary_lines"]
 
 
 #: The result class of each argument of :func:`claim_rows` and :func:`summary_lines`.
@@ -29,6 +29,9 @@ _RESULTS = {
     "design": fsm_control.AxisDesign,
     "verified": fsm_control.AxisVerification,
     "coupling": fsm_control.AxisCoupling,
+    "mirror": fsm_mimo.MirrorNominal,
+    "record": fsm_mimo.MirrorRecord,
+    "checked": fsm_mimo.MirrorVerification,
 }
 
 
@@ -230,3 +233,112 @@ def summary_lines(blas, scores, change, nonlinear, weight, nominal, design, veri
         f"d_{coupling.pair[0] + 1}'s reference at 10 Hz (other actuators open)",
         "not done: a MIMO controller for the mirror",
     ]
+
+
+def _two(x):
+    return float(f"{x:.2g}")
+
+
+def mimo_claim_rows(mirror, record, checked):
+    """The 3 x 3 section's claims: the MIMO controller beside the three SISO loops.
+
+    Every quantity names "MIMO" (the 3 x 3 problem), and the margin and step rows
+    "disk margin" and "cross-talk"; each row of the 3 x 3 controller has its twin for the
+    three SISO loops closed together on the coupled mirror.
+
+    Parameters
+    ----------
+    mirror : piezolib.problem.fsm_mimo.MirrorNominal
+    record : piezolib.problem.fsm_mimo.MirrorRecord
+    checked : piezolib.problem.fsm_mimo.MirrorVerification
+
+    Returns
+    -------
+    list of dict
+        Arguments of ``nb.check`` (none published).
+    """
+    _check_results(mirror=mirror, record=record, checked=checked)
+    sig3 = fsm_control.significant
+    rows = [_row("MIMO mu", "MIMO: nominal 3 x 3 model, states (of the all-levels model's "
+                 f"{mirror.G_full.nstates})", int(mirror.G_nominal.nstates),
+                 note="lowest order whose levels' spread at 500-1100 Hz is the full model's "
+                      "(reduction table)")]
+    table = checked.table()
+    for name in table.columns:
+        col = table[name]
+        who = "3 x 3 mu controller" if name == fsm_mimo.MIMO else "3 SISO loops together"
+        rows += [
+            _row("MIMO mu", f"MIMO problem, {who}: controller states", int(col["states"]),
+                 note=(f"reduced from {record.K_full_order} (DK) to the lowest order within "
+                       f"{record.params['reduction_precision']} of its mu_RP"
+                       if name == fsm_mimo.MIMO else "three axis designs of fsm_control, "
+                       "same weights, each on its diagonal entry")),
+            _row("MIMO mu", f"MIMO problem, {who}: mu_RP upper bound (w-plane, fine grid)",
+                 sig3(col["mu_RP upper"]), precision=0.01,
+                 note="full 3 x 3 output-multiplicative block, performance block 3 x 9"),
+            _row("MIMO mu", f"MIMO problem, {who}: mu_RP lower bound",
+                 sig3(col["mu_RP lower"]), precision=0.01)]
+        for (cname, mname), r in checked.loops.iterrows():
+            if cname != name:
+                continue
+            rows.append(_row("MIMO mu", f"MIMO sampled loop, {who}, {mname}: largest |pole|",
+                             sig3(r["largest |pole|"]), precision=0.01,
+                             note="stable below 1; one sample of delay"))
+        rows.append(_row("MIMO mu", f"MIMO step cross-talk, {who}: worst off-diagonal peak "
+                         "over the diagonal step (all models)",
+                         _two(col["worst cross-talk (all models)"]), precision=0.02,
+                         note="inf where a loop is unstable"))
+        if checked.margins is not None:
+            m = checked.margins.xs(name, level=0)
+            for col_name, short in (("multi-loop disk margin, input", "multi-loop disk margin "
+                                     "at the plant input"),
+                                    ("multi-loop disk margin, output", "multi-loop disk margin "
+                                     "at the plant output"),
+                                    ("loop-at-a-time disk margin, input (smallest)",
+                                     "loop-at-a-time disk margin at the plant input, smallest")):
+                rows.append(_row("MIMO mu", f"MIMO {who}: {short} (worst model)",
+                                 round(float(m[col_name].min()), 2), precision=0.02,
+                                 note="diskmargin's alpha; NaN where a loop is unstable"))
+    return rows
+
+
+def mimo_summary_lines(mirror, record, checked):
+    """The 3 x 3 section's findings, one line each (Markdown).
+
+    Parameters
+    ----------
+    mirror : piezolib.problem.fsm_mimo.MirrorNominal
+    record : piezolib.problem.fsm_mimo.MirrorRecord
+    checked : piezolib.problem.fsm_mimo.MirrorVerification
+
+    Returns
+    -------
+    list of str
+    """
+    _check_results(mirror=mirror, record=record, checked=checked)
+    t = checked.table()
+    mimo, siso = t[fsm_mimo.MIMO], t[fsm_mimo.SISO]
+
+    def stab(col):
+        return "stable with every level's model" if col["stable with every model"] else \
+            f"NOT stable with every model (largest |pole| {col['largest |pole| (all models)']:.3f})"
+
+    lines = [
+        f"3 x 3 μ controller of the whole mirror: nominal the all-levels model "
+        f"({mirror.G_nominal.nstates} states), the levels' spread as one full complex 3 × 3 "
+        f"output block; DK {record.K_full_order} states, reduced to {int(mimo['states'])}: "
+        f"μ_RP {mimo['mu_RP upper']:.3f} (lower {mimo['mu_RP lower']:.3f}), {stab(mimo)}, "
+        f"worst step cross-talk {mimo['worst cross-talk (all models)']:.2g}",
+        f"three SISO loops (one per diagonal entry, the same weights) closed together on the "
+        f"coupled mirror: μ_RP of the 3 × 3 problem {siso['mu_RP upper']:.3f} (lower "
+        f"{siso['mu_RP lower']:.3f}), {stab(siso)}, worst step cross-talk "
+        f"{siso['worst cross-talk (all models)']:.2g}"]
+    if checked.margins is not None:
+        m = checked.margins
+        lines.append(
+            "multi-loop disk margins (all channels at once, worst model), input / output: "
+            f"3 × 3 {m.xs(fsm_mimo.MIMO)['multi-loop disk margin, input'].min():.2f} / "
+            f"{m.xs(fsm_mimo.MIMO)['multi-loop disk margin, output'].min():.2f}, three SISO "
+            f"loops {m.xs(fsm_mimo.SISO)['multi-loop disk margin, input'].min():.2f} / "
+            f"{m.xs(fsm_mimo.SISO)['multi-loop disk margin, output'].min():.2f}")
+    return lines

@@ -1,0 +1,137 @@
+"""The 3 x 3 mirror controller: the committed record, the verification's pieces on small
+plants with known answers, bad input."""
+
+from types import SimpleNamespace
+
+import control as ct
+import numpy as np
+import pytest
+
+from piezolib import robust
+from piezolib.problem import fsm_benchmark as fsm
+from piezolib.problem import fsm_mimo, fsm_models
+
+FS = fsm.SAMPLING_FREQUENCY_HZ
+T = 1 / FS
+F_HZ = np.linspace(2.0, 1500.0, 200)
+
+
+def _diag_plant(poles=(0.9, 0.8, 0.7), gain=1.0):
+    A = np.diag(poles)
+    return ct.ss(A, gain * np.eye(3), np.eye(3), np.zeros((3, 3)), T)
+
+
+def _integrators(k=0.05, n=3):
+    return ct.ss(np.eye(n), k * np.eye(n), np.eye(n), np.zeros((n, n)), T)
+
+
+def test_relative_spread_is_the_largest_singular_value_of_the_output_error():
+    G = np.tile(np.diag([1.0, 2.0]), (3, 1, 1)).astype(complex)
+    G_l = G.copy()
+    G_l[:, 0, 1] = 0.5                         # (G_l - G) G^-1 = [[0, 0.25], [0, 0]]
+    assert fsm_mimo.relative_spread([G_l, G], G) == pytest.approx([0.25] * 3)
+
+
+def test_sampled_radius_of_decoupled_loops_is_the_worst_siso_loop():
+    G = _diag_plant()
+    K = ct.ss([], [], [], 0.05 * np.eye(3), T)
+    r3 = fsm_mimo.sampled_radius(G, K)
+    r_siso = max(fsm_mimo.sampled_radius(ct.ss(p, 1.0, 1.0, 0.0, T), ct.ss([], [], [], 0.05, T))
+                 for p in (0.9, 0.8, 0.7))
+    assert r3 == pytest.approx(r_siso, rel=1e-12)
+    assert 0 < r3 < 1
+
+
+def test_step_crosstalk_of_a_coupled_static_plant_matches_its_dc_gain():
+    # plant G = C (zI - A)^-1 B with a constant mixing: with integral control the loop's T -> I,
+    # so the off-diagonal steps end at 0 and their peak is the transient only; a decoupled
+    # plant has none at all
+    x = fsm_mimo.step_crosstalk(_diag_plant(), _integrators())
+    assert np.all(x[~np.eye(3, dtype=bool)] == 0.0)
+    assert np.all(np.diag(x) >= 1.0 - 1e-9)
+    mix = np.array([[1.0, 0.3, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    G = ct.ss(np.diag([0.9, 0.9, 0.9]), mix, np.eye(3), np.zeros((3, 3)), T)
+    x = fsm_mimo.step_crosstalk(G, _integrators(0.02))
+    assert x[0, 1] > 0.01 and x[1, 0] == 0.0          # input 2 reaches output 1, not the reverse
+
+
+def test_step_crosstalk_refuses_an_unstable_loop():
+    with pytest.raises(ValueError, match="unstable"):
+        fsm_mimo.step_crosstalk(_diag_plant(), ct.ss([], [], [], -5 * np.eye(3), T))
+
+
+def test_the_design_plant_with_no_controller_is_the_open_weights():
+    s = ct.tf("s")
+    G = ct.ss(-np.eye(3), np.eye(3), np.eye(3), np.zeros((3, 3)))
+    W_m, W_S, W_T, W_u = ct.tf(0.2, 1), 1 / (s + 1), ct.tf(0.3, 1), ct.tf(0.1, 1)
+    P = fsm_mimo.mirror_design_plant(G, W_m, W_S, W_T, W_u)
+    M = robust.lft_response(P, ct.ss([], [], [], np.zeros((3, 3))), np.array([1.0]))[0]
+    # with K = 0: y1 = W_S (v_r - u_Delta), y2 = W_T u_Delta, nothing else
+    w_s = complex(np.ravel(W_S(1j))[0])
+    assert M.shape == (12, 6)
+    np.testing.assert_allclose(M[3:6, 3:6], w_s * np.eye(3), atol=1e-12)
+    np.testing.assert_allclose(M[3:6, 0:3], -w_s * np.eye(3), atol=1e-12)
+    np.testing.assert_allclose(M[6:9, 0:3], 0.3 * np.eye(3), atol=1e-12)
+    np.testing.assert_allclose(M[0:3], 0.0, atol=1e-12)
+    np.testing.assert_allclose(M[9:12], 0.0, atol=1e-12)
+
+
+def test_mirror_nominal_at_full_order_reproduces_the_model():
+    model = ct.ss(np.diag([0.9, 0.5, -0.3]), np.eye(3) + 0.1, 1e-6 * np.eye(3),
+                  np.zeros((3, 3)), T)
+    zl = np.exp(2j * np.pi * F_HZ / FS)
+    G_all = np.asarray(model(zl))
+    models = {f"ours, order chosen (3), trained at {lv} mV": (lv, model) for lv in fsm.LEVELS_MV}
+    models["ours, one model for all levels (order 3)"] = ("all", model)
+    linear = fsm_models.LinearModels(models=models, selections={
+        lv: SimpleNamespace(order=3) for lv in fsm.LEVELS_MV}, baseline_order=28, G_all=G_all)
+    nominal = fsm_mimo.mirror_nominal(linear, F_HZ, 3, orders=(2,))
+    assert list(nominal.reduction.index) == [2, 3]
+    assert nominal.reduction.loc[3, "rms error < 100 Hz [%]"] < 1e-8
+    assert np.all(nominal.spread() < 1e-10)
+    assert nominal.G_nominal.nstates == 3
+
+
+def test_the_committed_design_record_loads_and_states_its_reduction():
+    rec = fsm_mimo.read_mirror_record()
+    assert rec.K_w.ninputs == rec.K_w.noutputs == 3
+    assert rec.K_w.nstates <= rec.K_full_order
+    assert rec.mu_reduced <= rec.mu_dk + rec.params["reduction_precision"] + 1e-12
+    assert len(rec.history) >= 1 and sorted(rec.siso_K_w) == [0, 1, 2]
+    assert rec.K_d().dt == pytest.approx(T) and rec.siso_K_d().ninputs == 3
+    assert set(rec.weights) == {"W_m", "W_S", "W_T", "W_u"}
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda: fsm_mimo.mirror_model(ct.ss([[0.5]], [[1.0]], [[1.0]], [[0.0]], T)), "model"),
+    (lambda: fsm_mimo.mirror_model(ct.ss(-np.eye(3), np.eye(3), np.eye(3), np.zeros((3, 3)))),
+     "model"),
+    (lambda: fsm_mimo.relative_spread([np.ones((4, 2, 2))], np.ones((4, 3, 3))), "level"),
+    (lambda: fsm_mimo.relative_spread([np.ones((4, 2, 2))], np.ones((4, 2, 2))), "invertible"),
+    (lambda: fsm_mimo.relative_spread([np.eye(2)[None]], np.full((1, 2, 2), np.nan)),
+     "nominal_response"),
+    (lambda: fsm_mimo.sampled_radius(_diag_plant(), ct.ss([], [], [], np.eye(2), T)), "K_d"),
+    (lambda: fsm_mimo.sampled_radius(_diag_plant(), ct.ss([], [], [], np.eye(3), 1e-3)), "K_d"),
+    (lambda: fsm_mimo.sampled_radius(_diag_plant(), ct.ss([], [], [], np.eye(3))), "K_d"),
+    (lambda: fsm_mimo.step_crosstalk(_diag_plant(), _integrators(), n_samples=3), "n_samples"),
+    (lambda: fsm_mimo.mirror_design_plant(_diag_plant(), 1, 1, 1, 1), "G"),
+    (lambda: fsm_mimo.mirror_design_plant(
+        ct.ss(-np.eye(3), np.eye(3), np.eye(3), np.zeros((3, 3))), ct.tf(1, [1, -1]), 1, 1, 1),
+     "W_m"),
+    (lambda: fsm_mimo.block_diagonal(), "controllers"),
+    (lambda: fsm_mimo.block_diagonal(ct.ss([], [], [], np.eye(2))), "controllers"),
+    (lambda: fsm_mimo.delay_matrix(0), "n"),
+    (lambda: fsm_mimo.read_mirror_record(3), "path"),
+    (lambda: fsm_mimo.mirror_nominal("x", F_HZ, 3), "linear"),
+    (lambda: fsm_mimo.verify_mirror("x", None), "nominal"),
+])
+def test_bad_input_is_refused_naming_the_argument(call, match):
+    with pytest.raises((ValueError, TypeError), match=match):
+        call()
+
+
+def test_a_file_that_is_no_record_is_refused(tmp_path):
+    bad = tmp_path / "x.json"
+    bad.write_text('{"format": 1}')
+    with pytest.raises(ValueError, match="not a 3 x 3 design record"):
+        fsm_mimo.read_mirror_record(bad)
