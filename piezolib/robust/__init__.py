@@ -27,6 +27,7 @@ performance_weights
             templates on S and T (``sensitivity_weight``,
             ``complementary_sensitivity_weight``)
 export      second-order sections: JSON, C header, reference filter
+mimo_export a MIMO controller in a well-conditioned state space, float32 checks, C header
 preview     reference feedforward with preview: zero-phase-error tracking (``zpetc``)
 float32_check
             what rounding the sections to float32 does (poles, response), refused or warned
@@ -53,6 +54,7 @@ from piezolib.robust.reduction import *    # noqa: F401,F403
 from piezolib.robust.discrete import *     # noqa: F401,F403
 from piezolib.robust.margins import *      # noqa: F401,F403
 from piezolib.robust.mimo_margins import *  # noqa: F401,F403
+from piezolib.robust.mimo_export import *   # noqa: F401,F403
 from piezolib.robust.achievable import *   # noqa: F401,F403
 from piezolib.robust.performance_weights import *  # noqa: F401,F403
 from piezolib.robust.export import *       # noqa: F401,F403
@@ -60,11 +62,11 @@ from piezolib.robust.preview import *      # noqa: F401,F403
 from piezolib.robust import (achievable, blocks, dfit, dgk, discrete, dk, export, fixed_order,
                              hinf, lft, lti, margins, matrix_exponential, mu,
                              performance_weights, preview, reduction)
-from piezolib.robust import mimo_margins
+from piezolib.robust import mimo_export, mimo_margins
 
 __all__ = (lti.__all__ + matrix_exponential.__all__ + lft.__all__ + blocks.__all__ + mu.__all__
            + hinf.__all__
            + dfit.__all__ + dk.__all__ + fixed_order.__all__ + dgk.__all__ + reduction.__all__
            + discrete.__all__ + margins.__all__ + achievable.__all__ + export.__all__
            + performance_weights.__all__ + preview.__all__
-           + mimo_margins.__all__)
+           + mimo_margins.__all__ + mimo_export.__all__)
