@@ -27,7 +27,8 @@ performance_weights
             templates on S and T (``sensitivity_weight``,
             ``complementary_sensitivity_weight``)
 export      second-order sections: JSON, C header, reference filter
-mimo_export a MIMO controller in a well-conditioned state space, float32 checks, C header
+mimo_export
+            a MIMO controller in a well-conditioned state space, float32 checks, C header
 preview     reference feedforward with preview: zero-phase-error tracking (``zpetc``)
 float32_check
             what rounding the sections to float32 does (poles, response), refused or warned
