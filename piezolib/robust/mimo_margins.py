@@ -125,6 +125,9 @@ class MIMOLoopMargins:
         L = P K (every plant output at once).
     input_loops, output_loops : list of MIMODiskMargin
         Loop-at-a-time margins at each plant input and each plant output.
+    input_output : MIMODiskMargin
+        Every plant input and every plant output perturbed at once, independently
+        (MATLAB's MMIO): nu + ny factors, ``worst_factors`` inputs first.
 
     Examples
     --------
@@ -142,6 +145,7 @@ class MIMOLoopMargins:
     output: MIMODiskMargin
     input_loops: list
     output_loops: list
+    input_output: MIMODiskMargin = None
 
 
 def _check_skew(skew):
@@ -427,11 +431,40 @@ def _series(first, second):
     return b * a
 
 
+def _input_output_parts(P, K, Li):
+    """S-like realisation (A, B, C, D, dt) of N + I, N: [w_i; w_o] -> [u_c; y].
+
+    With a factor f = 1 + delta / (1 - b delta), b = (1 + sigma)/2, on every plant input
+    (u_p = u_c + w_i) and output (y_m = y + w_o), w = delta z and z = [u_c; y] + b w, so
+    z = (N + b I) w = (S' + (sigma - 1)/2 I) w with S' = N + I:
+    N = [[-T_i, -S_i K], [S_o P, -T_o]] (S_i, T_i at the input, S_o, T_o at the output).
+    """
+    Pn, Kn = ct.ss(P), ct.ss(K)
+    dt = Li.dt
+    Pn = ct.ss(Pn.A, Pn.B, Pn.C, Pn.D, dt, inputs=[f"up{i}" for i in range(P.ninputs)],
+               outputs=[f"y{i}" for i in range(P.noutputs)])
+    Kn = ct.ss(Kn.A, Kn.B, -Kn.C, -Kn.D, dt, inputs=[f"ym{i}" for i in range(P.noutputs)],
+               outputs=[f"uc{i}" for i in range(P.ninputs)])      # negative feedback: u_c = -K y_m
+    nu, ny = P.ninputs, P.noutputs
+    sums = [ct.summing_junction([f"uc{i}", f"wi{i}"], f"up{i}", dt=dt) for i in range(nu)]
+    sums += [ct.summing_junction([f"y{i}", f"wo{i}"], f"ym{i}", dt=dt) for i in range(ny)]
+    N = ct.interconnect([Pn, Kn] + sums,
+                        inputs=[f"wi{i}" for i in range(nu)] + [f"wo{i}" for i in range(ny)],
+                        outputs=[f"uc{i}" for i in range(nu)] + [f"y{i}" for i in range(ny)])
+    N = ct.ss(N)
+    A, B, C, D = (np.asarray(x, float) for x in (N.A, N.B, N.C, N.D))
+    if A.size:
+        _, (scale, _) = la.matrix_balance(A, permute=False, separate=True)
+        A = A * scale[None, :] / scale[:, None]
+        B, C = B / scale[:, None], C * scale[None, :]
+    return A, B, C, D + np.eye(nu + ny), (float(dt) if dt else 0.0)
+
+
 def loop_margins_mimo(P, K, omega=None, skew=0.0):
     """Multi-loop and loop-at-a-time disk margins at the plant input and output.
 
-    As MATLAB's ``diskmargin(P, C)`` (its MMI/MMO and DMI/DMO): L = K P broken at the
-    plant inputs, L = P K at the plant outputs.
+    As MATLAB's ``diskmargin(P, C)`` (its MMI/MMO, DMI/DMO and MMIO): L = K P broken at
+    the plant inputs, L = P K at the plant outputs, and both sides perturbed at once.
 
     Parameters
     ----------
@@ -467,6 +500,9 @@ def loop_margins_mimo(P, K, omega=None, skew=0.0):
     Li, Lo = _series(P, K), _series(K, P)
     pi, wi, skew = _prepare("K P", Li, omega, skew)
     po, wo, _ = _prepare("P K", Lo, omega, skew)
+    pio = _input_output_parts(P, K, Li)
+    wio = wi if omega is not None else np.union1d(wi, wo)
     return MIMOLoopMargins(input=_disk(pi, wi, skew, None), output=_disk(po, wo, skew, None),
                            input_loops=[_disk(pi, wi, skew, i) for i in range(pi[3].shape[0])],
-                           output_loops=[_disk(po, wo, skew, i) for i in range(po[3].shape[0])])
+                           output_loops=[_disk(po, wo, skew, i) for i in range(po[3].shape[0])],
+                           input_output=_disk(pio, wio, skew, None))

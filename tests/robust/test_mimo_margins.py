@@ -192,3 +192,35 @@ def test_unstable_closed_loop_is_refused():
         disk_margin_mimo(ct.ss(ct.append(ct.ss(ct.tf([20], [1, 3, 3, 1])), ct.ss(ct.tf([1], [1, 1])))))
     with pytest.raises(ValueError, match="square"):
         disk_margin_mimo(ct.ss(-np.eye(2), np.eye(2), np.ones((3, 2)), np.zeros((3, 2))))
+
+
+def test_input_output_margin_worst_factors_destabilise_and_it_is_the_smallest():
+    P, C = satellite(), static([[1.0, -2.0], [0.0, 1.0]])
+    m = loop_margins_mimo(P, C)
+    io = m.input_output
+    assert io.alpha <= min(m.input.alpha, m.output.alpha)
+    assert io.alpha_upper == pytest.approx(io.alpha, rel=1e-3)
+    # independent of the interconnection behind mu: I + K F_o P F_i singular at that frequency
+    Fi, Fo = np.diag(io.worst_factors[:2]), np.diag(io.worst_factors[2:])
+    L = C.D @ Fo @ P(1j * io.worst_frequency) @ Fi
+    assert np.linalg.svd(np.eye(2) + L, compute_uv=False)[-1] < 1e-6
+    delta = 2 * (io.worst_factors - 1) / (io.worst_factors + 1)
+    assert np.max(np.abs(delta)) == pytest.approx(io.alpha_upper, rel=1e-6)
+
+
+def test_siso_input_output_margin_against_brute_force():
+    # one loop, a factor at the plant input and one at its output: 1 + L f1 f2 = 0
+    G = ct.tf(25, [1, 10, 10, 10])
+    io = loop_margins_mimo(ct.ss(G), static([[1.0]])).input_output
+    phi = np.exp(1j * np.linspace(0, 2 * np.pi, 2001))
+    best = math.inf
+    for w in io.worst_frequency * np.linspace(0.9, 1.1, 21):
+        g = np.ravel(G(1j * w))[0]
+        for r in np.linspace(0.15, 0.35, 400):
+            d1 = r * phi
+            f1 = (1 + d1 / 2) / (1 - d1 / 2)
+            f2 = -1 / (g * f1)
+            d2 = 2 * (f2 - 1) / (f2 + 1)
+            best = min(best, float(np.min(np.maximum(np.abs(d1), np.abs(d2)))))
+    assert io.alpha <= best * (1 + 1e-9)
+    assert best == pytest.approx(io.alpha, rel=2e-3)
