@@ -416,10 +416,13 @@ def _polish(data, regs, b, a, offset, n, delay, iterations=20, tol=1e-6):
     if na + b.size - delay - 1 == 0:
         return (b, a, *_solved_with_cost(data, regs, b, a, offset, n))
     A, rhs, theta, cost = _solved_with_cost(data, regs, b, a, offset, n)
-    # no pole closer to z = 1 than the alternation's (and 0.99): a slow pole with a zero next
-    # to it gives unit gain only near DC, and the record's slope moves from the weights into
-    # the dynamics (unidentifiable; the feedforward of a Preisach record then missed by 24 %)
-    reach = max(float(np.max(np.abs(np.roots(a)))) if na else 0.0, 0.99)
+    # the poles stay at most halfway from the alternation's largest radius to z = 1 (and
+    # within 0.99): a slow pole with a zero next to it gives unit gain only near DC, and the
+    # record's slope moves from the weights into the dynamics (unidentifiable; the feedforward
+    # of a Preisach record then missed by 24 %); a bound at the alternation's radius itself
+    # held a fit of plays through a lag at 1.7 % of stroke where the lag gives 0.09 %
+    radius = float(np.max(np.abs(np.roots(a)))) if na else 0.0
+    reach = max(radius + 0.5 * (1.0 - radius), 0.99)
     for _ in range(iterations):
         J = _dynamics_jacobian(data, regs, theta[:n], b, a, delay)
         free = np.r_[theta[:n] > 0, [True] if offset else []].astype(bool)
@@ -542,7 +545,10 @@ def fit_hammerstein(loops, fs, order="auto", n_plays=10, dynamics=None, delay=1,
     before each record's middle turning point and scored on those after it;
     of the orders within 5 % of the best score, the one with the smallest
     residual on the fitted part (where the step and its ringing are) is
-    refitted to the whole records.
+    refitted to the whole records; each lower candidate (a member of the
+    chosen order's model set) is refitted too, and where its residual on the
+    whole records is smaller, the chosen order's fit was stuck and the lower
+    one is returned.
 
     Parameters
     ----------
@@ -661,6 +667,14 @@ def fit_hammerstein(loops, fs, order="auto", n_plays=10, dynamics=None, delay=1,
                                                  iterations, tol)
         b, a, A, rhs, theta, cost, k = _alternate(data, regs, first[start][2], offset, r.size,
                                                   *chosen, delay, iterations, tol, polish=True)
+        # a lower order is a member of the chosen order's model set: when its own fit on all
+        # the records is the better one, the chosen order's fit is stuck, and that fit stands
+        for lower in (o for o in orders if o[0] <= chosen[0] and o[1] <= chosen[1]
+                      and o != chosen):
+            fit = _alternate(data, regs, first[start][2], offset, r.size, *lower, delay,
+                             iterations, tol, polish=True)
+            if fit[5] < cost:
+                b, a, A, rhs, theta, cost, k = fit
     x0 = float(theta[-1]) if offset else 0.0
     w = theta[:r.size].copy()
     w[w <= 1e-12 * float(np.sum(w))] = 0.0

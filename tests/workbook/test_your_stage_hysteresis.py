@@ -51,9 +51,6 @@ def test_fit_hysteresis_holds_out_the_second_half_when_nothing_else_validates(mo
     assert all(choice.checks.values())
 
 
-@pytest.mark.xfail(strict=True, reason="a known regression: since fit_hammerstein's Gauss-Newton "
-                   "finish keeps its poles off z = 1 (commit 6ebe439), plays through a first-order "
-                   "lag fit at 1.7 % (0.09 % before) and PI is chosen; a fix is pending")
 def test_fit_hysteresis_has_the_hammerstein_model_among_its_candidates(monkeypatch):
     # a stage whose plays drive a first-order lag: only the Hammerstein model follows it
     quick_fits(monkeypatch)
