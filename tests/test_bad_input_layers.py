@@ -362,7 +362,8 @@ CASES = {
          "delay_samples": {"negative": -1, "fraction": 0.5}, "pade_order": {"zero": 0}}),
     "fsm_benchmark.noise_floor": (dict(level_mV=100),
                                   {"level_mV": {"other level": 150}, "split": {"other": "x"},
-                                   "folder": {"number": 3}}),
+                                   "folder": {"number": 3},
+                                   "without_drift": {"text": "yes", "number": 1}}),
     # workbook.study
     "study.load": (dict(spec="reference"), {"spec": STUDY}),
     "study.from_dict": (dict(data={"name": "from_dict_test"}),
@@ -733,6 +734,17 @@ CASES = {
                                             linear=bare(_FM.LinearModels)),
                                        {"blas": RESULT, "linear": RESULT, "pair": PAIR,
                                         "order": POSITIVE_INT}),
+    # problem.fsm_causal
+    "fsm_causal.derive_causal_model": (Fill(blas=bare(_FM.LevelBLAs), orders=[48, 48, 40]),
+                                       {"blas": RESULT,
+                                        "orders": {"two": [48, 48], "zero": [0, 48, 40],
+                                                   "text": "x", "other levels": {1: 2}}}),
+    "fsm_causal.fit_causal_model": (Fill(blas=bare(_FM.LevelBLAs), orders=[48, 48, 40],
+                                         branches=[("u", 0)], window_samples=100.0),
+                                    {"blas": RESULT, "orders": {"two": [48, 48], "text": "x"}}),
+    "fsm_causal.write_causal_model": (None, {"fit": RESULT}),
+    "fsm_causal.read_causal_model": (dict(), {"path": {"number": 3, "missing": "/nonexistent.npz"}}),
+    "fsm_causal.score_causal_model": (None, {"fit": RESULT}),
     "fsm_models.level_label": (dict(level_mV=100), {"level_mV": {"other level": 150,
                                                                  "text": "100"}}),
     "fsm_control.axis_entry": (dict(model=FSM_MODEL, pair=(0, 0)),
@@ -797,6 +809,7 @@ CASES = {
              coupling=bare(_FC.AxisCoupling)),
         {name: RESULT for name in ("blas", "scores", "change", "nonlinear", "weight", "nominal",
                                    "design", "verified", "coupling")}),
+    "fsm_findings.causal_claim_rows": (None, {"causal": RESULT}),
     "fsm_findings.slashed": (dict(values=[1.0, 2.0]), {"values": {"text": "x", "number": 3,
                                                                   "not numbers": ["a"]}}),
     # workbook.tracking_setup, tracking_study
@@ -973,6 +986,7 @@ EXEMPT = {
     "hysteresis_fits.write_workbook_dahl": "no arguments (writes a committed artifact)",
     "paths.project_root": "no arguments", "paths.data_dir": "no arguments",
     "fsm_benchmark.data_folder": "no arguments",
+    "fsm_causal.causal_model_path": "no arguments",
     "fsm_benchmark.write_manifest": "writes the committed data's manifest; its folder is checked "
                                     "by paths.check_directory (a valid call needs the 21 MB data)",
     "study.study_files": "no arguments",

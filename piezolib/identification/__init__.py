@@ -20,7 +20,8 @@ freqfit     discrete MIMO state-space models fitted to an FRF (frequency-domain 
 mimo_hammerstein
             Prandtl-Ishlinskii operators ahead of MIMO linear dynamics, weights by least squares
 scheduled   linear models blended by the input's measured RMS level
-basis_model fixed-pole basis models: causal, nonlinear, LPV in a running input RMS, linear in
+basis_model
+            fixed-pole basis models: causal, nonlinear, LPV in a running input RMS, linear in
             their parameters (one least-squares fit)
 
 Why output-error passes follow ARX, and why the numerator is refitted:

@@ -144,8 +144,11 @@ def _records(name, x, min_length=2):
 
 def _pairs(u, y, n_init, names=("u", "y")):
     nu, ny = names
-    us = _records(nu, u, min_length=n_init + 3)
-    ys = _records(ny, y, min_length=n_init + 3)
+    us, ys = _records(nu, u), _records(ny, y)
+    shortest = min(ur.shape[0] for ur in us)
+    if shortest < n_init + 3:
+        raise ValueError(f"n_init = {n_init} leaves fewer than 3 samples of the shortest record "
+                         f"of {nu} ({shortest} samples)")
     if len(us) != len(ys):
         raise ValueError(f"{ny} must hold as many records as {nu} ({len(us)}), got {len(ys)}")
     for i, (ur, yr) in enumerate(zip(us, ys)):
@@ -589,7 +592,10 @@ def select_basis_model(u_fit, y_fit, u_validation, y_validation, poles, candidat
             raise type(exc)(f"candidates[{i}]: {exc}") from None
     windows = check_finite_array("windows_samples", windows_samples, ndim=1, min_length=1,
                                  real=True)
-    windows = tuple(_check_window(w) for w in windows)
+    for i, w in enumerate(windows):
+        if not w >= 1:
+            raise ValueError(f"windows_samples[{i}] must be at least 1 sample, got {w!r}")
+    windows = tuple(float(w) for w in windows)
     scale = check_positive("input_scale", input_scale)
     ridge = check_nonnegative("ridge", ridge)
     union = tuple(dict.fromkeys(b for c in cands for b in c))

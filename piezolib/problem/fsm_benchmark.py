@@ -30,7 +30,7 @@ import control as ct
 import numpy as np
 
 from piezolib import metrics
-from piezolib._checks import (check_integer, check_positive, check_proper, check_siso,
+from piezolib._checks import (check_bool, check_integer, check_positive, check_proper, check_siso,
                               check_stable, check_type)
 from piezolib.identification import freqfit
 from piezolib.robust.lti import balance
@@ -347,19 +347,24 @@ def score_simulation(simulate, level_mV, split="test", folder=None):
     return Score(level_mV=_level(level_mV), rmse_um=1e6 * rmse, nrmse=nrmse)
 
 
-def noise_floor(level_mV, split="test", folder=None):
+def noise_floor(level_mV, split="test", folder=None, without_drift=False):
     """The NRMSE a perfect model would get: the output noise over the output's spread.
 
     The noise variance per output is half the variance of the difference of
     the two periods (the steady-state periodic response cancels in it);
     a model that reproduced the noise-free output exactly would have an RMSE
-    of its standard deviation.
+    of its standard deviation.  With ``without_drift`` the difference's
+    constant offset per record and output (a drift between the periods, which
+    no model of the input can predict, but which is not noise within a
+    period either) is removed first: the floor of the noise alone.
 
     Parameters
     ----------
     level_mV : int
     split : {"train", "test"}, optional
     folder : str or Path, optional
+    without_drift : bool, optional
+        Remove the mean of the periods' difference per record and output.
 
     Returns
     -------
@@ -371,10 +376,16 @@ def noise_floor(level_mV, split="test", folder=None):
     >>> floor = noise_floor(100)
     >>> floor.level_mV, bool(0 < floor.nrmse_percent < 5)
     (100, True)
+    >>> bool(noise_floor(100, without_drift=True).nrmse_percent < floor.nrmse_percent)
+    True
     """
+    without_drift = check_bool("without_drift", without_drift)
     u, y = load(level_mV, split, folder)
     kept = y[N_INIT:]
-    noise_std = np.sqrt(np.mean((kept[..., 0] - kept[..., 1]) ** 2, axis=0) / 2)  # (3, R)
+    diff = kept[..., 0] - kept[..., 1]                                            # (N, 3, R)
+    if without_drift:
+        diff = diff - diff.mean(axis=0)
+    noise_std = np.sqrt(np.mean(diff ** 2, axis=0) / 2)                           # (3, R)
     nrmse = noise_std[..., None] / np.std(kept, axis=0)                           # (3, R, P)
     return Score(level_mV=_level(level_mV), rmse_um=1e6 * noise_std.mean(axis=1),
                  nrmse=nrmse.mean(axis=(1, 2)))

@@ -13,9 +13,10 @@ import numpy as np
 
 from piezolib._checks import check_type
 from piezolib.problem import fsm_benchmark as fsm
-from piezolib.problem import fsm_control, fsm_mimo, fsm_models
+from piezolib.problem import fsm_causal, fsm_control, fsm_mimo, fsm_models
 
-__all__ = ["claim_rows", "summary_lines", "slashed", "mimo_claim_rows", "mimo_summary_lines"]
+__all__ = ["claim_rows", "summary_lines", "slashed", "mimo_claim_rows", "mimo_summary_lines",
+           "causal_claim_rows"]
 
 
 #: The result class of each argument of :func:`claim_rows` and :func:`summary_lines`.
@@ -342,3 +343,37 @@ def mimo_summary_lines(mirror, record, checked):
             f"loops {m.xs(fsm_mimo.SISO)['multi-loop disk margin, input'].min():.2f} / "
             f"{m.xs(fsm_mimo.SISO)['multi-loop disk margin, output'].min():.2f}")
     return lines
+
+
+def causal_claim_rows(causal):
+    """The claim rows of the causal all-levels model: its test NRMSE per level beside the
+    published neural LFR's, and the drift-free noise floor per level.
+
+    Parameters
+    ----------
+    causal : piezolib.problem.fsm_causal.CausalScores
+
+    Returns
+    -------
+    list of dict
+        Arguments of ``nb.check``: ``paper`` the LFR's NRMSE (the model to beat, not a value
+        to reproduce: a "differs" verdict with the reason "method", lower is better).
+    """
+    check_type("causal", causal, fsm_causal.CausalScores,
+               "a fsm_causal.CausalScores (fsm_causal.score_causal_model)")
+    lfr = fsm.PUBLISHED_NRMSE_PERCENT[fsm_models.LFR]
+    rows = []
+    for lv in fsm.LEVELS_MV:
+        ours = causal.nrmse(lv)
+        rows.append(dict(section="benchmark", quantity=f"{fsm_causal.CAUSAL}, test NRMSE, {lv} mV",
+                         paper=lfr[lv], ours=ours, unit="%", precision=0.01, reason="method",
+                         note=f"paper: the published neural LFR (one model, all levels); lower is "
+                              f"better: {'below' if ours < lfr[lv] else 'above'} it by "
+                              f"{abs(lfr[lv] - ours):.2f} points; {causal.fit.chosen}, causal, "
+                              f"one least-squares fit"))
+    for lv in fsm.LEVELS_MV:
+        rows.append(_row("benchmark", f"noise floor of the metric without the drift at {lv} mV",
+                         causal.drift_free_floors[lv].nrmse_percent, unit="%",
+                         note="the periods' difference minus its constant offset per record"))
+    return rows
+
