@@ -193,17 +193,24 @@ def _sensitivity(name, A, B, C, D, dt):
 
 
 def _default_grid(A, As, dt):
-    mags = np.abs(np.r_[np.linalg.eigvals(A) if A.size else [],
-                        np.linalg.eigvals(As) if As.size else []])
+    """Log grid over the poles' range, plus the closed-loop poles' own frequencies (where a
+    lightly damped sensitivity peak sits, narrower than the grid's spacing), 0 and inf or
+    Nyquist."""
+    closed = np.linalg.eigvals(As) if As.size else np.zeros(0)
+    mags = np.abs(np.r_[np.linalg.eigvals(A) if A.size else [], closed])
     if dt:
         nyquist = math.pi / dt
         mags = np.abs(np.log(mags[mags > 0].astype(complex))) / dt if mags.size else mags
         mags = mags[(mags > 0) & np.isfinite(mags)]
         lo = min(mags.min() / 100, nyquist / 1e3) if mags.size else nyquist / 1e4
-        return np.r_[0.0, frequency_grid(lo, nyquist, _N_GRID)]
+        own = np.abs(np.angle(closed)) / dt
+        own = own[(own > lo) & (own < nyquist)]
+        return np.unique(np.r_[0.0, frequency_grid(lo, nyquist, _N_GRID), own])
     mags = mags[mags > 1e-12 * max(1.0, mags.max(initial=0.0))]
     lo, hi = (mags.min(), mags.max()) if mags.size else (1.0, 1.0)
-    return np.r_[0.0, frequency_grid(lo / 100, hi * 100, _N_GRID), math.inf]
+    own = np.abs(closed.imag)
+    own = own[(own > lo / 100) & (own < hi * 100)]
+    return np.unique(np.r_[0.0, frequency_grid(lo / 100, hi * 100, _N_GRID), own, math.inf])
 
 
 def _response(As, Bs, Cs, Ds, dt, omega):
@@ -338,8 +345,9 @@ def disk_margin_mimo(L, omega=None, skew=0.0):
     omega : array_like, optional
         Frequency grid [rad/s], positive and increasing (a discrete loop's up to pi / dt).
         Default: 600 log-spaced points spanning the open- and closed-loop poles by two
-        decades either side, plus w = 0 and w = inf (continuous) or w = 0 (discrete, whose
-        grid ends at the Nyquist frequency).  The peak of mu is refined between the grid
+        decades either side, the frequencies of the closed-loop poles (Im p, or arg z / dt),
+        plus w = 0 and w = inf (continuous) or w = 0 (discrete, whose grid ends at the
+        Nyquist frequency).  The peak of mu is refined between the grid
         neighbours of the grid's largest value.
     skew : float
         Skew sigma of the disk (0: balanced; > 0 biases it toward gain increase).
