@@ -118,6 +118,10 @@ SURVEY = _CS.survey_model_set(G, 0.05, 2)
 DISCRETE = ct.tf([1.0], [1.0, -0.5], 1 / FS)
 K_DISCRETE = ct.tf([1.0, -0.5], [1.0, -0.2], 1 / FS)
 FSM_MODEL = ct.ss(np.zeros((1, 1)), np.ones((1, 3)), np.ones((3, 1)), np.zeros((3, 3)), 1 / 6400)
+_MM = _mod("problem.fsm_mimo")
+MIRROR_G = ct.ss(0.5 * np.eye(3), np.eye(3), np.eye(3), np.zeros((3, 3)), 1 / 6400)
+MIRROR_G_W = ct.ss(-np.eye(3), np.eye(3), np.eye(3), np.zeros((3, 3)))
+MIRROR_K = ct.ss([], [], [], 0.1 * np.eye(3), 1 / 6400)
 CONTROLLER_SET = types.SimpleNamespace(mu={"a": 1.0}, K_full=K, K_fixed=K)
 RESULT = {"text": "abc", "number": 3}            # where a result of an earlier step belongs
 CHIRP = bare(importlib.import_module("piezolib.problem.stage_data").ChirpExperiment)
@@ -745,6 +749,10 @@ CASES = {
     "fsm_causal.write_causal_model": (None, {"fit": RESULT}),
     "fsm_causal.read_causal_model": (dict(), {"path": {"number": 3, "missing": "/nonexistent.npz"}}),
     "fsm_causal.score_causal_model": (None, {"fit": RESULT}),
+    "fsm_models.derive_order_curve": (Fill(blas=bare(_FM.LevelBLAs)),
+                                      {"blas": RESULT, "orders": ORDERS}),
+    "fsm_models.write_order_curve": (None, {"curve": RESULT}),
+    "fsm_models.read_order_curve": (dict(), {"path": {"number": 3, "missing": "/nonexistent.json"}}),
     "fsm_models.level_label": (dict(level_mV=100), {"level_mV": {"other level": 150,
                                                                  "text": "100"}}),
     "fsm_control.axis_entry": (dict(model=FSM_MODEL, pair=(0, 0)),
@@ -775,6 +783,67 @@ CASES = {
                                                          "fs": POSITIVE}),
     "fsm_control.significant": (dict(x=1.2345), {"x": {"text": "x", "none": None},
                                                  "digits": POSITIVE_INT}),
+    # problem.fsm_mimo
+    "fsm_mimo.mirror_model": (dict(model=MIRROR_G), {"model": {
+        "text": "x", "two inputs": LTI["two inputs"],
+        "continuous": ct.ss(-np.eye(3), np.eye(3), np.eye(3), np.zeros((3, 3)))}}),
+    "fsm_mimo.relative_spread": (dict(level_responses=[np.ones((2, 2, 2)) * np.eye(2)],
+                                      nominal_response=np.ones((2, 2, 2)) * np.eye(2)),
+                                 {"level_responses": {"empty": [], "other shape": [np.ones(3)]},
+                                  "nominal_response": {"nan": np.full((2, 2, 2), np.nan),
+                                                       "not square": np.ones((2, 2, 3)),
+                                                       "singular": np.ones((2, 2, 2))}}),
+    "fsm_mimo.mirror_nominal": (Fill(linear=bare(_FM.LinearModels), frequency_Hz=[10.0],
+                                     nominal_order=8),
+                                {"linear": RESULT, "frequency_Hz": {"empty": [], "nan": [np.nan],
+                                                                    "negative": [-1.0]},
+                                 "nominal_order": POSITIVE_INT, "orders": ORDERS}),
+    "fsm_mimo.mirror_weights": (Fill(params=_MM.DESIGN_PARAMETERS, nu=[1.0, 2.0],
+                                     hull=[0.1, 0.2]),
+                                {"params": {"text": "x", "empty": {}, "incomplete": {"a": 1}},
+                                 "nu": {"empty": [], "negative": [-1.0, 2.0]},
+                                 "hull": {"other length": [0.1], "negative": [-0.1, 0.2],
+                                          "text": "x"}}),
+    "fsm_mimo.mirror_design_plant": (
+        dict(G=MIRROR_G_W, W_m=ct.tf(0.1, 1), W_S=ct.tf(1, [1, 1]), W_T=ct.tf(0.1, 1),
+             W_u=ct.tf(0.1, 1)),
+        {"G": {"text": "x", "discrete": MIRROR_G, "two inputs": LTI["two inputs"]},
+         "W_m": {"unstable": ct.tf(1, [1, -1]), "text": "x", "3 x 3": MIRROR_G_W},
+         "W_S": {"unstable": ct.tf(1, [1, -1])}, "W_T": {"text": "x"},
+         "W_u": {"3 x 3": MIRROR_G_W}}),
+    "fsm_mimo.delay_matrix": (dict(n=3), {"n": POSITIVE_INT}),
+    "fsm_mimo.block_diagonal": (dict(controllers=[ct.ss([], [], [], [[1.0]])]),
+                                {"controllers": {"empty": [], "text": "x",
+                                                 "not SISO": [MIRROR_G]}}),
+    "fsm_mimo.sampled_radius": (dict(G_d=MIRROR_G, K_d=MIRROR_K),
+                                {"G_d": {"text": "x", "continuous": MIRROR_G_W},
+                                 "K_d": {"text": "x", "2 x 2": ct.ss([], [], [], np.eye(2), 1 / 6400),
+                                         "other rate": ct.ss([], [], [], np.eye(3), 1e-3)}}),
+    "fsm_mimo.step_matrix": (dict(G_d=MIRROR_G, K_d=MIRROR_K, n_samples=20),
+                             {"G_d": {"text": "x"}, "K_d": {"text": "x"},
+                              "n_samples": POSITIVE_INT}),
+    "fsm_mimo.step_crosstalk": (dict(G_d=MIRROR_G, K_d=MIRROR_K, n_samples=20),
+                                {"G_d": {"text": "x"}, "K_d": {"text": "x"},
+                                 "n_samples": POSITIVE_INT}),
+    "fsm_mimo.mirror_margins": (Fill(models={"m": MIRROR_G}, controllers={"k": MIRROR_K}),
+                                {"models": {"text": "x", "empty": {}},
+                                 "controllers": {"text": "x", "empty": {}}}),
+    "fsm_mimo.synthesis_plant": (Fill(nominal=bare(_MM.MirrorNominal), params={"a": 1}),
+                                 {"nominal": RESULT, "params": {"text": "x", "empty": {}}}),
+    "fsm_mimo.reduce_mirror_controller": (
+        Fill(plant=None, K=MIRROR_K, mu=1.0, precision=0.01, orders=[2]),
+        {"K": {"text": "x"}, "mu": POSITIVE, "precision": POSITIVE, "orders": ORDERS}),
+    "fsm_mimo.derive_mirror_design": (Fill(linear=bare(_FM.LinearModels), frequency_Hz=[10.0]),
+                                      {"linear": RESULT, "params": {"text": "x"},
+                                       "frequency_Hz": {"empty": [], "nan": [np.nan]}}),
+    "fsm_mimo.write_mirror_record": (Fill(record=bare(_MM.MirrorRecord), path="x.json"),
+                                     {"record": RESULT, "path": {"number": 3, "empty": ""}}),
+    "fsm_mimo.read_mirror_record": (dict(), {"path": {"number": 3,
+                                                      "not json": InTmp("bad.json", "{no"),
+                                                      "not a record": InTmp("r.json", "{}")}}),
+    "fsm_mimo.verify_mirror": (Fill(nominal=bare(_MM.MirrorNominal), record=bare(_MM.MirrorRecord)),
+                               {"nominal": RESULT, "record": RESULT,
+                                "omega": {"text": "x", "short": [1.0, 2.0]}}),
     # workbook.case_comparison, feedforward_cases, weighting_findings, fsm_findings
     "case_comparison.case_III_comparison": (
         None, {"study": STUDY_GIVEN, "controllers": {"text": "abc", "empty": {},
@@ -795,6 +864,14 @@ CASES = {
              error_params=paper.ERROR_WEIGHT, met=bare(_WEI.TemplatesMet)),
         {"entries": RESULT, "lft_error": {"text": "x", "nan": np.nan, "negative": -1.0},
          "templates": RESULT, "error_params": RESULT, "met": RESULT}),
+    "fsm_findings.mimo_claim_rows": (Fill(mirror=bare(_MM.MirrorNominal),
+                                          record=bare(_MM.MirrorRecord),
+                                          checked=bare(_MM.MirrorVerification)),
+                                     {"mirror": RESULT, "record": RESULT, "checked": RESULT}),
+    "fsm_findings.mimo_summary_lines": (Fill(mirror=bare(_MM.MirrorNominal),
+                                             record=bare(_MM.MirrorRecord),
+                                             checked=bare(_MM.MirrorVerification)),
+                                        {"mirror": RESULT, "record": RESULT, "checked": RESULT}),
     "fsm_findings.claim_rows": (
         Fill(scores=bare(_FM.LinearScores), nonlinear=bare(_FM.NonlinearModels),
              weight=bare(_FM.LevelSpreadWeight), nominal=bare(_FC.AxisNominal),
@@ -986,6 +1063,7 @@ EXEMPT = {
     "hysteresis_fits.write_workbook_dahl": "no arguments (writes a committed artifact)",
     "paths.project_root": "no arguments", "paths.data_dir": "no arguments",
     "fsm_benchmark.data_folder": "no arguments",
+    "fsm_mimo.record_path": "no arguments",
     "fsm_causal.causal_model_path": "no arguments",
     "fsm_benchmark.write_manifest": "writes the committed data's manifest; its folder is checked "
                                     "by paths.check_directory (a valid call needs the 21 MB data)",

@@ -50,8 +50,9 @@ __all__ = ["N_AXES", "MIMO_BLOCKS", "DESIGN_PARAMETERS", "RECORD_NAME", "mirror_
            "relative_spread", "MirrorNominal", "mirror_nominal", "mirror_weights",
            "mirror_design_plant", "delay_matrix", "MirrorRecord", "derive_mirror_design",
            "write_mirror_record", "read_mirror_record", "record_path", "block_diagonal",
-           "step_crosstalk", "sampled_radius", "MirrorVerification", "verify_mirror",
-           "mirror_margins", "synthesis_plant"]
+           "step_crosstalk", "step_matrix", "sampled_radius", "MirrorVerification", "verify_mirror",
+           "mirror_margins", "synthesis_plant",
+           "reduce_mirror_controller"]
 
 #: Axes (inputs = outputs) of the mirror.
 N_AXES = 3
@@ -315,6 +316,15 @@ def mirror_weights(params, nu, hull):
         ``W_m, W_S, W_T, W_u``.
     """
     check_mapping("params", params)
+    nu = check_positive_values("nu", nu)
+    hull = np.asarray(hull, dtype=float) if not isinstance(hull, str) else None
+    if hull is None or hull.shape != nu.shape or not np.all(np.isfinite(hull)) or \
+            np.any(hull < 0):
+        raise ValueError(f"hull must hold {nu.size} finite non-negative values (one per nu)")
+    missing = {"bandwidth_Hz", "error_weight", "output_weight", "output_corner",
+               "rolloff"} - set(params)
+    if missing:
+        raise ValueError(f"params misses {sorted(missing)}")
     omega_b = 2 * np.pi * check_positive("bandwidth_Hz", params["bandwidth_Hz"])
     W_m = unc.fit_covering_weight(nu, hull, order=1, starts=1, name="W_m")
     W_S = robust.sensitivity_weight(**params["error_weight"], bandwidth_rad_s=omega_b)
@@ -380,15 +390,28 @@ def mirror_design_plant(G, W_m, W_S, W_T, W_u):
     return robust.balance(P)
 
 
-def block_diagonal(*controllers):
+def block_diagonal(controllers):
     """SISO controllers side by side, one per axis (a decentralised controller).
+
+    Parameters
+    ----------
+    controllers : sequence of control.LTI
+        SISO controllers, axis by axis.
+
+    Returns
+    -------
+    control.StateSpace
 
     Examples
     --------
-    >>> K = block_diagonal(ct.ss([[-1.0]], [[1.0]], [[1.0]], [[0.0]]), ct.ss([[2.0]]))
+    >>> K = block_diagonal([ct.ss([[-1.0]], [[1.0]], [[1.0]], [[0.0]]),
+    ...                     ct.ss([], [], [], [[2.0]])])
     >>> K.ninputs, K.nstates
     (2, 1)
     """
+    if isinstance(controllers, (str, bytes, ct.LTI)) or not hasattr(controllers, "__len__"):
+        raise TypeError(f"controllers must be a sequence of SISO controllers, got "
+                        f"{type(controllers).__name__}")
     if not controllers:
         raise ValueError("controllers must hold at least one SISO controller")
     for i, k in enumerate(controllers):
@@ -470,7 +493,7 @@ class MirrorRecord:
 
     def siso_K_d(self):
         """The three SISO loops as one block-diagonal discrete controller."""
-        return ct.c2d(block_diagonal(*[self.siso_K_w[i] for i in range(N_AXES)]), _T(),
+        return ct.c2d(block_diagonal([self.siso_K_w[i] for i in range(N_AXES)]), _T(),
                       "tustin")
 
     def description(self):
@@ -520,20 +543,8 @@ def derive_mirror_design(linear, frequency_Hz, params=None, *, orders=None, siso
     seconds = time.perf_counter() - t0
     K = dk.K
     orders = range(8, K.nstates, 2) if orders is None else check_integers("orders", orders, 1)
-    rows, chosen = {}, (K, float(dk.mu_peak))
-    G_w = _w_plane_plant(nominal.G_nominal)
-    limit = float(dk.mu_peak) + params["reduction_precision"]
-    for order in orders:
-        try:
-            Kr = robust.reduce_controller(K, order).K
-        except ValueError:
-            continue
-        stable = bool(robust.closed_loop_poles(G_w, Kr).real.max() < 0)
-        mu = float(_mu_peak(plant, Kr, DK_W_PLANE).upper.max()) if stable else float("inf")
-        rows[order] = {"mu_RP upper (DK grid)": mu, "w-plane loop stable": stable}
-        if stable and mu <= limit:
-            chosen = (Kr, mu)
-            break
+    chosen, reduction = reduce_mirror_controller(plant, K, float(dk.mu_peak),
+                                                 params["reduction_precision"], orders)
     siso_K, siso_mu = {}, {}
     if siso:
         for i in range(N_AXES):
@@ -547,8 +558,50 @@ def derive_mirror_design(linear, frequency_Hz, params=None, *, orders=None, siso
     return MirrorRecord(K_w=ct.ss(chosen[0]), K_full_order=K.nstates, weights=weights,
                         params=params, history=dk.history, mu_dk=float(dk.mu_peak),
                         mu_reduced=chosen[1],
-                        reduction=pd.DataFrame(rows).T.rename_axis("order"),
-                        siso_K_w=siso_K, siso_mu=siso_mu, seconds=seconds)
+                        reduction=reduction, siso_K_w=siso_K, siso_mu=siso_mu, seconds=seconds)
+
+
+def reduce_mirror_controller(plant, K, mu, precision, orders):
+    """The lowest order of ``orders`` whose truncated K keeps μ_RP within ``precision`` of ``mu``.
+
+    Parameters
+    ----------
+    plant : control.StateSpace
+        The synthesis plant (:func:`synthesis_plant`).
+    K : control.StateSpace
+        The DK controller (3 x 3, w-plane).
+    mu : float
+        Its μ_RP upper bound on the DK grid.
+    precision : float
+        Allowed increase of μ_RP (absolute).
+    orders : sequence of int
+        Candidate orders, tried in increasing order.
+
+    Returns
+    -------
+    ((control.StateSpace, float), pandas.DataFrame)
+        The chosen controller and its μ_RP (``K`` itself if no order qualifies), and the
+        table of the orders tried.
+    """
+    check_lti("K", K)
+    mu = check_positive("mu", mu)
+    precision = check_positive("precision", precision)
+    rows, chosen = {}, (ct.ss(K), mu)
+    for order in sorted(check_integers("orders", orders, minimum=1)):
+        if order >= K.nstates:
+            break
+        try:
+            Kr = robust.reduce_controller(K, order).K
+        except ValueError:
+            continue
+        stable = bool(np.linalg.eigvals(robust.lower_lft(plant, Kr).A).real.max() < 0)
+        m = float(_mu_peak(plant, Kr, DK_W_PLANE).upper.max()) if stable else float("inf")
+        rows[order] = {"mu_RP upper (DK grid)": m, "w-plane loop stable": stable}
+        if stable and m <= mu + precision:
+            chosen = (ct.ss(Kr), m)
+            break
+    table = pd.DataFrame(rows, index=["mu_RP upper (DK grid)", "w-plane loop stable"]).T
+    return chosen, table.rename_axis("order")
 
 
 def synthesis_plant(nominal, params, weights=None):
@@ -677,6 +730,40 @@ def _loop_models(G_d, K_d):
     return G_d, K_d
 
 
+def step_matrix(G_d, K_d, n_samples=STEP_SAMPLES):
+    """Unit-step responses of the sampled loop (z^-1 G_d K_d, negative feedback) to each reference.
+
+    Parameters
+    ----------
+    G_d, K_d : control.StateSpace
+        As :func:`sampled_radius` (a stable loop).
+    n_samples : int
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        Time [s], shape (N,), and y[j, i, k], output j for a step on reference i.
+
+    Examples
+    --------
+    >>> T = 1 / 6400
+    >>> g = ct.ss([[0.5]], [[1.0]], [[1.0]], [[0.0]], T)
+    >>> t, y = step_matrix(g, ct.ss([[1.0]], [[0.1]], [[1.0]], [[0.0]], T), n_samples=2000)
+    >>> y.shape, round(float(y[0, 0, -1]), 3)
+    ((1, 1, 2000), 1.0)
+    """
+    G_d, K_d = _loop_models(G_d, K_d)
+    n_samples = check_integer("n_samples", n_samples, minimum=10)
+    L = ct.series(K_d, delay_matrix(G_d.ninputs), G_d)
+    T_cl = ct.feedback(L, np.eye(G_d.noutputs))
+    if T_cl.nstates and np.abs(np.linalg.eigvals(T_cl.A)).max() >= 1:
+        raise ValueError("the loop of G_d and K_d is unstable: no step response")
+    n = G_d.noutputs
+    t = np.arange(n_samples) * G_d.dt
+    resp = ct.step_response(T_cl, T=t)
+    return t, np.asarray(resp.outputs).reshape(n, n, -1)
+
+
 def step_crosstalk(G_d, K_d, n_samples=STEP_SAMPLES):
     """Unit steps on each reference of the sampled loop; peaks relative to the diagonal step.
 
@@ -703,15 +790,8 @@ def step_crosstalk(G_d, K_d, n_samples=STEP_SAMPLES):
     >>> float(x[0, 1]), bool(x[0, 0] >= 1)
     (0.0, True)
     """
-    G_d, K_d = _loop_models(G_d, K_d)
-    n_samples = check_integer("n_samples", n_samples, minimum=10)
-    L = ct.series(K_d, delay_matrix(G_d.ninputs), G_d)
-    T_cl = ct.feedback(L, np.eye(G_d.noutputs))
-    if T_cl.nstates and np.abs(np.linalg.eigvals(T_cl.A)).max() >= 1:
-        raise ValueError("the loop of G_d and K_d is unstable: no step cross-talk")
-    n = G_d.noutputs
-    resp = ct.step_response(T_cl, T=np.arange(n_samples) * G_d.dt)
-    y = np.asarray(resp.outputs).reshape(n, n, -1)                    # (output, input, t)
+    _, y = step_matrix(G_d, K_d, n_samples)                          # (output, input, t)
+    n = y.shape[0]
     final = np.abs(y[np.arange(n), np.arange(n), -1])
     return np.abs(y).max(axis=2) / final[None, :]
 
@@ -729,7 +809,9 @@ class MirrorVerification:
         Rows (controller, model): the sampled loop's largest |pole|, stability,
         the worst off-diagonal step peak (cross-talk) with that model.
     crosstalk : dict {str: ndarray}
-        The step peak matrix of each controller with the nominal 48-state model.
+        The step peak matrix of each controller with the all-levels (full) model.
+    steps : dict {str: (ndarray, ndarray)}
+        Its step responses (:func:`step_matrix`), per controller.
     margins : pandas.DataFrame or None
         Disk margins (loop-at-a-time and multi-loop, input and output) per controller.
     """
@@ -737,6 +819,7 @@ class MirrorVerification:
     mu: dict
     loops: pd.DataFrame
     crosstalk: dict
+    steps: dict
     margins: object = None
 
     def table(self):
@@ -789,11 +872,11 @@ def verify_mirror(nominal, record, omega=None):
     omega = FINE_W_PLANE if omega is None else check_frequency_grid("omega", omega,
                                                                     min_length=16)
     plant, _ = synthesis_plant(nominal, record.params, record.weights)
-    Ks_w = {MIMO: record.K_w, SISO: block_diagonal(*[record.siso_K_w[i] for i in range(N_AXES)])}
+    Ks_w = {MIMO: record.K_w, SISO: block_diagonal([record.siso_K_w[i] for i in range(N_AXES)])}
     Ks_d = {MIMO: record.K_d(), SISO: record.siso_K_d()}
     models = {"all-levels model (full)": nominal.G_full,
               **{f"{lv} mV model": g for lv, g in nominal.G_level.items()}}
-    mu, rows, cross = {}, {}, {}
+    mu, rows, cross, steps = {}, {}, {}, {}
     for name, K_w in Ks_w.items():
         mu[name] = robust.mussv(robust.lft_response(plant, K_w, omega), MIMO_BLOCKS, omega,
                                 restarts=1, iterations=30)
@@ -802,12 +885,13 @@ def verify_mirror(nominal, record, omega=None):
             x = step_crosstalk(g, Ks_d[name]) if r < 1 else np.full((N_AXES, N_AXES), np.inf)
             if mname.startswith("all-levels"):
                 cross[name] = x
+                steps[name] = step_matrix(g, Ks_d[name]) if r < 1 else None
             rows[(name, mname)] = {"controller states": Ks_d[name].nstates,
                                    "largest |pole|": r, "stable": r < 1,
                                    "worst cross-talk": float(x[~np.eye(N_AXES, dtype=bool)].max())}
     loops = pd.DataFrame(rows).T
     loops.index.names = ["controller", "model"]
-    return MirrorVerification(mu=mu, loops=loops, crosstalk=cross,
+    return MirrorVerification(mu=mu, loops=loops, crosstalk=cross, steps=steps,
                               margins=mirror_margins(models, Ks_d))
 
 

@@ -77,19 +77,21 @@ def test_the_design_plant_with_no_controller_is_the_open_weights():
 
 
 def test_mirror_nominal_at_full_order_reproduces_the_model():
-    model = ct.ss(np.diag([0.9, 0.5, -0.3]), np.eye(3) + 0.1, 1e-6 * np.eye(3),
-                  np.zeros((3, 3)), T)
+    B = np.vstack([np.eye(3) + 0.1, 0.5 * np.eye(3)])
+    C = 1e-6 * np.hstack([np.eye(3), np.ones((3, 3))])
+    model = ct.ss(np.diag([0.9, 0.5, -0.3, 0.8, 0.4, 0.2]), B, C, np.zeros((3, 3)), T)
     zl = np.exp(2j * np.pi * F_HZ / FS)
     G_all = np.asarray(model(zl))
-    models = {f"ours, order chosen (3), trained at {lv} mV": (lv, model) for lv in fsm.LEVELS_MV}
-    models["ours, one model for all levels (order 3)"] = ("all", model)
+    models = {f"ours, order chosen (6), trained at {lv} mV": (lv, model) for lv in fsm.LEVELS_MV}
+    models["ours, one model for all levels (order 6)"] = ("all", model)
     linear = fsm_models.LinearModels(models=models, selections={
-        lv: SimpleNamespace(order=3) for lv in fsm.LEVELS_MV}, baseline_order=28, G_all=G_all)
-    nominal = fsm_mimo.mirror_nominal(linear, F_HZ, 3, orders=(2,))
-    assert list(nominal.reduction.index) == [2, 3]
-    assert nominal.reduction.loc[3, "rms error < 100 Hz [%]"] < 1e-8
-    assert np.all(nominal.spread() < 1e-10)
-    assert nominal.G_nominal.nstates == 3
+        lv: SimpleNamespace(order=6) for lv in fsm.LEVELS_MV}, baseline_order=28, G_all=G_all)
+    nominal = fsm_mimo.mirror_nominal(linear, F_HZ, 6, orders=(5,))
+    assert list(nominal.reduction.index) == [5, 6]
+    assert nominal.reduction.loc[6, "rms error < 100 Hz [%]"] < 1e-8
+    assert nominal.reduction.loc[5, "rms error < 100 Hz [%]"] > 1e-6    # truncation costs
+    assert np.all(nominal.spread() < 1e-10)                             # levels = nominal
+    assert nominal.G_nominal.nstates == 6 and nominal.checks
 
 
 def test_the_committed_design_record_loads_and_states_its_reduction():
@@ -118,8 +120,8 @@ def test_the_committed_design_record_loads_and_states_its_reduction():
     (lambda: fsm_mimo.mirror_design_plant(
         ct.ss(-np.eye(3), np.eye(3), np.eye(3), np.zeros((3, 3))), ct.tf(1, [1, -1]), 1, 1, 1),
      "W_m"),
-    (lambda: fsm_mimo.block_diagonal(), "controllers"),
-    (lambda: fsm_mimo.block_diagonal(ct.ss([], [], [], np.eye(2))), "controllers"),
+    (lambda: fsm_mimo.block_diagonal([]), "controllers"),
+    (lambda: fsm_mimo.block_diagonal([ct.ss([], [], [], np.eye(2))]), "controllers"),
     (lambda: fsm_mimo.delay_matrix(0), "n"),
     (lambda: fsm_mimo.read_mirror_record(3), "path"),
     (lambda: fsm_mimo.mirror_nominal("x", F_HZ, 3), "linear"),
