@@ -14,26 +14,35 @@ holds its tables and the ``checks`` it states ({what it states: bool}):
 * :func:`fit_nonlinear_models`: one model for all levels that is not linear in
   amplitude (Hammerstein with Prandtl-Ishlinskii operators; amplitude-scheduled);
 * :func:`level_spread_weight`: the relative error of the levels' models against
-  the all-levels model for one input-output pair and a weight that covers it.
+  the all-levels model for one input-output pair and a weight that covers it;
+* :func:`derive_order_curve`: the order validation curve over a wide range (up to
+  the subspace fit's largest order), committed as :data:`ORDER_CURVE_FILE`
+  (:func:`read_order_curve`): where its best point lies.
 
 Frequencies in Hz, inputs in V, outputs in m (the models) or um (tables).
 """
 
+import json
+import time
 from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
+from piezolib import files
 from piezolib import identification as ident
 from piezolib import uncertainty as unc
 from piezolib._checks import (check_band, check_finite_array, check_index_pair, check_integer,
-                              check_integers, check_type)
+                              check_integers, check_path, check_type)
 from piezolib.problem import fsm_benchmark as fsm
+from piezolib.problem import paths
 
 __all__ = ["LevelBLAs", "level_blas", "LinearModels", "fit_linear_models", "LinearScores",
            "score_linear_models", "LevelChange", "level_change", "NonlinearModels",
            "fit_nonlinear_models", "LevelSpreadWeight", "level_spread_weight",
-           "level_label", "BANDS_HZ", "HAMMERSTEIN", "SCHEDULED"]
+           "level_label", "BANDS_HZ", "HAMMERSTEIN", "SCHEDULED", "WIDE_ORDERS",
+           "ORDER_CURVE_FILE", "OrderCurve", "derive_order_curve", "write_order_curve",
+           "read_order_curve"]
 
 #: Frequency bands [Hz] over which the BLA's change with the level is split.
 BANDS_HZ = ((0, 600), (600, 900), (900, 1100), (1100, 1500), (1500, 3000))
@@ -657,3 +666,144 @@ def level_spread_weight(blas, linear, pair=(2, 2), order=4):
     return LevelSpreadWeight(pair=tuple(pair), coupling=coupling, relative_errors=rel_err,
                              envelope=envelope, weight=W, coverage=cover, weight_magnitude=W_resp,
                              frequency_Hz=f, pair_is_largest=largest, order=order)
+
+
+#: The wide candidate range of the order validation curve: up to the subspace fit's largest
+#: order (``identification.MAX_ROWS`` block rows, order + 8 by default).
+WIDE_ORDERS = (24, 32, 40, 48, 56, 64, 72, 80, 88, ident.MAX_ROWS - 8)
+#: The committed curve, relative to ``data/``.
+ORDER_CURVE_FILE = "models/fsm_order_curve.json"
+
+
+@dataclass(frozen=True)
+class OrderCurve:
+    """The order validation curve over a wide range (:func:`derive_order_curve`).
+
+    Attributes
+    ----------
+    orders : tuple of int
+    validation_error : dict {int: list of float}
+        Per level [mV]: the relative FRF error of each order fitted on group 0 and scored on
+        group 1 (:func:`piezolib.identification.select_order`).
+    test_nrmse : dict {int: float}
+        Per level: the test NRMSE [%] of the level's model at the curve's best order, refitted
+        on the whole BLA (as :func:`fit_linear_models` does).
+    seconds : float
+        Wall time of the derivation [s].
+    """
+
+    orders: tuple
+    validation_error: dict
+    test_nrmse: dict
+    seconds: float
+
+    def best(self, level_mV):
+        """The order with the smallest validation error at ``level_mV``."""
+        return int(self.orders[int(np.argmin(self.validation_error[level_mV]))])
+
+    def interior(self, level_mV):
+        """Whether the best order lies inside the range (not at either end)."""
+        return self.orders[0] < self.best(level_mV) < self.orders[-1]
+
+    def table(self):
+        """Validation error [%] per order (rows) and level (columns)."""
+        return pd.DataFrame({level_label(lv): pd.Series(100 * np.asarray(e), index=self.orders)
+                             for lv, e in self.validation_error.items()}).rename_axis("order")
+
+    def description(self, linear=None):
+        """One line per level: the best order, whether it is inside the range, its test NRMSE
+        (beside the notebook's chosen order's, given ``linear``: a LinearScores)."""
+        lines = []
+        for lv in fsm.LEVELS_MV:
+            where = "inside the range" if self.interior(lv) else "AT THE END of the range"
+            own = "" if linear is None else (f" (order chosen from the notebook's candidates, "
+                                             f"{linear.linear.selections[lv].order}: "
+                                             f"{linear.own(lv):.2f} %)")
+            lines.append(f"{lv} mV: best order {self.best(lv)} of {self.orders[0]}-"
+                         f"{self.orders[-1]}, {where}; its test NRMSE "
+                         f"{self.test_nrmse[lv]:.2f} %{own}")
+        return "\n".join(lines)
+
+
+def derive_order_curve(blas, orders=WIDE_ORDERS):
+    """The order validation curve of every level over a wide range, and the best order's test
+    score.
+
+    Parameters
+    ----------
+    blas : LevelBLAs
+    orders : sequence of int, optional
+        Candidate orders (default :data:`WIDE_ORDERS`).
+
+    Returns
+    -------
+    OrderCurve
+    """
+    check_type("blas", blas, LevelBLAs, "a LevelBLAs (level_blas)")
+    orders = tuple(int(n) for n in check_integers("orders", orders, minimum=1))
+    t0 = time.perf_counter()
+    fs = fsm.SAMPLING_FREQUENCY_HZ
+    errors, test = {}, {}
+    for lv, bl in blas.blas.items():
+        sel = ident.select_order(bl.G_groups[0], bl.G_groups[1], bl.frequency_Hz, fs, orders)
+        errors[lv] = [float(e) for e in sel.validation_error]
+        test[lv] = fsm.score(ident.fit_frf(bl.G, bl.frequency_Hz, fs, sel.order), lv).nrmse_percent
+    return OrderCurve(orders=orders, validation_error=errors, test_nrmse=test,
+                      seconds=time.perf_counter() - t0)
+
+
+def _order_curve_path(path):
+    return paths.data_dir() / ORDER_CURVE_FILE if path is None else check_path("path", path)
+
+
+def write_order_curve(curve, path=None):
+    """Save an :class:`OrderCurve` as JSON (default ``data/`` + :data:`ORDER_CURVE_FILE`).
+
+    Parameters
+    ----------
+    curve : OrderCurve
+    path : str or Path, optional
+
+    Returns
+    -------
+    Path
+    """
+    check_type("curve", curve, OrderCurve, "an OrderCurve (derive_order_curve)")
+    doc = {"about": "piezolib.problem.fsm_models.derive_order_curve on the FSM benchmark's "
+                    "training BLAs (validation: group 0 fit, group 1 scored); re-derived by the "
+                    "slow test tests/problem/test_fsm_models.py",
+           "orders": list(curve.orders),
+           "validation_error": {str(lv): [round(e, 8) for e in v]
+                                for lv, v in curve.validation_error.items()},
+           "test_nrmse_percent_at_best": {str(lv): round(v, 4) for lv, v in curve.test_nrmse.items()},
+           "seconds": round(curve.seconds, 1)}
+    return files.atomic_write(_order_curve_path(path), json.dumps(doc, indent=1) + "\n")
+
+
+def read_order_curve(path=None):
+    """The committed :class:`OrderCurve`.
+
+    Parameters
+    ----------
+    path : str or Path, optional
+
+    Returns
+    -------
+    OrderCurve
+
+    Examples
+    --------
+    >>> curve = read_order_curve()
+    >>> curve.orders[0], curve.orders[-1]
+    (24, 92)
+    """
+    path = _order_curve_path(path)
+    try:
+        doc = json.loads(path.read_text())
+        return OrderCurve(orders=tuple(doc["orders"]),
+                          validation_error={int(k): v for k, v in doc["validation_error"].items()},
+                          test_nrmse={int(k): v for k, v in doc["test_nrmse_percent_at_best"].items()},
+                          seconds=float(doc["seconds"]))
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise ValueError(f"path: cannot read an order curve from {path} ({exc})") from None
+

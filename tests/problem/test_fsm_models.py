@@ -6,6 +6,7 @@ import control as ct
 import numpy as np
 import pytest
 
+from piezolib import identification as ident
 from piezolib.problem import fsm_benchmark as fsm
 from piezolib.problem import fsm_models
 
@@ -113,3 +114,25 @@ def test_steps_refuse_what_is_not_their_input():
         fsm_models.fit_linear_models({}, (4,), 28)
     with pytest.raises(TypeError, match="linear"):
         fsm_models.score_linear_models(None)
+
+
+def test_committed_order_curve_reaches_the_fits_largest_order():
+    curve = fsm_models.read_order_curve()
+    assert curve.orders == fsm_models.WIDE_ORDERS
+    assert curve.orders[-1] == ident.MAX_ROWS - 8
+    for lv in fsm.LEVELS_MV:
+        assert len(curve.validation_error[lv]) == len(curve.orders)
+        # the committed best order's validation error is the curve's minimum
+        assert curve.validation_error[lv][curve.orders.index(curve.best(lv))] == \
+            min(curve.validation_error[lv])
+    assert "order" in curve.table().index.name
+
+
+@pytest.mark.slow
+def test_rederived_order_curve_lands_on_the_committed_one():
+    committed = fsm_models.read_order_curve()
+    curve = fsm_models.derive_order_curve(fsm_models.level_blas(), committed.orders)
+    for lv in fsm.LEVELS_MV:
+        assert curve.best(lv) == committed.best(lv)
+        assert np.allclose(curve.validation_error[lv], committed.validation_error[lv], atol=1e-5)
+        assert abs(curve.test_nrmse[lv] - committed.test_nrmse[lv]) < 0.01
