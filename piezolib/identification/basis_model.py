@@ -375,10 +375,24 @@ class BasisModel:
             raise ValueError(f"u must have shape (N >= 2, {self.n_inputs}, ...), got {u.shape}")
         flat = u.reshape(u.shape[0], u.shape[1], -1)
         y = np.empty((u.shape[0], self.n_outputs, flat.shape[2]))
+        block = (_n_bank(self.poles) + 1) * self.n_inputs
         for r in range(flat.shape[2]):
-            y[:, :, r] = _regressors(flat[:, :, r], self.poles, self.branches,
-                                     self.window_samples, self.input_scale) @ self.theta.T
+            y[:, :, r] = self._simulate_record(flat[:, :, r], block)
         return y.reshape((u.shape[0], self.n_outputs) + u.shape[2:])
+
+    def _simulate_record(self, u, block):
+        """One record: each function's filter bank once, times each power's coefficients,
+        then scaled by a^j (the regressor matrix of :func:`basis_regressors` is never formed)."""
+        scale = self.input_scale
+        a = (np.sqrt(_amplitude_sq(u, self.window_samples)) / scale
+             if any(j for _, j in self.branches) else None)
+        banks, y = {}, np.zeros((u.shape[0], self.n_outputs))
+        for b, (name, j) in enumerate(self.branches):
+            if name not in banks:
+                banks[name] = _bank(BRANCH_FUNCTIONS[name](u, scale), self.poles)
+            part = banks[name] @ self.theta[:, b * block:(b + 1) * block].T
+            y += part if j == 0 else part * (a ** j)[:, None]
+        return y
 
     def to_arrays(self):
         """The model as a dict of arrays (for ``numpy.savez``; :meth:`from_arrays` reads it)."""
