@@ -318,6 +318,7 @@ CASES = {
                                                 "stride": POSITIVE_INT,
                                                 "directory": DIRECTORY}),
     "hysteresis_fits.workbook_dahl_fit": (None, {"directory": DIRECTORY}),
+    "hysteresis_fits.share_stored_model_check": (None, {"call": {"text": "cache", "number": 3}}),
     # a file that is no model ("not json", "empty"): its error names the file, not "path"
     # (tests/problem/test_hysteresis_fits.py)
     "hysteresis_fits.read_dahl_model": (None, {"path": {k: v for k, v in PATH_MISSING.items()

@@ -12,6 +12,7 @@ validation, notebook 03).  Background: ``docs/hysteresis.md``.
 """
 
 import functools
+import hashlib
 import json
 from dataclasses import fields
 from pathlib import Path
@@ -27,7 +28,7 @@ from piezolib.problem.paths import check_directory, data_dir
 from piezolib.files import CONTENT_KEY, atomic_write, seal, seal_problem
 from piezolib.hysteresis.pi import fit_pi
 
-__all__ = ["published_dahl", "CASE_I_CANDIDATES", "WORKBOOK_DAHL", "fit_case_I_loops",
+__all__ = ["share_stored_model_check", "published_dahl", "CASE_I_CANDIDATES", "WORKBOOK_DAHL", "fit_case_I_loops",
            "workbook_dahl_fit", "workbook_dahl_path", "read_dahl_model", "write_dahl_model",
            "write_workbook_dahl", "PI_PLAYS", "workbook_pi_fit",
            "VALIDATION_AMPLITUDES_V", "validation_loops"]
@@ -261,9 +262,59 @@ def workbook_dahl_path():
     return data_dir() / "models" / "workbook_dahl.json"
 
 
+#: ``call(func, *args) -> func(*args)`` through a cache shared between processes, or None
+#: (each process refits to check the stored model): :func:`share_stored_model_check`.
+_shared_check = None
+
+
+def share_stored_model_check(call):
+    """Let every process of a run share the stored workbook model's refit check.
+
+    :func:`workbook_dahl_fit` refits the Case I loops to check that the
+    committed model is the fit's optimum (a few seconds); each notebook's
+    kernel did it again.  With ``call`` set (the workbook passes its disk
+    cache), the check runs once per content of its inputs: the stored file's
+    bytes and the loops' samples are part of the key, so an edited model or
+    changed experiment files are checked anew.
+
+    Parameters
+    ----------
+    call : callable or None
+        ``call(func, *args)`` returning ``func(*args)``, possibly from a cache
+        keyed on ``func`` and ``args``; None: check in every process.
+
+    Examples
+    --------
+    >>> share_stored_model_check(lambda func, *args: func(*args))
+    >>> share_stored_model_check(None)
+    """
+    global _shared_check
+    if call is not None and not callable(call):
+        raise TypeError(f"call must be a callable or None, got {call!r}"[:200])
+    _shared_check = call
+    _stored_fit.cache_clear()
+
+
+def _check_key(path):
+    """What the stored model's check depends on: the file's and the loops' SHA-256."""
+    h = hashlib.sha256(Path(path).read_bytes())
+    for u, v in _case_I_loops(None):
+        h.update(np.ascontiguousarray(u).tobytes())
+        h.update(np.ascontiguousarray(v).tobytes())
+    return h.hexdigest()
+
+
 @functools.lru_cache(maxsize=None)
 def _stored_fit(path):
-    """``fit`` moved to the stored model, after checking that both are the same optimum.
+    """:func:`_checked_stored_fit`, through the shared check when one is set."""
+    if _shared_check is None:
+        return _checked_stored_fit(path)
+    return _shared_check(_checked_stored_fit, path, _check_key(path))
+
+
+def _checked_stored_fit(path, *key):
+    """``fit`` moved to the stored model, after checking that both are the same optimum
+    (``key``: :func:`_check_key` and what else the shared check keys on; unused here).
 
     alpha1, alpha2 and beta2 are identifiable only in combination, so where
     along that valley the fit ends depends on rounding (relative 1e-4 between

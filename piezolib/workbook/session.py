@@ -29,6 +29,7 @@ from collections.abc import Mapping
 import pandas as pd
 
 from piezolib import notebook_display, progress
+from piezolib.problem.hysteresis_fits import share_stored_model_check
 from piezolib.workbook import plotting, report, style, tables
 from piezolib.workbook import study as studies
 
@@ -318,11 +319,19 @@ def start(study=studies.REFERENCE, claims=None):
     """
     session = Session(study, claims)
     style.use_style()
+    # the notebooks of a run check the committed Dahl model's refit once, not once each
+    share_stored_model_check(_disk_cached)
     if notebook_display.in_kernel():        # a script or test keeps its own logging set-up
         progress.route_logs("piezolib")
     for option, value in DISPLAY_OPTIONS.items():
         pd.set_option(option, value)
     return session
+
+
+def _disk_cached(func, *args):
+    """``func(*args)`` through the pipeline's disk cache, keyed on the library's source too."""
+    from piezolib.workbook import pipeline
+    return pipeline.checked_cache_call(func, *args, pipeline.library_fingerprint())[0]
 
 
 def claim_lines(rows):

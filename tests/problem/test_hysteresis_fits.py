@@ -99,6 +99,35 @@ def test_a_stored_model_off_the_fits_optimum_is_refused(tmp_path, monkeypatch):
         ph.write_dahl_model("model", tmp_path / "x.json")
 
 
+def test_a_shared_check_is_keyed_on_the_stored_file_and_still_refuses_a_moved_model(
+        tmp_path, monkeypatch):
+    from dataclasses import replace
+
+    store, calls = {}, []
+
+    def shared(func, *args):             # a dict as the cache shared between processes
+        calls.append(args[1:])
+        if args not in store:
+            store[args] = func(*args)
+        return store[args]
+
+    ph.share_stored_model_check(shared)
+    try:
+        first = ph.workbook_dahl_fit()
+        ph._stored_fit.cache_clear()                    # another process: served by the store
+        assert ph.workbook_dahl_fit() is first and len(store) == 1
+        model = ph.read_dahl_model(ph.workbook_dahl_path())
+        path = ph.write_dahl_model(replace(model, alpha2=model.alpha2 * 1.01), tmp_path / "m.json")
+        monkeypatch.setattr(ph, "workbook_dahl_path", lambda: path)
+        with pytest.raises(ValueError, match="no longer matches the fit"):
+            ph.workbook_dahl_fit()                      # another file: another key, checked
+        assert len({key for key in calls}) == 2 and len(store) == 1
+    finally:
+        ph.share_stored_model_check(None)
+    with pytest.raises(TypeError, match="call must be a callable or None"):
+        ph.share_stored_model_check("cache")
+
+
 def test_an_edited_dahl_model_file_is_refused(tmp_path, monkeypatch):
     committed = ph.workbook_dahl_path()
     text = committed.read_text()
