@@ -147,10 +147,18 @@ def _default_grid(G, K, poles):
 
 def _evaluator(S, omega_s):
     """sys(j w) as a vectorised function of w [rad/s], for the SISO model S realised in
-    scaled time (:func:`~piezolib.robust.lti.to_scaled`).
+    scaled time (:func:`~piezolib.robust.lti.to_scaled`): :func:`_response_at` at
+    p = j w / omega_s."""
+    response = _response_at(S)
+    return lambda w: response(1j * np.atleast_1d(np.asarray(w, float)) / omega_s)
+
+
+def _response_at(S):
+    """C (p I - A)^-1 B + D of the SISO realisation S as a vectorised function of the
+    complex points p (s for a continuous model, z for a discrete one).
 
     As SLICOT's TB05AD, which python-control calls once per frequency (most of the
-    margins' former cost), but for all frequencies together: A reduced once to
+    margins' former cost), but for all points together: A reduced once to
     Hessenberg form H = Q' A Q, then (p I - H) x = Q' B by elimination with
     partial pivoting, one row pair at a time.  (A modal form was tried: on a
     controller with a weight pole at 1e-3 beside one at 2e4 its residues lost
@@ -159,12 +167,12 @@ def _evaluator(S, omega_s):
     A, B, C, D = (np.asarray(x, float) for x in (S.A, S.B, S.C, S.D))
     d, n = complex(D[0, 0]), A.shape[0]
     if n == 0:
-        return lambda w: np.full(np.shape(w), d)
+        return lambda p: np.full(np.shape(np.atleast_1d(p)), d)
     H, Q = la.hessenberg(A, calc_q=True)
     b, c = (Q.T @ B)[:, 0], (C @ Q)[0]
 
-    def response(w):
-        p = 1j * np.atleast_1d(np.asarray(w, float)) / omega_s
+    def response(p):
+        p = np.atleast_1d(np.asarray(p, complex))
         if p.size <= 4:     # the root finders' single points: LAPACK's solve is cheaper
             return np.array([c @ np.linalg.solve(q * np.eye(n) - H, b.astype(complex)) + d
                              for q in p])
@@ -530,10 +538,11 @@ def delay_tolerance(G, Kd, delays=(0, 1, 2, 3)):
 def _discrete_delay_margin(Gd, Kd, n=20000):
     """Delay margin [samples] of the sampled loop from its frequency response."""
     theta = np.linspace(np.pi / n, np.pi * (1 - 1e-9), n)
+    g, k = _response_at(Gd), _response_at(Kd)
 
     def L(t):
         z = np.exp(1j * np.atleast_1d(t))
-        return np.ravel(Gd(z)) * np.ravel(Kd(z))
+        return g(z) * k(z)
 
     wc = _crossings(lambda t: float(np.log(np.abs(L(t))[0])), theta, np.log(np.abs(L(theta))))
     if wc.size == 0:
