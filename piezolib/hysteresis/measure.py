@@ -158,6 +158,7 @@ def hysteresis_percent(v, x, band=0.02):
 
 def _strokes(v, reversal):
     """Monotone strokes (start, end, direction) between turning points of v."""
+    v = np.asarray(v, dtype=float).tolist()     # Python floats: the same comparisons, 5x faster
     turning = [0]
     direction = 0
     extreme_i = 0
