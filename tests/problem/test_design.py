@@ -81,13 +81,16 @@ def test_deployed_controller_tolerates_sampling_and_two_samples_of_delay(models,
     assert high.max() < genplant.DESIGN_ROLLOFF.hf_gain
 
 
-def test_paper_problem_design_is_kept_and_fails_with_delay(models):
+def test_paper_problem_design_is_kept_without_delay(models):
+    # one DK step: the path of the design without delay (the paper's plant P, no fixed-order
+    # K); the full design's mu (below 0.85) and that one sample of delay destabilises it are
+    # checked on the committed controllers (notebook 05, tests/workbook/test_pipeline.py)
     G, H_m, H_e, H_y, _ = models
-    old = design.design_controller(G, H_m, H_e, H_y, delay_samples=None, fixed_order=False)
+    old = design.design_controller(G, H_m, H_e, H_y, delay_samples=None, fixed_order=False,
+                                   max_iter=1)
     assert old.plant.name == "P" and old.K_fixed is None and old.K_deployed is old.K_reduced
-    assert old.musyn.mu_peak < 0.85
-    # the reason for the delay-aware design: one sample of delay destabilises it
-    assert sampled_radius(G, old.K_discrete, 0) < 1 < sampled_radius(G, old.K_discrete, 1)
+    assert old.K_discrete.dt == pytest.approx(1e-4) and old.musyn.history.shape[0] == 1
+    assert sampled_radius(G, old.K_discrete, 0) < 1
 
 
 def test_design_follows_the_models_given_and_is_deterministic(models, result, quick, caplog):

@@ -8,7 +8,7 @@ import control as ct
 import numpy as np
 import pytest
 
-from piezolib import paper
+from piezolib import paper, robust
 from piezolib.problem import analysis
 from piezolib.workbook import pipeline, study
 
@@ -60,6 +60,11 @@ def test_committed_reference_controllers_match_their_recorded_mu():
     assert result.nominal_stability
     assert result.mu_RP <= found.mu["no-delay DK"] + 2e-3
     assert result.mu_RP >= found.mu["no-delay DK"] - 0.02
+    assert result.mu_RP < 0.85
+    # the reason for the delay-aware design: one sample of delay destabilises the no-delay K
+    Kd = robust.discretize(found.K_nodelay_reduced, paper.SAMPLING_FREQUENCY_HZ).K
+    radii = [robust.sampled_loop_radius(G, Kd, d) for d in (0, 1)]
+    assert radii[0] < 1 < radii[1]
 
 
 def test_write_read_round_trip_is_bit_exact(tmp_path):
