@@ -283,8 +283,9 @@ def mimo_claim_rows(mirror, record, checked):
             if cname != name:
                 continue
             rows.append(_row("MIMO mu", f"MIMO sampled loop, {who}, {mname}: largest |pole|",
-                             sig3(r["largest |pole|"]), precision=0.01,
-                             note="stable below 1; one sample of delay"))
+                             round(float(r["largest |pole|"]), 4), precision=0.002,
+                             note="stable below 1; one sample of delay; 4 decimals (the "
+                                  "slowest closed-loop pole is near z = 1)"))
         rows.append(_row("MIMO mu", f"MIMO step cross-talk, {who}: worst off-diagonal peak "
                          "over the diagonal step (all models)",
                          _two(col["worst cross-talk (all models)"]), precision=0.02,
