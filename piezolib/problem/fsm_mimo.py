@@ -845,11 +845,24 @@ class MirrorVerification:
         """Bounds ordered, RP met and every loop stable for the 3 x 3 controller."""
         mu = self.mu[MIMO]
         rows = self.loops.xs(MIMO, level=0)
-        return {"3 x 3: mu lower bound <= upper bound on every frequency": bool(
-                    np.all(mu.lower <= mu.upper * (1 + 1e-6))),
-                "3 x 3: robust performance, mu_RP upper bound < 1": bool(mu.upper.max() < 1),
-                "3 x 3: the sampled loop is stable with the nominal and each level's model":
-                    bool(rows["stable"].all())}
+        t = self.table()
+        out = {"3 x 3: mu lower bound <= upper bound on every frequency": bool(
+                   np.all(mu.lower <= mu.upper * (1 + 1e-6))),
+               "3 x 3: robust performance, mu_RP upper bound < 1": bool(mu.upper.max() < 1),
+               "3 x 3: the sampled loop is stable with the nominal and each level's model":
+                   bool(rows["stable"].all()),
+               "3 x 3: worst step cross-talk below the three SISO loops'": bool(
+                   t.loc["worst cross-talk (all models)", MIMO]
+                   < t.loc["worst cross-talk (all models)", SISO]),
+               "3 x 3: mu_RP of the 3 x 3 problem below the three SISO loops'": bool(
+                   t.loc["mu_RP upper", MIMO] < t.loc["mu_RP upper", SISO])}
+        if self.margins is not None:
+            worst = self.margins.groupby(level=0).min()
+            for side in ("input", "output"):
+                col = f"multi-loop disk margin, {side}"
+                out[f"3 x 3: multi-loop disk margin at the plant {side} above the three SISO "
+                    "loops' (worst model)"] = bool(worst.loc[MIMO, col] > worst.loc[SISO, col])
+        return out
 
 
 #: Names of the two controllers compared.
