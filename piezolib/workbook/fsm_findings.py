@@ -236,10 +236,6 @@ def summary_lines(blas, scores, change, nonlinear, weight, nominal, design, veri
     ]
 
 
-def _two(x):
-    return float(f"{x:.2g}")
-
-
 def mimo_claim_rows(mirror, record, checked):
     """The 3 x 3 section's claims: the MIMO controller beside the three SISO loops.
 
@@ -288,8 +284,9 @@ def mimo_claim_rows(mirror, record, checked):
                                   "slowest closed-loop pole is near z = 1)"))
         rows.append(_row("MIMO mu", f"MIMO step cross-talk, {who}: worst off-diagonal peak "
                          "over the diagonal step (all models)",
-                         _two(col["worst cross-talk (all models)"]), precision=0.02,
-                         note="inf where a loop is unstable"))
+                         sig3(col["worst cross-talk (all models)"]), precision=0.005,
+                         note="0.25 s after a 1 um step on one reference; inf where a loop is "
+                              "unstable"))
         if checked.margins is not None:
             m = checked.margins.xs(name, level=0)
             for col_name, short in (("multi-loop disk margin, input", "multi-loop disk margin "
@@ -299,7 +296,7 @@ def mimo_claim_rows(mirror, record, checked):
                                     ("loop-at-a-time disk margin, input (smallest)",
                                      "loop-at-a-time disk margin at the plant input, smallest")):
                 rows.append(_row("MIMO mu", f"MIMO {who}: {short} (worst model)",
-                                 round(float(m[col_name].min()), 2), precision=0.02,
+                                 sig3(float(m[col_name].min())), precision=0.002,
                                  note="diskmargin's alpha; NaN where a loop is unstable"))
     return rows
 
@@ -330,19 +327,19 @@ def mimo_summary_lines(mirror, record, checked):
         f"({mirror.G_nominal.nstates} states), the levels' spread as one full complex 3 × 3 "
         f"output block; DK {record.K_full_order} states, reduced to {int(mimo['states'])}: "
         f"μ_RP {mimo['mu_RP upper']:.3f} (lower {mimo['mu_RP lower']:.3f}), {stab(mimo)}, "
-        f"worst step cross-talk {mimo['worst cross-talk (all models)']:.2g}",
+        f"worst step cross-talk {mimo['worst cross-talk (all models)']:.3g}",
         f"three SISO loops (one per diagonal entry, the same weights) closed together on the "
         f"coupled mirror: μ_RP of the 3 × 3 problem {siso['mu_RP upper']:.3f} (lower "
         f"{siso['mu_RP lower']:.3f}), {stab(siso)}, worst step cross-talk "
-        f"{siso['worst cross-talk (all models)']:.2g}"]
+        f"{siso['worst cross-talk (all models)']:.3g}"]
     if checked.margins is not None:
         m = checked.margins
         lines.append(
             "multi-loop disk margins (all channels at once, worst model), input / output: "
-            f"3 × 3 {m.xs(fsm_mimo.MIMO)['multi-loop disk margin, input'].min():.2f} / "
-            f"{m.xs(fsm_mimo.MIMO)['multi-loop disk margin, output'].min():.2f}, three SISO "
-            f"loops {m.xs(fsm_mimo.SISO)['multi-loop disk margin, input'].min():.2f} / "
-            f"{m.xs(fsm_mimo.SISO)['multi-loop disk margin, output'].min():.2f}")
+            f"3 × 3 {m.xs(fsm_mimo.MIMO)['multi-loop disk margin, input'].min():.3g} / "
+            f"{m.xs(fsm_mimo.MIMO)['multi-loop disk margin, output'].min():.3g}, three SISO "
+            f"loops {m.xs(fsm_mimo.SISO)['multi-loop disk margin, input'].min():.3g} / "
+            f"{m.xs(fsm_mimo.SISO)['multi-loop disk margin, output'].min():.3g}")
     return lines
 
 
