@@ -8,7 +8,9 @@ the numpy path applies elementwise, in the same order and precision (float32
 sections stay float32; no fused multiply-add, no reassociation), so the result
 is identical, float for float, to the Python loop it replaces; the Python loop
 costs about 0.5 ms per sample whatever the number of members, this one a few
-nanoseconds per member and sample.
+nanoseconds per member and sample: each stage of a sample is a loop over the
+members, which the compiler runs on vector registers (2.5x faster than one
+member at a time on notebook 12's 200 members).
 
 numba is imported on first use, and the compiled function is cached on disk
 (``__pycache__``), so a process that never runs a closed loop does not pay for
@@ -44,25 +46,36 @@ def _kernel():
     def loop(v_r, u_f, delay, dac, adc, gain, amp, out_lo, out_hi,
              has_plays, r, w, w0, plays, b0, b1, a1, z, noise, log, coef, s, v_y0,
              u_b, diverged_v):
+        # each stage of the sample is one loop over the members (innermost, contiguous):
+        # the compiler runs it on vector registers, each member's operations in the order
+        # of the Python loop (no reassociation), so the result is the same float for float
         n, N = v_r.shape[0], v_y0.shape[0]
         order, n_plays, n_sec = z.shape[0], r.shape[0], coef.shape[0]
-        z_new = np.empty(order)
         v_y = v_y0.copy()
-        cast = np.empty(1, coef.dtype)      # rounds the error to the sections' precision
+        v = np.empty(N, coef.dtype)         # the error in the sections' precision, then y
+        y = np.empty(N, coef.dtype)
+        v_a = np.empty(N)
+        v_h = np.empty(N)
+        y_k = np.empty(N)
+        x_in = np.empty(N)
+        z_new = np.empty(N)
         limit = diverged_v * diverged_v
         for k in range(n):
             # the controller: sections in their precision, one after the other
+            for i in range(N):
+                v[i] = v_r[k] - v_y[i]
+            for q in range(n_sec):
+                c0, c1, c2, c4, c5 = coef[q, 0], coef[q, 1], coef[q, 2], coef[q, 4], coef[q, 5]
+                for i in range(N):
+                    y[i] = c0 * v[i] + s[0, q, i]
+                for i in range(N):
+                    s1 = (c1 * v[i] - c4 * y[i]) + s[1, q, i]
+                    s[1, q, i] = c2 * v[i] - c5 * y[i]
+                    s[0, q, i] = s1
+                    v[i] = y[i]
             total = 0.0
             for i in range(N):
-                cast[0] = v_r[k] - v_y[i]
-                v = cast[0]
-                for q in range(n_sec):
-                    y = coef[q, 0] * v + s[0, q, i]
-                    s1 = (coef[q, 1] * v - coef[q, 4] * y) + s[1, q, i]
-                    s[1, q, i] = coef[q, 2] * v - coef[q, 5] * y
-                    s[0, q, i] = s1
-                    v = y
-                u_b[k, i] = np.float64(v)
+                u_b[k, i] = np.float64(v[i])
                 total += u_b[k, i] * u_b[k, i]
             if not total < limit:
                 return k
@@ -72,29 +85,36 @@ def _kernel():
                 u_c = u_f[k] + ub
                 u_dac = convert(u_c, dac[0], dac[1], dac[2])
                 v_cmd = u_dac * gain
-                v_a = v_cmd
+                log[0, k, i], log[1, k, i], log[2, k, i] = u_c, u_dac, v_cmd
+                v_a[i] = v_cmd
                 if amp:
-                    v_a = min(max(v_cmd, out_lo), out_hi)
-                    log[3, k, i] = v_a
-                if has_plays:
-                    v_h = w0[i] * v_a
-                    for p in range(n_plays):
-                        lo, hi = v_a + (-r[p, i]), v_a + r[p, i]
+                    v_a[i] = min(max(v_cmd, out_lo), out_hi)
+                    log[3, k, i] = v_a[i]
+            if has_plays:
+                for i in range(N):
+                    v_h[i] = w0[i] * v_a[i]
+                for p in range(n_plays):
+                    for i in range(N):
+                        lo, hi = v_a[i] + (-r[p, i]), v_a[i] + r[p, i]
                         plays[p, i] = min(max(plays[p, i], lo), hi)
-                        h = (plays[p, i] - r[p, i]) * w[p, i]
-                        v_h = v_h + h
-                else:
-                    v_h = v_a
-                x_in = v_h / gain
-                y_k = z[0, i] + b0[i] * x_in
-                for m in range(order):
-                    z_new[m] = x_in * b1[m, i]
-                for m in range(order - 1):
-                    z_new[m] = z_new[m] + z[m + 1, i]
-                for m in range(order):
-                    z[m, i] = z_new[m] - y_k * a1[m, i]
+                        v_h[i] = v_h[i] + (plays[p, i] - r[p, i]) * w[p, i]
+            else:
+                for i in range(N):
+                    v_h[i] = v_a[i]
+            for i in range(N):
+                x_in[i] = v_h[i] / gain
+                y_k[i] = z[0, i] + b0[i] * x_in[i]
+            # z_new[m] = x_in b1[m] + z[m + 1] - y_k a1[m], in place from m = 0 upwards
+            # (z[m + 1] is read before it is overwritten)
+            for m in range(order):
+                for i in range(N):
+                    z_new[i] = x_in[i] * b1[m, i]
+                    if m < order - 1:
+                        z_new[i] = z_new[i] + z[m + 1, i]
+                    z[m, i] = z_new[i] - y_k[i] * a1[m, i]
+            for i in range(N):
                 analog = z[0, i] + noise[k + 1, i]
-                log[0, k, i], log[1, k, i], log[2, k, i], log[4, k, i] = u_c, u_dac, v_cmd, y_k
+                log[4, k, i] = y_k[i]
                 log[5, k + 1, i] = analog
                 v_y[i] = convert(analog, adc[0], adc[1], adc[2])
                 log[6, k + 1, i] = v_y[i]
