@@ -631,7 +631,32 @@ def sos_filter(controller, x, dtype="float64"):
     """
     x = check_finite_array("x", x, ndim=1, min_length=1, real=True)
     f = SectionFilter(controller, dtype, _stacklevel=3)
-    return np.array([f.step(v) for v in x.tolist()])
+    coef = np.array(f._coef, dtype=f.dtype).reshape(-1, 6)
+    # compiled: SectionFilter.step's operations, in its order and precision, per sample
+    return _sections_kernel()(coef, x.astype(f.dtype), np.zeros(x.size))
+
+
+@functools.cache
+def _sections_kernel():
+    """The compiled loop of :func:`sos_filter` (numba imported and the function compiled or
+    loaded from its disk cache once; a process that never filters does not pay for it)."""
+    import numba
+
+    @numba.njit(cache=True, nogil=True)
+    def run(coef, x, out):
+        n_sec = coef.shape[0]
+        s = np.zeros((n_sec, 2), coef.dtype)
+        for k in range(x.size):
+            y = x[k]
+            for q in range(n_sec):
+                u = y
+                y = coef[q, 0] * u + s[q, 0]
+                s[q, 0] = coef[q, 1] * u - coef[q, 4] * y + s[q, 1]
+                s[q, 1] = coef[q, 2] * u - coef[q, 5] * y
+            out[k] = np.float64(y)
+        return out
+
+    return run
 
 
 def _path(name, path, *, directory=False):

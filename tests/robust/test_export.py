@@ -86,6 +86,15 @@ def test_c_header_runs_like_reference(exported, tmp_path):
     assert np.array_equal(c_y.astype(np.float32), sos_filter(sos, x, "float32").astype(np.float32))
 
 
+@pytest.mark.parametrize("dtype", ["float64", "float32"])
+def test_sos_filter_is_section_filter_step_by_step(exported, dtype):
+    # sos_filter runs compiled; SectionFilter.step is the reference it must equal bit for bit
+    _, sos = exported
+    x = np.random.default_rng(3).standard_normal(3000)
+    f = SectionFilter(sos, dtype)
+    assert np.array_equal(sos_filter(sos, x, dtype), [f.step(v) for v in x])
+
+
 def test_section_filter_bad_input():
     with pytest.raises(ValueError, match="controller"):
         SectionFilter(np.ones((2, 5)))
