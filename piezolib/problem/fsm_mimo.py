@@ -52,7 +52,7 @@ __all__ = ["N_AXES", "MIMO_BLOCKS", "DESIGN_PARAMETERS", "RECORD_NAME", "mirror_
            "write_mirror_record", "read_mirror_record", "record_path", "block_diagonal",
            "step_crosstalk", "step_matrix", "sampled_radius", "MirrorVerification", "verify_mirror",
            "mirror_margins", "synthesis_plant",
-           "reduce_mirror_controller"]
+           "reduce_mirror_controller", "MirrorExport", "export_mirror"]
 
 #: Axes (inputs = outputs) of the mirror.
 N_AXES = 3
@@ -955,3 +955,68 @@ _MARGIN_COLUMNS = ("multi-loop disk margin, input", "multi-loop disk margin, out
                    "loop-at-a-time disk margin, input (smallest)",
                    "loop-at-a-time disk margin, output (smallest)",
                    "multi-loop gain margin, input [dB]", "multi-loop phase margin, input [deg]")
+
+
+@dataclass(frozen=True)
+class MirrorExport:
+    """The 3 x 3 controller exported in float32 (:func:`export_mirror`).
+
+    Attributes
+    ----------
+    export : piezolib.robust.MIMOExport
+        The realisation, its float32 matrices and their checks.
+    radius32 : dict {str: float}
+        Largest |pole| of the sampled loop with the float32 controller, per model.
+    """
+
+    export: object
+    radius32: dict
+
+    def table(self):
+        """The export's numbers, one column."""
+        x = self.export
+        return pd.Series({
+            "form": x.form, "states": x.n_states, "basis condition number": x.basis_condition,
+            "spectral radius of A (float64)": x.radius64,
+            "spectral radius of A (float32)": x.radius32,
+            "largest relative response error of the float32 matrices": x.max_error,
+            "its first-order rounding bound (largest)": float(np.nanmax(x.bound)),
+            "time run: float32 arithmetic error / its bound": x.time_error / x.time_bound,
+            **{f"sampled loop with the float32 K, {m}: largest |pole|": r
+               for m, r in self.radius32.items()}}, name="3 x 3 controller, float32")
+
+    @property
+    def checks(self):
+        """The float32 controller is stable, within its bounds, and closes stable loops."""
+        x = self.export
+        return {"3 x 3 float32 export: controller stable in float32": bool(x.radius32 < 1),
+                "3 x 3 float32 export: response error within the rounding bound": bool(
+                    x.max_error <= np.nanmax(x.bound)),
+                "3 x 3 float32 export: time-domain error within its bound": bool(
+                    x.time_error <= x.time_bound),
+                "3 x 3 float32 export: the sampled loop with each model is stable": bool(
+                    max(self.radius32.values()) < 1)}
+
+
+def export_mirror(nominal, record, name="K_fsm_mimo"):
+    """The discrete 3 x 3 controller as float32 matrices (``robust.export_mimo``), checked.
+
+    Parameters
+    ----------
+    nominal : MirrorNominal
+        Its models close the sampled loops with the float32 controller.
+    record : MirrorRecord
+    name : str
+        C identifier of the controller.
+
+    Returns
+    -------
+    MirrorExport
+    """
+    check_type("nominal", nominal, MirrorNominal, "a MirrorNominal (mirror_nominal)")
+    check_type("record", record, MirrorRecord, "a MirrorRecord (read_mirror_record)")
+    x = robust.export_mimo(record.K_d(), name=name)
+    K32 = ct.ss(*(np.asarray(M, dtype=float) for M in (x.A32, x.B32, x.C32, x.D32)), _T())
+    models = {"all-levels model (full)": nominal.G_full,
+              **{f"{lv} mV model": g for lv, g in nominal.G_level.items()}}
+    return MirrorExport(export=x, radius32={m: sampled_radius(g, K32) for m, g in models.items()})

@@ -33,6 +33,7 @@ _RESULTS = {
     "mirror": fsm_mimo.MirrorNominal,
     "record": fsm_mimo.MirrorRecord,
     "checked": fsm_mimo.MirrorVerification,
+    "exported": fsm_mimo.MirrorExport,
 }
 
 
@@ -236,7 +237,7 @@ def summary_lines(blas, scores, change, nonlinear, weight, nominal, design, veri
     ]
 
 
-def mimo_claim_rows(mirror, record, checked):
+def mimo_claim_rows(mirror, record, checked, exported=None):
     """The 3 x 3 section's claims: the MIMO controller beside the three SISO loops.
 
     Every quantity names "MIMO" (the 3 x 3 problem), and the margin and step rows
@@ -248,6 +249,8 @@ def mimo_claim_rows(mirror, record, checked):
     mirror : piezolib.problem.fsm_mimo.MirrorNominal
     record : piezolib.problem.fsm_mimo.MirrorRecord
     checked : piezolib.problem.fsm_mimo.MirrorVerification
+    exported : piezolib.problem.fsm_mimo.MirrorExport, optional
+        The float32 export of the 3 x 3 controller (its rows follow the controller's).
 
     Returns
     -------
@@ -255,6 +258,8 @@ def mimo_claim_rows(mirror, record, checked):
         Arguments of ``nb.check`` (none published).
     """
     _check_results(mirror=mirror, record=record, checked=checked)
+    if exported is not None:
+        _check_results(exported=exported)
     sig3 = fsm_control.significant
     rows = [_row("MIMO mu", "MIMO: nominal 3 x 3 model, states (of the all-levels model's "
                  f"{mirror.G_full.nstates})", int(mirror.G_nominal.nstates),
@@ -298,6 +303,16 @@ def mimo_claim_rows(mirror, record, checked):
                 rows.append(_row("MIMO mu", f"MIMO {who}: {short} (worst model)",
                                  sig3(float(m[col_name].min())), precision=0.002,
                                  note="diskmargin's alpha; NaN where a loop is unstable"))
+        if exported is not None and name == fsm_mimo.MIMO:
+            x = exported.export
+            rows += [
+                _row("MIMO mu", "MIMO 3 x 3 mu controller, float32 export: largest relative "
+                     "response error", float(f"{x.max_error:.1g}"), precision=1e-4,
+                     note=f"{x.form} form, basis condition {x.basis_condition:.3g}; first-order "
+                          f"rounding bound {np.nanmax(x.bound):.2g}"),
+                _row("MIMO mu", "MIMO 3 x 3 mu controller, float32 export: sampled loop, "
+                     "largest |pole| (worst model)", round(max(exported.radius32.values()), 4),
+                     precision=0.002, note="stable below 1")]
     return rows
 
 

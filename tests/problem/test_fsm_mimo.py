@@ -137,3 +137,18 @@ def test_a_file_that_is_no_record_is_refused(tmp_path):
     bad.write_text('{"format": 1}')
     with pytest.raises(ValueError, match="not a 3 x 3 design record"):
         fsm_mimo.read_mirror_record(bad)
+
+
+def test_the_float32_export_of_the_committed_controller_keeps_its_bounds():
+    G = _diag_plant()
+    nominal = fsm_mimo.MirrorNominal(G_full=G, G_level={lv: G for lv in fsm.LEVELS_MV},
+                                     G_nominal=G, reduction=None, hankel_relative=None,
+                                     frequency_Hz=F_HZ, nominal_order=3, bla=None)
+    exported = fsm_mimo.export_mirror(nominal, fsm_mimo.read_mirror_record())
+    x = exported.export
+    assert x.A32.dtype == np.float32 and x.n_states == exported.table()["states"]
+    assert x.max_error <= np.nanmax(x.bound) and x.time_error <= x.time_bound
+    assert set(exported.radius32) == {"all-levels model (full)", "100 mV model", "200 mV model",
+                                      "300 mV model"}
+    checks = exported.checks
+    assert checks["3 x 3 float32 export: controller stable in float32"]
