@@ -233,7 +233,7 @@ def summary_lines(blas, scores, change, nonlinear, weight, nominal, design, veri
         f"actuator {coupling.pair[1] + 1} the displacements d_1, d_2 move by "
         f"{coupling.moves.iloc[0, 0]:.2f}, {coupling.moves.iloc[1, 0]:.2f} µm per µm of "
         f"d_{coupling.pair[0] + 1}'s reference at 10 Hz (other actuators open)",
-        "not done: a MIMO controller for the mirror",
+        "the mirror as a whole: the 3 × 3 μ controller of the last section (its lines follow)",
     ]
 
 
