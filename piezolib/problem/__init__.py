@@ -19,6 +19,7 @@ weighting        notebook 04: templates of eq. 15, P against eq. 16, M against e
 fsm_benchmark    the CubeSpec fine steering mirror benchmark: data, metric, baselines
 fsm_models       the benchmark's models step by step (BLAs, linear, nonlinear, scores), with checks
 fsm_control      a mu controller for one mirror axis: nominal, design, verification, coupling
+fsm_mimo         a 3 x 3 mu controller for the whole mirror, checked beside three SISO loops
 fsm_causal       one causal model of the mirror for all levels (fixed-pole LPV basis), scored
 paths            where the checkout and its ``data/`` folder are
 foreign_hysteresis  raw records of Bouc-Wen, Preisach and Duhem hysteresis through a resonance,
@@ -38,6 +39,6 @@ __all__ = ["paper", "genplant", "stage", "stage_batch", "stage_loop_kernel", "st
            "stage_hysteresis", "stage_data", "design", "analysis", "verification",
            "hysteresis_fits", "dahl_audit", "hysteresis_choice",
            "weighting", "fsm_benchmark", "paths",
-           "fsm_models", "fsm_control", "fsm_causal",
+           "fsm_models", "fsm_control", "fsm_causal", "fsm_mimo",
            "published_audit", "stage_identification", "coefficient_set", "coefficient_box",
            "foreign_hysteresis"]
