@@ -63,17 +63,17 @@ def describe(stable, max_real, mu):
     return f"mu_RP {mu:.4f}; closed loop stable (slowest pole Re s = {max_real:.4g} rad/s)"
 
 
-def run_dkpy(queue, P, omega, iterations, d_order):
+def run_dkpy(queue, P, omega, iterations, d_order, omega_s):
     try:
         import dkpy
         warnings.simplefilter("ignore")
-        Ps = robust.to_scaled(P, OMEGA_S)
+        Ps = robust.to_scaled(P, omega_s)
         dk = dkpy.DkIterFixedOrder(controller_synthesis=dkpy.HinfSynSlicot(),
                                    structured_singular_value=dkpy.SsvLmiBisection(n_jobs=1),
                                    d_scale_fit=dkpy.DScaleFitSlicot(),
                                    n_iterations=iterations, fit_order=d_order)
         t0 = time.perf_counter()
-        K, _, mu, _, _ = dk.synthesize(Ps, 3, 3, omega / OMEGA_S,
+        K, _, mu, _, _ = dk.synthesize(Ps, 3, 3, omega / omega_s,
                                        [list(b) for b in fsm_mimo.MIMO_BLOCKS])
         seconds = time.perf_counter() - t0
         if K is None:
@@ -90,6 +90,8 @@ def main():
     ap.add_argument("--d-order", type=int, default=4, help="order of the D-scaling fits")
     ap.add_argument("--n", type=int, default=120, help="grid points, 0.1 ... 3e5 rad/s")
     ap.add_argument("--dkpy-timeout", type=float, default=1800.0, help="[s] for dkpy")
+    ap.add_argument("--omega-s", type=float, default=OMEGA_S,
+                    help="time scale [rad/s] of the plant handed to dkpy (1: seconds)")
     args = ap.parse_args()
     import control as ct
 
@@ -115,13 +117,14 @@ def main():
         return 0
     ctx = mp.get_context("fork")
     queue = ctx.Queue()
-    proc = ctx.Process(target=run_dkpy, args=(queue, P, omega, args.iterations, args.d_order))
+    proc = ctx.Process(target=run_dkpy, args=(queue, P, omega, args.iterations, args.d_order,
+                                                   args.omega_s))
     sys.stdout.flush()
     t0 = time.perf_counter()
     proc.start()
     proc.join(args.dkpy_timeout)
     print(f"\ndkpy DkIterFixedOrder ({args.iterations} iterations, HinfSynSlicot, "
-          f"SsvLmiBisection, DScaleFitSlicot)")
+          f"SsvLmiBisection, DScaleFitSlicot; plant in time scale {args.omega_s:g} rad/s)")
     if proc.is_alive():
         proc.terminate()
         proc.join()
@@ -133,7 +136,7 @@ def main():
         print(f"  failed after {time.perf_counter() - t0:.1f} s: {out[1]}")
         return 0
     seconds, mu_own = out[1], out[2]
-    K_dk = robust.from_scaled(ct.ss(*out[3:]), OMEGA_S)
+    K_dk = robust.from_scaled(ct.ss(*out[3:]), args.omega_s)
     theirs = check(P, K_dk, omega)
     print(f"  time              : {seconds:8.1f} s")
     print(f"  controller order  : {K_dk.nstates}")
