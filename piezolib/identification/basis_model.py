@@ -66,7 +66,7 @@ import scipy.signal
 from piezolib._checks import (check_finite_array, check_integer, check_nonnegative,
                               check_positive, check_type)
 
-__all__ = ["BRANCH_FUNCTIONS", "BasisModel", "BasisSelection", "basis_poles", "running_rms",
+__all__ = ["BRANCH_FUNCTIONS", "BasisModel", "BasisStepper", "BasisSelection", "basis_poles", "running_rms",
            "basis_regressors", "fit_basis_model", "select_basis_model"]
 
 #: The static functions a branch may apply to each input channel (``scale``: ``input_scale``).
@@ -394,6 +394,25 @@ class BasisModel:
             y += part if j == 0 else part * (a ** j)[:, None]
         return y
 
+    def stepper(self):
+        """The model one sample at a time, e.g. inside a feedback loop: :class:`BasisStepper`.
+
+        Its outputs equal :meth:`simulate`'s on the same input from rest (the same
+        recursions, the filters' states and the amplitude's window carried from sample to
+        sample).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> model = BasisModel(np.array([0.9, 0.5 + 0.5j]), (("u", 0), ("u", 1)), 20.0, 1.0,
+        ...                    theta=np.ones((1, 2 * (3 + 1))), n_inputs=1)
+        >>> u = np.sin(np.arange(50.0))[:, None]
+        >>> run = model.stepper()
+        >>> bool(np.allclose([run.step(x) for x in u], model.simulate(u), rtol=1e-12))
+        True
+        """
+        return BasisStepper(self)
+
     def to_arrays(self):
         """The model as a dict of arrays (for ``numpy.savez``; :meth:`from_arrays` reads it)."""
         return {"poles": self.poles, "branch_functions": np.array([b[0] for b in self.branches]),
@@ -410,6 +429,62 @@ class BasisModel:
         return cls(np.asarray(arrays["poles"]), branches, float(arrays["window_samples"]),
                    float(arrays["input_scale"]), np.asarray(arrays["theta"]),
                    int(arrays["n_inputs"]))
+
+
+class BasisStepper:
+    """A :class:`BasisModel` run one sample at a time from rest (:meth:`BasisModel.stepper`).
+
+    Each static function's filter bank keeps its states (one complex state per pole and
+    channel), the amplitude its running mean square; :meth:`step` takes u(k) and returns
+    y(k), which uses the inputs up to k only.
+    """
+
+    def __init__(self, model):
+        check_type("model", model, BasisModel, "a BasisModel")
+        self.model = model
+        self._names = list(dict.fromkeys(name for name, _ in model.branches))
+        self._x = {name: np.zeros((model.poles.size, model.n_inputs), complex)
+                   for name in self._names}
+        self._complex = model.poles.imag != 0
+        self._k, self._mean_sq = 0, 0.0
+        block = (_n_bank(model.poles) + 1) * model.n_inputs
+        self._theta = [model.theta[:, b * block:(b + 1) * block].T
+                       for b in range(len(model.branches))]
+
+    def _row(self, x, s):
+        """The regressors of one branch at this sample, in :func:`_bank`'s column order."""
+        parts = []
+        for i, cplx in enumerate(self._complex):
+            parts += [x[i].real, x[i].imag] if cplx else [x[i].real]
+        parts.append(s)
+        return np.concatenate(parts)
+
+    def step(self, u):
+        """Output y(k) [unit of the model's outputs] for the input u(k), shape (n_inputs,)."""
+        m = self.model
+        u = check_finite_array("u", u, shape=(m.n_inputs,), real=True)
+        scale, window = m.input_scale, m.window_samples
+        # the amplitude of _amplitude_sq: a growing mean, then an exponential window
+        ms = float(np.mean(u ** 2))
+        k0 = int(np.floor(window))
+        if self._k < k0:
+            self._mean_sq = (self._mean_sq * self._k + ms) / (self._k + 1)
+        else:
+            g = 1.0 / window
+            self._mean_sq = g * ms + (1 - g) * self._mean_sq
+        a = np.sqrt(self._mean_sq) / scale
+        rows, signals = {}, {}
+        for name in self._names:
+            signals[name] = BRANCH_FUNCTIONS[name](u, scale)
+            rows[name] = self._row(self._x[name], signals[name])
+        y = np.zeros(m.n_outputs)
+        for (name, j), theta in zip(m.branches, self._theta):
+            part = rows[name] @ theta
+            y += part if j == 0 else part * a ** j
+        for name in self._names:              # x(k + 1) = p x(k) + phi(u(k))
+            self._x[name] = m.poles[:, None] * self._x[name] + signals[name][None, :]
+        self._k += 1
+        return y
 
 
 # --------------------------------------------------------------------------- fitting

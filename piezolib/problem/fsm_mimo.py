@@ -52,7 +52,8 @@ __all__ = ["N_AXES", "MIMO_BLOCKS", "DESIGN_PARAMETERS", "RECORD_NAME", "mirror_
            "write_mirror_record", "read_mirror_record", "record_path", "block_diagonal",
            "step_crosstalk", "step_matrix", "sampled_radius", "MirrorVerification", "verify_mirror",
            "mirror_margins", "synthesis_plant",
-           "reduce_mirror_controller", "MirrorExport", "export_mirror"]
+           "reduce_mirror_controller", "MirrorExport", "export_mirror", "NONLINEAR_STEP_RMS_V",
+           "NonlinearLoop", "nonlinear_loop"]
 
 #: Axes (inputs = outputs) of the mirror.
 N_AXES = 3
@@ -1020,3 +1021,124 @@ def export_mirror(nominal, record, name="K_fsm_mimo"):
     models = {"all-levels model (full)": nominal.G_full,
               **{f"{lv} mV model": g for lv, g in nominal.G_level.items()}}
     return MirrorExport(export=x, radius32={m: sampled_radius(g, K32) for m, g in models.items()})
+
+
+# -- the loop closed with the causal nonlinear model ---------------------------------------
+
+#: RMS of the steady controller output [V] of the steps on the nonlinear model: inside the
+#: 100-300 mV range the causal model was fitted on.
+NONLINEAR_STEP_RMS_V = 0.2
+
+
+@dataclass(frozen=True)
+class NonlinearLoop:
+    """The 3 x 3 controller's sampled loop closed with the causal nonlinear model
+    (:func:`nonlinear_loop`), beside the same loop with the all-levels linear model.
+
+    Attributes
+    ----------
+    table : pandas.DataFrame
+        Rows: the reference stepped; columns per model (nonlinear, linear): the step's final
+        value over the reference, the worst cross-talk (peak of the other two outputs over
+        the final value) and the largest |u| [V].
+    step_um : ndarray, shape (3,)
+        The step on each reference [um] (its steady u has RMS :data:`NONLINEAR_STEP_RMS_V`
+        on the linear model).
+    responses : dict {str: ndarray}
+        Outputs [um], shape (3 outputs, 3 references, n_samples), per model.
+    """
+
+    table: pd.DataFrame
+    step_um: np.ndarray
+    responses: dict
+
+    @property
+    def checks(self):
+        """{statement: holds}: the nonlinear model's loop settles near the references."""
+        nl = self.table.xs("causal nonlinear model", axis=1, level=0)
+        return {"with the causal nonlinear model each step settles within 5 % of its reference":
+                bool(np.all(np.abs(nl["final / reference"] - 1) < 0.05)),
+                "with the causal nonlinear model the cross-talk stays below 10 %":
+                bool(np.all(nl["worst cross-talk"] < 0.1))}
+
+
+def _loop_run(plant_step, K_d, r, n_samples):
+    """(outputs (n, 3) [um], controller outputs (n, 3) [V]) of z^-1 P K_d on the step ``r``."""
+    A, B, C, D = (np.asarray(m, float) for m in (K_d.A, K_d.B, K_d.C, K_d.D))
+    x, u_held = np.zeros(A.shape[0]), np.zeros(N_AXES)
+    ys, us = np.empty((n_samples, N_AXES)), np.empty((n_samples, N_AXES))
+    for k in range(n_samples):
+        y = plant_step(u_held)                  # u computed at k - 1: one sample of delay
+        e = r - y
+        u = C @ x + D @ e
+        x = A @ x + B @ e
+        ys[k], us[k], u_held = y, u, u
+    return ys, us
+
+
+def nonlinear_loop(causal_model, record, nominal, n_samples=STEP_SAMPLES):
+    """Steps on each reference of the sampled loop closed with the causal nonlinear model.
+
+    The model (:class:`piezolib.identification.BasisModel`, [V] -> [m]) runs one sample
+    at a time (:meth:`~piezolib.identification.BasisModel.stepper`), the 3 x 3 controller
+    ``record.K_d()`` with one sample of delay, as :func:`step_matrix` closes the linear
+    loop; the same run with the all-levels linear model ``nominal.G_full`` beside it.  The
+    step on reference i is sized so that the linear loop's steady controller output has
+    RMS :data:`NONLINEAR_STEP_RMS_V` (the causal model's amplitude range).
+
+    Parameters
+    ----------
+    causal_model : piezolib.identification.BasisModel
+        3 inputs [V] -> 3 outputs [m].
+    record : MirrorRecord
+    nominal : MirrorNominal
+    n_samples : int
+
+    Returns
+    -------
+    NonlinearLoop
+    """
+    check_type("causal_model", causal_model, ident.BasisModel, "a BasisModel (fsm_causal)")
+    check_type("record", record, MirrorRecord, "a MirrorRecord (read_mirror_record)")
+    check_type("nominal", nominal, MirrorNominal, "a MirrorNominal (mirror_nominal)")
+    n_samples = check_integer("n_samples", n_samples, minimum=16)
+    if (causal_model.n_inputs, causal_model.n_outputs) != (N_AXES, N_AXES):
+        raise ValueError(f"causal_model must have {N_AXES} inputs and outputs, got "
+                         f"{causal_model.n_inputs} and {causal_model.n_outputs}")
+    K_d = ct.ss(record.K_d())
+    G = ct.ss(nominal.G_full)
+    inv_dc = np.linalg.inv(np.asarray(G.dcgain(), float))       # [V/um]
+    step = NONLINEAR_STEP_RMS_V / np.sqrt(np.mean(inv_dc ** 2, axis=0))
+
+    def linear():
+        state = {"x": np.zeros(G.nstates)}
+        A, B, C, D = (np.asarray(m, float) for m in (G.A, G.B, G.C, G.D))
+
+        def run(u):
+            y = C @ state["x"] + D @ u
+            state["x"] = A @ state["x"] + B @ u
+            return y
+        return run
+
+    def nonlinear():
+        model = causal_model.stepper()
+        return lambda u: 1e6 * model.step(u)    # [m] -> [um]
+
+    rows, responses = {}, {}
+    for name, make in (("causal nonlinear model", nonlinear), ("all-levels linear model", linear)):
+        out = np.empty((N_AXES, N_AXES, n_samples))
+        for i in range(N_AXES):
+            r = np.zeros(N_AXES)
+            r[i] = step[i]
+            y, u = _loop_run(make(), K_d, r, n_samples)
+            out[:, i] = y.T
+            final = y[-1, i]
+            others = np.delete(np.abs(y), i, axis=1).max()
+            rows.setdefault(f"step on reference {i + 1}", {}).update({
+                (name, "final / reference"): final / r[i],
+                (name, "worst cross-talk"): others / abs(final),
+                (name, "largest |u| [V]"): float(np.abs(u).max())})
+        responses[name] = out
+    table = pd.DataFrame(rows).T
+    table.columns = pd.MultiIndex.from_tuples(table.columns)
+    return NonlinearLoop(table=table, step_um=step, responses=responses)

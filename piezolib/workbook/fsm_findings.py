@@ -16,7 +16,7 @@ from piezolib.problem import fsm_benchmark as fsm
 from piezolib.problem import fsm_causal, fsm_control, fsm_mimo, fsm_models
 
 __all__ = ["claim_rows", "summary_lines", "slashed", "mimo_claim_rows", "mimo_summary_lines",
-           "causal_claim_rows"]
+           "causal_claim_rows", "nonlinear_loop_claim_rows"]
 
 
 #: The result class of each argument of :func:`claim_rows` and :func:`summary_lines`.
@@ -390,3 +390,32 @@ def causal_claim_rows(causal):
                          note="the periods' difference minus its constant offset per record"))
     return rows
 
+
+
+def nonlinear_loop_claim_rows(loop):
+    """Claims of the 3 x 3 controller's loop closed with the causal nonlinear model: per
+    reference stepped, the final value over the reference and the worst cross-talk.
+
+    Parameters
+    ----------
+    loop : piezolib.problem.fsm_mimo.NonlinearLoop
+
+    Returns
+    -------
+    list of dict
+        Arguments of ``nb.check``.
+    """
+    check_type("loop", loop, fsm_mimo.NonlinearLoop, "a fsm_mimo.NonlinearLoop (nonlinear_loop)")
+    nl = loop.table.xs("causal nonlinear model", axis=1, level=0)
+    lin = loop.table.xs("all-levels linear model", axis=1, level=0)
+    rows = []
+    for i, (step, row) in enumerate(nl.iterrows()):
+        where = f"MIMO 3 x 3 mu controller with the causal nonlinear model, {step}"
+        rows.append(_row("MIMO mu", f"{where}: final value / reference", float(row.iloc[0]),
+                         precision=1e-3, note=f"a {loop.step_um[i]:.2f} um step, after "
+                         f"{fsm_mimo.STEP_SAMPLES} samples; with the all-levels linear model "
+                         f"{lin.iloc[i, 0]:.4f}"))
+        rows.append(_row("MIMO mu", f"{where}: cross-talk", float(row.iloc[1]), precision=1e-3,
+                         note=f"peak of the other two outputs over the final value; linear "
+                              f"model {lin.iloc[i, 1]:.4f}; largest |u| {row.iloc[2]:.3f} V"))
+    return rows

@@ -143,3 +143,22 @@ def test_bad_arguments_name_themselves(kwargs, name):
                 window_samples=10.0, input_scale=1.0) | kwargs
     with pytest.raises((ValueError, TypeError), match=name):
         ident.fit_basis_model(**args)
+
+
+def test_stepper_is_simulate_one_sample_at_a_time():
+    # every branch kind, complex and real poles, the window passing from growing to sliding
+    rng = np.random.default_rng(4)
+    poles = np.array([0.95, 0.6 + 0.3j, -0.2])
+    branches = (("u", 0), ("u", 1), ("u|u|", 2), ("u^3", 0))
+    n_reg = len(branches) * (bm._n_bank(poles) + 1) * 2
+    model = ident.BasisModel(poles, branches, 30.0, 0.7, rng.standard_normal((3, n_reg)), 2)
+    u = rng.standard_normal((200, 2))
+    run = model.stepper()
+    np.testing.assert_allclose([run.step(x) for x in u], model.simulate(u), rtol=1e-11,
+                               atol=1e-12)
+    with pytest.raises(ValueError, match="u"):
+        run.step(np.zeros(3))
+    with pytest.raises(ValueError, match="u"):
+        run.step([np.nan, 0.0])
+    with pytest.raises(TypeError, match="model"):
+        ident.BasisStepper("model")

@@ -152,3 +152,38 @@ def test_the_float32_export_of_the_committed_controller_keeps_its_bounds():
                                       "300 mV model"}
     checks = exported.checks
     assert checks["3 x 3 float32 export: controller stable in float32"]
+
+
+def _nominal_and_record(G, K_w):
+    """(MirrorRecord, MirrorNominal) holding only what nonlinear_loop reads."""
+    nominal = fsm_mimo.MirrorNominal(G_full=G, G_level={}, G_nominal=G, reduction=None,
+                                     hankel_relative=np.zeros(0), frequency_Hz=F_HZ,
+                                     nominal_order=G.nstates, bla=np.zeros((1, 3, 3)))
+    record = fsm_mimo.MirrorRecord(K_w=K_w, K_full_order=K_w.nstates, weights={}, params={},
+                                   history=None, mu_dk=0.5, mu_reduced=0.5, reduction=None,
+                                   siso_K_w={}, siso_mu={})
+    return record, nominal
+
+
+def test_the_nonlinear_loop_with_a_basis_model_equal_to_the_linear_plant_is_the_linear_loop():
+    from piezolib.identification import BasisModel
+
+    p, g = 0.9, 2.0                                  # g / (z - p) per axis [um/V]
+    G = ct.ss(p * np.eye(3), g * np.eye(3), np.eye(3), np.zeros((3, 3)), T)
+    theta = np.zeros((3, 6))
+    theta[:, :3] = 1e-6 * g * np.eye(3)              # the filter's state, in m
+    model = BasisModel(np.array([p]), (("u", 0),), 50.0, 1.0, theta, 3)
+    K_w = ct.ss(np.zeros((3, 3)), np.eye(3), 200.0 * np.eye(3), np.zeros((3, 3)))  # integrators
+    loop = fsm_mimo.nonlinear_loop(model, *_nominal_and_record(G, K_w))
+    nl = loop.table.xs("causal nonlinear model", axis=1, level=0)
+    lin = loop.table.xs("all-levels linear model", axis=1, level=0)
+    np.testing.assert_allclose(nl.to_numpy(), lin.to_numpy(), rtol=1e-9, atol=1e-12)
+    assert np.allclose(nl["final / reference"], 1, atol=5e-3)      # integral action, 0.25 s
+    assert np.all(nl["worst cross-talk"] < 1e-12)                   # decoupled plant
+    # the steady actuator voltages have the stated RMS (one axis moves: RMS over the three)
+    steady = loop.step_um / g * (1 - p)
+    np.testing.assert_allclose(steady / np.sqrt(3), fsm_mimo.NONLINEAR_STEP_RMS_V)
+    assert all(loop.checks.values())
+    with pytest.raises(ValueError, match="causal_model"):
+        fsm_mimo.nonlinear_loop(BasisModel(np.array([p]), (("u", 0),), 50.0, 1.0,
+                                           np.zeros((1, 2)), 1), *_nominal_and_record(G, K_w))
