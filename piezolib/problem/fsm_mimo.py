@@ -206,6 +206,12 @@ class MirrorNominal:
     nominal_order: int
     bla: np.ndarray
 
+    def models(self):
+        """{name: model} of the loops every check closes: the all-levels model and each
+        level's own [um/V]."""
+        return {"all-levels model (full)": self.G_full,
+                **{f"{lv} mV model": g for lv, g in self.G_level.items()}}
+
     def spread(self, G=None):
         """The levels' output-multiplicative spread around ``G`` (default the nominal)."""
         zl = _zl(self.frequency_Hz)
@@ -893,8 +899,7 @@ def verify_mirror(nominal, record, omega=None):
     plant, _ = synthesis_plant(nominal, record.params, record.weights)
     Ks_w = {MIMO: record.K_w, SISO: block_diagonal([record.siso_K_w[i] for i in range(N_AXES)])}
     Ks_d = {MIMO: record.K_d(), SISO: record.siso_K_d()}
-    models = {"all-levels model (full)": nominal.G_full,
-              **{f"{lv} mV model": g for lv, g in nominal.G_level.items()}}
+    models = nominal.models()
     mu, rows, cross, steps = {}, {}, {}, {}
     for name, K_w in Ks_w.items():
         mu[name] = robust.mussv(robust.lft_response(plant, K_w, omega), MIMO_BLOCKS, omega,
@@ -1017,10 +1022,9 @@ def export_mirror(nominal, record, name="K_fsm_mimo"):
     check_type("nominal", nominal, MirrorNominal, "a MirrorNominal (mirror_nominal)")
     check_type("record", record, MirrorRecord, "a MirrorRecord (read_mirror_record)")
     x = robust.export_mimo(record.K_d(), name=name)
-    K32 = ct.ss(*(np.asarray(M, dtype=float) for M in (x.A32, x.B32, x.C32, x.D32)), _T())
-    models = {"all-levels model (full)": nominal.G_full,
-              **{f"{lv} mV model": g for lv, g in nominal.G_level.items()}}
-    return MirrorExport(export=x, radius32={m: sampled_radius(g, K32) for m, g in models.items()})
+    K32 = x.to_statespace("float32")
+    return MirrorExport(export=x, radius32={m: sampled_radius(g, K32)
+                                            for m, g in nominal.models().items()})
 
 
 # -- the loop closed with the causal nonlinear model ---------------------------------------

@@ -40,8 +40,25 @@ def sections_response(sos, z):
     return h
 
 
+class ResponseError:
+    """:attr:`max_error` and where it occurs, for a check holding ``error`` (relative error of
+    the float32 response, NaN where undefined) on the grid ``omega``."""
+
+    @property
+    def max_error(self):
+        """Largest relative error of the float32 response on the check grid."""
+        return float(np.nanmax(self.error)) if np.any(np.isfinite(self.error)) else 0.0
+
+    @property
+    def omega_max_error(self):
+        """Frequency of :attr:`max_error` [rad/s] (rad/sample when fs is None)."""
+        if not np.any(np.isfinite(self.error)):
+            return math.nan
+        return float(self.omega[np.nanargmax(self.error)])
+
+
 @dataclass(frozen=True, eq=False)
-class Float32Check:
+class Float32Check(ResponseError):
     """What rounding the sections to float32 does to the controller.
 
     The float32 response H32 is compared with the float64 one H64 at DC, at
@@ -98,17 +115,6 @@ class Float32Check:
     decay_change: np.ndarray
     omega_pole: np.ndarray
 
-    @property
-    def max_error(self):
-        """Largest relative error of the float32 response on the check grid."""
-        return float(np.nanmax(self.error)) if np.any(np.isfinite(self.error)) else 0.0
-
-    @property
-    def omega_max_error(self):
-        """Frequency of :attr:`max_error` [rad/s] (rad/sample when fs is None)."""
-        if not np.any(np.isfinite(self.error)):
-            return math.nan
-        return float(self.omega[np.nanargmax(self.error)])
 
     @classmethod
     def of(cls, sos, fs=None, name="K"):

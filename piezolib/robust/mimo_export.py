@@ -57,7 +57,7 @@ import numpy as np
 import scipy.linalg as la
 
 from piezolib._checks import check_count, check_finite_lti, check_integer, check_positive
-from piezolib.robust.float32_check import ExportError, ExportWarning
+from piezolib.robust.float32_check import ExportError, ExportWarning, ResponseError
 
 __all__ = ["MIMOExport", "export_mimo", "c_header"]
 
@@ -68,7 +68,7 @@ _FORMS = ("auto", "modal", "schur", "given")
 
 
 @dataclass(frozen=True, eq=False)
-class MIMOExport:
+class MIMOExport(ResponseError):
     """A discrete MIMO controller in a well-conditioned realisation, its float32 matrices
     and what rounding to float32 does to it.
 
@@ -149,18 +149,6 @@ class MIMOExport:
     def n_states(self):
         """Number of states n."""
         return self.A.shape[0]
-
-    @property
-    def max_error(self):
-        """Largest relative response error of the float32 matrices on the check grid."""
-        return float(np.nanmax(self.error)) if np.any(np.isfinite(self.error)) else 0.0
-
-    @property
-    def omega_max_error(self):
-        """Where :attr:`max_error` occurs [rad/s]."""
-        if not np.any(np.isfinite(self.error)):
-            return math.nan
-        return float(self.omega[np.nanargmax(self.error)])
 
     def to_statespace(self, dtype="float64"):
         """The realisation (float64 or float32 entries, as float64) as a control.StateSpace."""
