@@ -172,24 +172,21 @@ PEAK_CHUNK = 8
 
 
 def _descending_until(score, compute, scale, chunk=PEAK_CHUNK):
-    """Evaluate ``compute(indices)`` in descending order of ``scale * score`` until no
-    frequency left can beat the largest ``scale * value`` found: ``score`` must bound
-    ``compute`` from above, so the largest value over all frequencies is the one found
-    (``scale``: mussv's per-frequency normalisation, undone to compare frequencies).
-    Returns the evaluated indices (in that order) and the values; the caller checks the
-    bound held."""
+    """``[(indices, compute(indices)), ...]`` in descending order of ``scale * score`` until no
+    frequency left can beat the largest ``scale * value`` found (``compute`` returns a tuple
+    whose first entry is the value per index): ``score`` must bound that value from above, so
+    the largest value over all frequencies is the one found (``scale``: mussv's
+    per-frequency normalisation, undone to compare frequencies)."""
     score = score * scale
     order = np.argsort(-score, kind="stable")
-    done, values, best = [], [], -np.inf
+    parts, best = [], -np.inf
     for start in range(0, order.size, chunk):
         if score[order[start]] <= best:
             break
         idx = order[start:start + chunk]
-        v = compute(idx)
-        done.append(idx)
-        values.append(v)
-        best = max(best, float(np.max(v * scale[idx])))
-    return np.concatenate(done), np.concatenate(values)
+        parts.append((idx, compute(idx)))
+        best = max(best, float(np.max(parts[-1][1][0] * scale[idx])))
+    return parts
 
 
 def _complex_relaxation(blocks):
@@ -214,15 +211,8 @@ def _peak_upper(arr, blocks, scale):
         if b.is_real and b.size == 1:
             g[:, i] = 0.0
     upper, Dl, Dr, G = cu.copy(), cDl.real.copy(), cDr.real.copy(), np.zeros((nf, q, p))
-    parts = {}
-
-    def compute(idx):
-        parts[tuple(idx)] = mixed_upper_bound(arr[idx], blocks)
-        return parts[tuple(idx)][0]
-
-    _descending_until(cu, compute, scale)
-    for idx, (u, di, gi, Dli, Dri, Gi) in parts.items():
-        idx = np.asarray(idx)
+    for idx, (u, di, gi, Dli, Dri, Gi) in _descending_until(
+            cu, lambda k: mixed_upper_bound(arr[k], blocks), scale):
         if np.any(u > cu[idx] * (1 + 1e-9)):        # the pruning's premise failed: bound all
             return mixed_upper_bound(arr, blocks)
         upper[idx], d[idx], g[idx], Dl[idx], Dr[idx], G[idx] = u, di, gi, Dli, Dri, Gi
@@ -234,15 +224,8 @@ def _peak_lower(arr, upper, scale, bound):
     upper bound is above it), zero (a valid lower bound) elsewhere."""
     nf, p, q = arr.shape
     low, Delta = np.zeros(nf), np.zeros((nf, q, p), complex)
-    parts = {}
-
-    def compute(idx):
-        parts[tuple(idx)] = bound(idx)
-        return parts[tuple(idx)][0]
-
-    _descending_until(upper, compute, scale)
-    for idx, (lo, De) in parts.items():
-        low[list(idx)], Delta[list(idx)] = lo, De
+    for idx, (lo, De) in _descending_until(upper, bound, scale):
+        low[idx], Delta[idx] = lo, De
     return low, Delta
 
 
