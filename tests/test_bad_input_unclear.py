@@ -53,6 +53,16 @@ def test_export_names_the_float32_range_before_writing(tmp_path):
     assert not list(tmp_path.iterdir())
 
 
+def test_export_names_the_float32_normal_range_before_writing(tmp_path):
+    """1e-46 rounds to zero in float32 (the first-order bound, relative, does not see it)."""
+    with pytest.raises(ValueError, match="below the float32 normal range"):
+        robust.export_controller(ct.tf([1e-46], [1.0, -0.5], 1e-4), tmp_path, "K")
+    assert not list(tmp_path.iterdir())
+    with pytest.warns(robust.ExportWarning, match="below the float32 normal range"):
+        robust.export_controller(ct.tf([1e-46], [1.0, -0.5], 1e-4), tmp_path, "K",
+                                 dtype="float64")          # float32 only written alongside
+
+
 def _twentieth_order(gain):
     poles = 0.5 * np.exp(1j * np.linspace(0.1, 3.0, 10))
     zeros = 0.7 * np.exp(1j * np.linspace(0.2, 2.9, 10))

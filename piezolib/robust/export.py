@@ -36,6 +36,7 @@ import json
 import math
 import os
 import re
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -456,6 +457,19 @@ def _check_float32(controller, sos, what, stacklevel, rtol=None, refuse=True):
                           f"float32 range (|x| <= {np.finfo(np.float32).max:.3g}): the target's "
                           "float32 sections cannot hold it (scale the controller's input or "
                           "output)")
+    # below float32's normal range rounding is no longer relative (the first-order bound
+    # does not hold): a numerator row whose largest coefficient is there is refused
+    scale = np.max(np.abs(sos[:, :3]), axis=1)
+    tiny = (scale > 0) & (scale < np.finfo(np.float32).tiny)
+    if np.any(tiny):
+        message = (f"{what} has a section numerator of scale {scale[tiny][0]:.3g} below the "
+                   f"float32 normal range (|x| >= {np.finfo(np.float32).tiny:.3g}): float32 "
+                   "sections round it to zero or lose its digits (scale the controller's input "
+                   "or output)")
+        if refuse:
+            raise ExportError(message)
+        warnings.warn(message, ExportWarning, stacklevel=stacklevel)
+        return
     if np.array_equal(sos.astype(np.float32).astype(np.float64), sos):
         return          # float32 holds every coefficient: nothing moves
     check = (controller._float32_check if isinstance(controller, SOSController)

@@ -140,8 +140,13 @@ def zpetc(Gd, radius=1.0):
     tf = ct.tf(Gd)
     num = np.trim_zeros(np.asarray(tf.num[0][0], dtype=float), "f")
     den = np.trim_zeros(np.asarray(tf.den[0][0], dtype=float), "f")
-    if not (np.all(np.isfinite(num)) and np.all(np.isfinite(den))) or num.size == 0:
-        raise ValueError("Gd must have finite coefficients and a nonzero numerator")
+    if not (np.all(np.isfinite(num)) and np.all(np.isfinite(den))):
+        raise ValueError(f"Gd must have finite coefficients, got numerator {tf.num[0][0]} and "
+                         f"denominator {tf.den[0][0]}")
+    if num.size == 0:
+        raise ValueError(f"Gd is identically zero (numerator {tf.num[0][0]}): no feedforward "
+                         f"inverts it; a high-order plant can lose its numerator in a transfer "
+                         f"function conversion (ct.c2d of a tf): discretise its state space")
     d = len(den) - len(num)
     if d < 0:
         raise ValueError("Gd must be proper")
