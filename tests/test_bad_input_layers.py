@@ -238,7 +238,32 @@ CASES = {
     "design.mixed_tradeoff": (None, {"scales": {"empty": [], "negative": [-1.0], "text": "x"},
                                      "n_jobs": POSITIVE_INT}),
     "design.tradeoff_table": (None, {"designs": {"text": "abc", "not designs": [1, 2]},
-                                     "G": PLANT, "fs": POSITIVE}),
+                                     "G": PLANT, "fs": POSITIVE,
+                                     "bounds": {"text": "abc", "list": [0.5]}}),
+    # problem.mixed_end_points
+    "mixed_end_points.read_end_points": (dict(), {"path": {"number": 3, "empty": ""}}),
+    "mixed_end_points.bound_key": (
+        dict(G=G, H_e=H_E, H_y=H_Y, performance_scale=0.5, spread=0.05, fs=FS),
+        {"G": PLANT, "H_e": {"text": "x"}, "performance_scale": POSITIVE, "spread": POSITIVE,
+         "fs": POSITIVE}),
+    "mixed_end_points.margin_key": (
+        dict(G=G, Kd=K_DISCRETE, delay_samples=1, samples=10),
+        {"G": PLANT, "Kd": {"text": "x"}, "delay_samples": {"negative": -1, "fraction": 0.5},
+         "samples": {"negative": -1}, "seed": {"negative": -1}, "spread_max": POSITIVE,
+         "rtol": POSITIVE, "float32": {"text": "x"}}),
+    "mixed_end_points.committed_bounds": (
+        dict(designs=[], G=G, H_e=H_E, H_y=H_Y, fs=FS),
+        {"designs": {"text": "abc", "not designs": [1, 2]}, "fs": POSITIVE,
+         "path": {"number": 3}}),
+    "mixed_end_points.committed_bracket": (
+        dict(G=G, Kd=K_DISCRETE, delay_samples=1, samples=10),
+        {"G": PLANT, "Kd": {"text": "x"}, "delay_samples": {"negative": -1},
+         "samples": {"negative": -1}, "path": {"number": 3}}),
+    "mixed_end_points.write_end_points": (
+        Fill(bounds={}, margins={}),
+        {"bounds": {"text": "abc", "negative": {"k": -1.0}},
+         "margins": {"text": "abc", "not margins": {"k": 3.0}},
+         "path": {"number": 3, "empty": ""}}),
     "design.choose_mixed_design": (dict(designs=[]), {"designs": {"text": "abc",
                                                                   "not designs": [1, 2]},
                                                       "spread": POSITIVE}),
@@ -710,6 +735,9 @@ CASES = {
          "sections": {"text": "abc", "no deployed": {}}, "G": PLANT, "H_e": {"text": "x"},
          "fs": POSITIVE, "grids": {"text": "x", "empty": [], "not triples": [(1.0, 2.0)]},
          "spread": POSITIVE, "delay_samples": {"negative": -1, "fraction": 0.5}}),
+    "coefficient_box.searched_end_points": (
+        Fill(designs=[], deployed=K, sections={_CB.DEPLOYED: SECTIONS_10K}),
+        {"designs": {"text": "abc", "not designs": [1, 2]}, "fs": POSITIVE}),
     "coefficient_box.mixed_claims": (Fill(chosen=bare(_CB.ChosenDesignCheck),
                                           tracking=pd.DataFrame()),
                                      {"chosen": RESULT, "tracking": RESULT}),
@@ -1073,6 +1101,7 @@ EXEMPT = {
     "paper.table2": "no arguments", "paper.table4": "no arguments",
     "paper.table5": "no arguments", "paper.problem": "no arguments",
     "hysteresis_fits.workbook_dahl_path": "no arguments",
+    "mixed_end_points.end_points_path": "no arguments",
     "hysteresis_fits.write_workbook_dahl": "no arguments (writes a committed artifact)",
     "paths.project_root": "no arguments", "paths.data_dir": "no arguments",
     "fsm_benchmark.data_folder": "no arguments",

@@ -26,6 +26,7 @@ import pandas as pd
 
 from piezolib import uncertainty as unc
 from piezolib._checks import check_integer, check_model, check_positive, check_siso, check_type
+from piezolib.problem import mixed_end_points as end_points
 from piezolib.problem import paper
 from piezolib.problem.analysis import MARGIN_DELAYS, box_stability_table, margins_table
 from piezolib.problem.design import MixedDesign, choose_mixed_design, tradeoff_table
@@ -39,7 +40,8 @@ from piezolib.uncertainty import parametric
 __all__ = ["LFTExactness", "lft_exactness", "ControllerMargins", "BoxMargins",
            "stability_margins",
            "SpreadBounds", "spread_bounds", "MixedTradeoff", "recomputed_tradeoff",
-           "ChosenDesignCheck", "check_chosen_design", "mixed_claims", "summary_lines",
+           "ChosenDesignCheck", "check_chosen_design", "searched_end_points", "mixed_claims",
+           "summary_lines",
            "LFT_CHECK_OMEGA", "MARGIN_GRID", "CERTIFICATE_GRID", "FIGURE_GRID", "PEAK_POINTS",
            "CHECK_GRIDS", "DEPLOYED", "MIXED"]
 
@@ -492,8 +494,12 @@ class MixedTradeoff:
                 for d in MARGIN_DELAYS}
 
 
-def recomputed_tradeoff(designs, G, H_e, H_y, fs):
+def recomputed_tradeoff(designs, G, H_e, H_y, fs, *, committed=True):
     """The trade-off of the mixed designs, its exact margins recomputed from the controllers.
+
+    The bound no controller can cross at each scale (an H-infinity search, shown but not
+    asserted) is the committed one where :mod:`~piezolib.problem.mixed_end_points` holds
+    the design's problem, else computed.
 
     Parameters
     ----------
@@ -502,6 +508,8 @@ def recomputed_tradeoff(designs, G, H_e, H_y, fs):
         The problem the designs were made for.
     fs : float
         Loop rate [Hz].
+    committed : bool
+        Read the committed bounds (False: compute every one).
 
     Returns
     -------
@@ -510,7 +518,9 @@ def recomputed_tradeoff(designs, G, H_e, H_y, fs):
     if not isinstance(designs, (list, tuple)):
         raise TypeError(f"designs must be a list or tuple of MixedDesign, got "
                         f"{type(designs).__name__}")
-    table = tradeoff_table(designs, G, H_e, H_y, fs)
+    fs = check_positive("fs", fs)
+    bounds = end_points.committed_bounds(designs, G, H_e, H_y, fs) if committed else None
+    table = tradeoff_table(designs, G, H_e, H_y, fs, bounds=bounds)
     same = all(abs(table.loc[d.performance_scale, f"exact margin, delay {k} [%]"] / 100 - m)
                <= 1e-6 * m for d in designs for k, m in d.margins.items())
     return MixedTradeoff(table=table, chosen=choose_mixed_design(designs), checks={
@@ -608,7 +618,7 @@ class ChosenDesignCheck:
 
 
 def check_chosen_design(design, deployed, sections, G, H_e, H_y, fs, grids=CHECK_GRIDS, *,
-                        spread=None, delay_samples=DESIGN_DELAY_SAMPLES):
+                        spread=None, delay_samples=DESIGN_DELAY_SAMPLES, committed=True):
     """Check the chosen mixed-mu design independently, beside the deployed controller.
 
     Mixed mu_RP on the union of ``grids`` with the **exact** delay e^{-j omega tau}
@@ -638,6 +648,9 @@ def check_chosen_design(design, deployed, sections, G, H_e, H_y, fs, grids=CHECK
         The box [-]; default the paper's ``paper.UNCERTAINTY_SPREAD``.
     delay_samples : int
         Computation delay [samples] of the design.
+    committed : bool
+        Start each sampled-loop margin from its committed bracket
+        (:mod:`~piezolib.problem.mixed_end_points`), verified here; False: search every one.
 
     Returns
     -------
@@ -671,9 +684,8 @@ def check_chosen_design(design, deployed, sections, G, H_e, H_y, fs, grids=CHECK
         # only the peaks are claimed: bound where a frequency can set them
         mu_rp = mussv(M, blk, omega, peak=True)
         mu_rs = mussv(M[:, :n, :n], blk[:n], omega, lower=False, peak=True)
-    sampled = {name: {d: unc.sampled_parametric_margin(G, Kd, d,
-                                                       samples=SAMPLED_MARGIN_SAMPLES)
-                      for d in MARGIN_DELAYS} for name, (_, Kd) in pairs.items()}
+    sampled = {name: {d: _sampled_margin(G, Kd, d, committed) for d in MARGIN_DELAYS}
+               for name, (_, Kd) in pairs.items()}
     box = box_stability_table(pairs, G, spread, fs)
     box = pd.concat([pd.DataFrame({name: {f"sampled-loop margin, delay {d} [%]": 100 * m.spread
                                           for d, m in by_delay.items()}
@@ -683,6 +695,50 @@ def check_chosen_design(design, deployed, sections, G, H_e, H_y, fs, grids=CHECK
         delay_samples=delay_samples, box=box,
         margins=margins_table({name: K for name, (K, _) in pairs.items()}, G, fs),
         sampled=sampled)
+
+
+def _sampled_margin(G, Kd, delay, committed):
+    """The sampled loop's margin with ``delay`` samples, from the committed bracket if any."""
+    known = end_points.committed_bracket(G, Kd, delay, SAMPLED_MARGIN_SAMPLES) \
+        if committed else None
+    return unc.sampled_parametric_margin(G, Kd, delay, samples=SAMPLED_MARGIN_SAMPLES,
+                                         known=known)
+
+
+def searched_end_points(designs, deployed, sections, G, H_e, H_y, fs):
+    """Notebook 09's search end points derived from scratch, for
+    :func:`piezolib.problem.mixed_end_points.write_end_points`.
+
+    Parameters
+    ----------
+    designs : sequence of MixedDesign
+        The trade-off's designs (their bounds).
+    deployed, sections, G, H_e, H_y, fs
+        As :func:`check_chosen_design`; the chosen design is
+        :func:`~piezolib.problem.design.choose_mixed_design` of ``designs``.
+
+    Returns
+    -------
+    bounds : dict
+        {key: the bound no controller can cross} per design.
+    margins : dict
+        {key: SampledMargin} per controller and delay.
+    """
+    if not isinstance(designs, (list, tuple)):
+        raise TypeError(f"designs must be a list or tuple of MixedDesign, got "
+                        f"{type(designs).__name__}")
+    fs = check_positive("fs", fs)
+    chosen = check_chosen_design(choose_mixed_design(designs), deployed, sections, G, H_e,
+                                 H_y, fs, grids=((1e3, 1e5, 3),), committed=False)
+    table = tradeoff_table(designs, G, H_e, H_y, fs)
+    bounds = {end_points.bound_key(G, H_e, H_y, d.performance_scale, d.spread, fs):
+              float(table.loc[d.performance_scale, "no controller below"]) for d in designs}
+    kd = {DEPLOYED: sections[DEPLOYED].to_statespace("float32")}
+    if chosen.design is not None:
+        kd[MIXED] = sections[MIXED].to_statespace("float32")
+    margins = {end_points.margin_key(G, kd[name], d, SAMPLED_MARGIN_SAMPLES): m
+               for name, by_delay in chosen.sampled.items() for d, m in by_delay.items()}
+    return bounds, margins
 
 
 # -- claims and the closing summary -------------------------------------------------------

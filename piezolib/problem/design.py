@@ -13,7 +13,7 @@ import control as ct
 import numpy as np
 
 from piezolib.problem import paper
-from piezolib._checks import check_integer, check_model, check_positive
+from piezolib._checks import check_integer, check_model, check_positive, check_type
 from piezolib.problem.analysis import exact_margins_with_delay
 from piezolib.problem.genplant import (DESIGN_BLOCK_STRUCTURE, DESIGN_DELAY_SAMPLES,
                                        DESIGN_EFFORT_WEIGHT, DESIGN_PADE_ORDER, DESIGN_ROLLOFF,
@@ -312,7 +312,7 @@ def choose_mixed_design(designs, spread=None, design_delay=DESIGN_DELAY_SAMPLES)
     return max(ok, key=lambda d: d.performance_scale, default=None)
 
 
-def tradeoff_table(designs, G, H_e, H_y, fs=paper.SAMPLING_FREQUENCY_HZ):
+def tradeoff_table(designs, G, H_e, H_y, fs=paper.SAMPLING_FREQUENCY_HZ, *, bounds=None):
     """The trade-off of the mixed designs, recomputed from their controllers where it can be.
 
     One row per design (index: performance scale): mu_RP upper and lower bound
@@ -329,6 +329,10 @@ def tradeoff_table(designs, G, H_e, H_y, fs=paper.SAMPLING_FREQUENCY_HZ):
         The problem the designs were made for.
     fs : float
         Loop rate [Hz].
+    bounds : dict, optional
+        {performance scale: bound} already known (e.g. committed, see
+        :func:`piezolib.problem.coefficient_box.tradeoff_bounds`); the other
+        designs' bounds are computed.
 
     Returns
     -------
@@ -341,13 +345,18 @@ def tradeoff_table(designs, G, H_e, H_y, fs=paper.SAMPLING_FREQUENCY_HZ):
     designs = _check_designs(designs)
     G, _, H_e, H_y = check_models(G, ct.tf([1.0], [1.0]), H_e, H_y)
     fs = check_positive("fs", fs)
+    bounds = {} if bounds is None else check_type("bounds", bounds, dict,
+                                                  "a dict {performance scale: bound}")
     rows = []
     for d in designs:
-        P = parametric_design_plant(G, d.performance_scale * H_e, d.performance_scale * H_y,
-                                    d.spread, fs=fs)
-        bound = performance_lower_bound(P, 1, 1, ["y1", "y2", "y_u"], ["v_r"])
+        if d.performance_scale in bounds:
+            value = check_positive("bounds", bounds[d.performance_scale])
+        else:
+            P = parametric_design_plant(G, d.performance_scale * H_e,
+                                        d.performance_scale * H_y, d.spread, fs=fs)
+            value = performance_lower_bound(P, 1, 1, ["y1", "y2", "y_u"], ["v_r"]).value
         rows.append({"performance scale": d.performance_scale, "mu_RP upper": d.mu_peak,
-                     "mu_RP lower": d.mu_lower_peak, "no controller below": bound.value,
+                     "mu_RP lower": d.mu_lower_peak, "no controller below": value,
                      "start: our deployed K": d.start_mu_peak,
                      **{f"exact margin, delay {k} [%]": 100 * m
                         for k, m in exact_margins_with_delay(G, d.K, fs).items()}})

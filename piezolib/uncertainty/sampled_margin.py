@@ -127,7 +127,7 @@ def _refine(G, q, spread, Kd, dt, d, steps=40):
 
 
 def sampled_parametric_margin(G, Kd, delay_samples=1, *, spread_max=0.5, rtol=1e-3,
-                              samples=2000, seed=0, float32=False):
+                              samples=2000, seed=0, float32=False, known=None):
     """Largest spread of G's coefficient box whose sampled loops are all stable.
 
     Each member G_q (denominator coefficients a_i (1 + spread q_i), |q_i| <= 1)
@@ -138,6 +138,13 @@ def sampled_parametric_margin(G, Kd, delay_samples=1, *, spread_max=0.5, rtol=1e
     vertices, 7 points along each of its n 2^(n-1) edges, a uniform sample
     of ``samples`` members and the most unstable member found so far (refined
     by a local search in the box) are tried.
+
+    A bracket found before (``known``: a committed end point of this search) is
+    verified instead of searched for: when every member tried is stable at its
+    lower end and the local search from the most unstable of them finds no
+    unstable member there, the bracket is at most ``rtol`` wide and its member
+    is unstable at its upper end, the result is built from it as the search
+    builds it; otherwise the search runs.
 
     What it certifies.  For the continuous loop the characteristic polynomial
     is affine in q, so zero exclusion over the box is exact
@@ -166,6 +173,9 @@ def sampled_parametric_margin(G, Kd, delay_samples=1, *, spread_max=0.5, rtol=1e
         Seed of that sample.
     float32 : bool
         Round Kd's realisation to float32 first (what a single-precision target runs).
+    known : tuple, optional
+        (spread, spread_unstable, offsets) of an earlier run with these arguments:
+        verified (see above), searched for only when it does not verify.
 
     Returns
     -------
@@ -178,6 +188,11 @@ def sampled_parametric_margin(G, Kd, delay_samples=1, *, spread_max=0.5, rtol=1e
     >>> m = sampled_parametric_margin(G, Kd, 1, samples=200)
     >>> round(100 * m.spread, 1), m.bounded, bool(m.radius >= 1)
     (36.4, True, True)
+    >>> again = sampled_parametric_margin(G, Kd, 1, samples=200,
+    ...                                   known=(m.spread, m.spread_unstable, m.offsets))
+    >>> (again.spread, again.spread_unstable, again.radius) == (m.spread, m.spread_unstable,
+    ...                                                         m.radius)
+    True
     """
     G = check_plant(G)
     Kd = _controller(Kd, float32)
@@ -195,6 +210,8 @@ def sampled_parametric_margin(G, Kd, delay_samples=1, *, spread_max=0.5, rtol=1e
     if n > _MAX_COEFFICIENTS:
         raise ValueError(f"G has {n} denominator coefficients; the vertex and edge search "
                          f"takes at most {_MAX_COEFFICIENTS}")
+    if known is not None:
+        known = _known_bracket(known, n, spread_max)
     if _radii(G, np.zeros((1, n)), spread_max, Kd, dt, d)[0][0] >= 1:
         return SampledMargin(0.0, 0.0, np.zeros(n), np.nan, np.nan, d, 1, np.nan, False, True)
     corners, sample = _box_points(n, samples, seed)
@@ -222,6 +239,24 @@ def sampled_parametric_margin(G, Kd, delay_samples=1, *, spread_max=0.5, rtol=1e
                 return q, r
         return None
 
+    def result(low, high, q):
+        r, poles = _radii(G, q[None], high, Kd, dt, d)
+        z = poles[0][np.argmax(np.abs(poles[0]))]
+        sample_r = _radii(G, sample, low, Kd, dt, d)[0].max() if samples else np.nan
+        return SampledMargin(spread=float(low), spread_unstable=float(high), offsets=q,
+                             radius=float(r[0]), omega=float(abs(np.angle(z)) / dt),
+                             delay_samples=d, members_checked=corners.shape[0] + samples,
+                             sample_radius=float(sample_r), nominal_stable=True, bounded=True)
+
+    if known is not None:
+        low, high, q = known
+        # the search's own end: a stable lower end (the local search included), a bracket
+        # within rtol, a member unstable at the upper end
+        if (0 < low < high and high - low <= rtol * high
+                and _radii(G, q[None], high, Kd, dt, d)[0][0] >= 1
+                and unstable(low, refine=True) is None):
+            return result(low, high, q)
+        worst = np.zeros((0, n))
     top = unstable(spread_max, refine=True)
     if top is None:
         return SampledMargin(spread_max, np.nan, np.zeros(n), np.nan, np.nan, d,
@@ -242,11 +277,21 @@ def sampled_parametric_margin(G, Kd, delay_samples=1, *, spread_max=0.5, rtol=1e
         if found is None:
             break
         low, high, critical = 0.0, low, found
-    q = critical[0]
-    r, poles = _radii(G, q[None], high, Kd, dt, d)
-    z = poles[0][np.argmax(np.abs(poles[0]))]
-    sample_r = _radii(G, sample, low, Kd, dt, d)[0].max() if samples else np.nan
-    return SampledMargin(spread=float(low), spread_unstable=float(high), offsets=q,
-                         radius=float(r[0]), omega=float(abs(np.angle(z)) / dt),
-                         delay_samples=d, members_checked=corners.shape[0] + samples,
-                         sample_radius=float(sample_r), nominal_stable=True, bounded=True)
+    return result(low, high, critical[0])
+
+
+def _known_bracket(known, n, spread_max):
+    """(spread, spread_unstable, offsets) of ``known``, checked."""
+    if not (isinstance(known, (tuple, list)) and len(known) == 3):
+        raise TypeError(f"known must be a tuple (spread, spread_unstable, offsets), got "
+                        f"{known!r}"[:200])
+    low = check_positive("known spread", known[0])
+    high = check_positive("known spread_unstable", known[1])
+    if not low < high <= spread_max:
+        raise ValueError(f"known must bracket the margin below spread_max {spread_max:g}: "
+                         f"spread {low:g}, spread_unstable {high:g}")
+    q = np.asarray(known[2], dtype=float)
+    if q.shape != (n,) or not np.all(np.isfinite(q)) or np.any(np.abs(q) > 1):
+        raise ValueError(f"known offsets must be {n} finite values in [-1, 1], got "
+                         f"{known[2]!r}"[:200])
+    return low, high, q

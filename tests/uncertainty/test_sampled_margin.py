@@ -62,3 +62,32 @@ def test_bad_input_is_refused_by_name(kwargs, error, word):
     args = dict(G=G, Kd=KD) | kwargs
     with pytest.raises(error, match=word):
         sampled_parametric_margin(args.pop("G"), args.pop("Kd"), **args)
+
+
+def _same(a, b):
+    return all(np.array_equal(getattr(a, f), getattr(b, f), equal_nan=True)
+               for f in a.__dataclass_fields__)
+
+
+def test_a_known_bracket_is_verified_and_gives_the_search_result(margin):
+    known = (margin.spread, margin.spread_unstable, margin.offsets)
+    assert _same(sampled_parametric_margin(G, KD, 1, samples=200, known=known), margin)
+
+
+@pytest.mark.parametrize("shift", ["too high", "too low", "too wide", "stable member"])
+def test_a_wrong_known_bracket_falls_back_to_the_search(margin, shift):
+    low, high, q = margin.spread, margin.spread_unstable, margin.offsets
+    known = {"too high": (1.05 * low, 1.06 * low, q),          # members unstable at its low end
+             "too low": (0.9 * low, 0.9 * high, q),            # its member is stable at high
+             "too wide": (0.5 * low, high, q),                 # wider than rtol
+             "stable member": (low, high, np.zeros_like(q))}[shift]
+    assert _same(sampled_parametric_margin(G, KD, 1, samples=200, known=known), margin)
+
+
+@pytest.mark.parametrize("known, error", [
+    ((0.1, 0.2), TypeError), ((0.2, 0.1, np.zeros(3)), ValueError),
+    ((0.1, 0.6, np.zeros(3)), ValueError), ((0.1, 0.2, np.zeros(2)), ValueError),
+    ((0.1, 0.2, np.full(3, 2.0)), ValueError), ((np.nan, 0.2, np.zeros(3)), ValueError)])
+def test_bad_known_bracket_names_it(known, error):
+    with pytest.raises(error, match="known"):
+        sampled_parametric_margin(G, KD, 1, samples=0, known=known)
