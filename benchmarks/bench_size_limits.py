@@ -8,6 +8,13 @@ The toolkit refuses a size past a stated maximum before any work
 stated fraction of it, where the full size would take long, scaled up in the line) in a
 fresh process and prints its wall time and the growth of the process's peak resident set
 size, so that the limits' docstrings can be checked against this machine.
+
+``MAX_ROWS`` went from 100 to 168 so that notebook 10's order validation curve of the mirror's
+3 x 3 BLA (3839 lines) could reach past its best orders (64 / 88 / 92): on that data, one
+process on a shared 2-core machine, a fit with n_rows = order + 8 took 2.7-3.0 CPU-s and
++450 MiB at 100 rows, 3.5-4.3 CPU-s and +610 MiB at 136 rows, 4.5-6.1 CPU-s and +750 MiB at
+168 rows: the memory grows as n_rows (the block-Hankel matrix is n_rows (n_y + n_u) by
+2 F n_u, with a few copies), the QR's time as n_rows squared.
 """
 
 import json
@@ -15,7 +22,7 @@ import subprocess
 import sys
 
 CASES = {
-    "fit_frf, n_rows = MAX_ROWS (100), 3 x 3 FRF on 2000 lines, order 8": """
+    "fit_frf, n_rows = MAX_ROWS (168), 3 x 3 FRF on 2000 lines, order 8": """
 import numpy as np
 from piezolib import identification as ident
 rng = np.random.default_rng(0)
@@ -23,6 +30,16 @@ f = np.linspace(1.0, 2000.0, 2000); fs = 6400.0
 G = rng.standard_normal((3, 3, f.size)) + 1j * rng.standard_normal((3, 3, f.size))
 from piezolib.identification.freqfit import MAX_ROWS
 run = lambda: ident.fit_frf(G, f, fs, 8, n_rows=MAX_ROWS, iterations=1)
+""",
+    # the size notebook 10's order curve reaches: the mirror's 3 x 3 BLA on 3839 lines
+    "fit_frf, order MAX_ROWS - 8 (160, n_rows = order + 8), 3 x 3 FRF on 3839 lines": """
+import numpy as np
+from piezolib import identification as ident
+rng = np.random.default_rng(0)
+f = np.linspace(1.0, 3000.0, 3839); fs = 6400.0
+G = rng.standard_normal((3, 3, f.size)) + 1j * rng.standard_normal((3, 3, f.size))
+from piezolib.identification.freqfit import MAX_ROWS
+run = lambda: ident.fit_frf(G, f, fs, MAX_ROWS - 8)
 """,
     "random_model_set, count = MAX_MEMBERS (1e6), 3rd-order plant": """
 import control as ct

@@ -812,6 +812,17 @@ CASES = {
                                                          "fs": POSITIVE}),
     "fsm_control.significant": (dict(x=1.2345), {"x": {"text": "x", "none": None},
                                                  "digits": POSITIVE_INT}),
+    "fsm_control.write_axis_design": (
+        Fill(design=bare(_FC.AxisDesign), nominal=bare(_FC.AxisNominal), path="x.json"),
+        {"design": RESULT, "nominal": RESULT, "path": {"number": 3, "empty": ""}}),
+    "fsm_control.read_axis_design": (
+        Fill(nominal=bare(_FC.AxisNominal), bandwidth_Hz=20.0, error_weight={}, output_weight={},
+             output_corner=5.0, rolloff={}, dk_iterations=8),
+        {"nominal": RESULT, "bandwidth_Hz": POSITIVE, "error_weight": {"text": "x"},
+         "output_weight": {"text": "x"}, "output_corner": POSITIVE, "rolloff": {"text": "x"},
+         "dk_iterations": POSITIVE_INT,
+         "path": {"number": 3, "missing": "/nonexistent.json",
+                  "not a record": InTmp("r.json", "{}")}}),
     # problem.fsm_mimo
     "fsm_mimo.mirror_model": (dict(model=MIRROR_G), {"model": {
         "text": "x", "two inputs": LTI["two inputs"],
@@ -927,6 +938,12 @@ CASES = {
         {name: RESULT for name in ("blas", "scores", "change", "nonlinear", "weight", "nominal",
                                    "design", "verified", "coupling")}),
     "fsm_findings.causal_claim_rows": (None, {"causal": RESULT}),
+    "fsm_findings.order_curve_claim_rows": (
+        Fill(curve=bare(_FM.OrderCurve), scores=bare(_FM.LinearScores)),
+        {"curve": RESULT, "scores": RESULT}),
+    "fsm_findings.order_curve_summary_line": (
+        Fill(curve=bare(_FM.OrderCurve), scores=bare(_FM.LinearScores)),
+        {"curve": RESULT, "scores": RESULT}),
     "fsm_findings.nonlinear_loop_claim_rows": (None, {"loop": RESULT}),
     "fsm_findings.slashed": (dict(values=[1.0, 2.0]), {"values": {"text": "x", "number": 3,
                                                                   "not numbers": ["a"]}}),
@@ -1106,6 +1123,7 @@ EXEMPT = {
     "paths.project_root": "no arguments", "paths.data_dir": "no arguments",
     "fsm_benchmark.data_folder": "no arguments",
     "fsm_mimo.record_path": "no arguments",
+    "fsm_control.axis_record_path": "no arguments",
     "fsm_causal.causal_model_path": "no arguments",
     "fsm_benchmark.write_manifest": "writes the committed data's manifest; its folder is checked "
                                     "by paths.check_directory (a valid call needs the 21 MB data)",

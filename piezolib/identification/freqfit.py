@@ -58,9 +58,12 @@ __all__ = ["fit_frf", "frf_error", "select_order", "OrderSelection", "simulate_d
 #: Largest pole radius the fitted model may have.
 MAX_POLE_RADIUS = 0.9995
 #: Most block rows of the subspace step: its block-Hankel matrix has n_rows (n_y + n_u) rows
-#: and F n_u columns (a 3 x 3 FRF on 2000 lines: 400 rows 93 s and 0.9 GB, 100 rows 32 s
-#: and 0.2 GB on a shared 2-core machine, ``benchmarks/bench_size_limits.py``).
-MAX_ROWS = 100
+#: and F n_u columns, its memory grows as n_rows and its QR's time as n_rows squared.  A 3 x 3
+#: FRF on 3839 lines (the mirror benchmark of notebook 10), n_rows = order + 8, one process on
+#: a shared 2-core machine: 100 rows 2.7-3.0 CPU-s and +450 MiB, 136 rows 3.5-4.3 CPU-s and
+#: +610 MiB, 168 rows (order 160) the largest allowed (``benchmarks/bench_size_limits.py``
+#: prints the time and memory at the limit).
+MAX_ROWS = 168
 
 
 def _check_frf(G, frequency_Hz, fs, name="G"):

@@ -17,12 +17,20 @@ Four steps, each a function returning a result with the ``checks`` it states:
 * :func:`axis_coupling`: what one SISO loop leaves of the mirror: the BLA's
   coupling in the loop's band and how far the other displacements move.
 
+The DK-iteration takes about 10 CPU-s, so its end point is committed
+(:func:`write_axis_design`, ``data/controllers/fsm_axis_design.json``) and
+notebook 10 reads it (:func:`read_axis_design`): the record's K with the
+weights rebuilt around the given nominal, refused when the nominal or the
+design's parameters differ from the record's; the slow test re-derives it.
+
 In the w-plane of the sampled loop, a continuous design mapped back with Tustin
 (no pre-warping) *is* the sampled loop: stability, margins and μ are those of
 the sampled loop on the warped axis nu = (2/T) tan(omega T / 2).
 """
 
-from dataclasses import dataclass
+import json
+import time
+from dataclasses import dataclass, field
 
 import control as ct
 import numpy as np
@@ -33,14 +41,15 @@ from piezolib import robust
 from piezolib import uncertainty as unc
 from piezolib._checks import (check_band, check_index_pair, check_integer, check_integers,
                               check_lti, check_mapping, check_nonnegative, check_positive,
-                              check_positive_values, check_type)
+                              check_path, check_positive_values, check_type)
 from piezolib.problem import fsm_benchmark as fsm
-from piezolib.problem import genplant
+from piezolib.problem import genplant, paths
 from piezolib.problem.fsm_models import LevelBLAs, LinearModels
 
 __all__ = ["UM_PER_M", "REDUCTION_ORDERS", "BLOCKS", "axis_entry", "AxisNominal", "axis_nominal",
            "AxisDesign", "design_axis", "AxisVerification", "verify_axis", "AxisCoupling",
-           "axis_coupling", "hz_of_w_plane", "significant"]
+           "axis_coupling", "hz_of_w_plane", "significant", "AXIS_RECORD_NAME", "AxisDKRecord",
+           "axis_record_path", "write_axis_design", "read_axis_design"]
 
 #: Micrometres per metre (the axis is designed in um/V).
 UM_PER_M = 1e6
@@ -54,6 +63,11 @@ RESONANCES_HZ = (500, 1100)
 FINE_W_PLANE = np.logspace(-1, 7, 1500)
 #: The w-plane grid of DK-iteration [rad/s].
 DK_W_PLANE = np.logspace(0, 5.5, 200)
+#: File name of the committed axis design under ``data/controllers/``.
+AXIS_RECORD_NAME = "fsm_axis_design.json"
+#: Largest relative difference of the nominal's response from the record's on the excited
+#: lines for the record to belong to it (a refit of the same data differs by ~1e-12).
+RECORD_NOMINAL_TOLERANCE = 1e-6
 
 
 def significant(x, digits=3):
@@ -278,6 +292,8 @@ class AxisDesign:
         One sample of delay.
     bandwidth_Hz : float
         Where the template on |S| crosses 1 [Hz].
+    params : dict
+        The design's choices (the keyword arguments of :func:`design_axis`).
     """
 
     G_w: object
@@ -291,6 +307,7 @@ class AxisDesign:
     K_d: object
     zinv: object
     bandwidth_Hz: float
+    params: dict = field(default_factory=dict)
 
     def weight_at(self, f_Hz):
         """|W_m| at the ordinary frequency ``f_Hz`` [Hz] (through the w-plane)."""
@@ -345,6 +362,16 @@ def design_axis(nominal, *, bandwidth_Hz, error_weight, output_weight, output_co
     -------
     AxisDesign
     """
+    params = _design_params(nominal, bandwidth_Hz, error_weight, output_weight, output_corner,
+                            rolloff, dk_iterations)
+    parts = _axis_problem(nominal, params)
+    dk = robust.musyn(parts["plant"], BLOCKS, 1, 1, DK_W_PLANE, d_order="auto",
+                      max_iter=params["dk_iterations"])
+    return _axis_design(parts, dk, params)
+
+
+def _design_params(nominal, bandwidth_Hz, error_weight, output_weight, output_corner, rolloff,
+                   dk_iterations):
     check_type("nominal", nominal, AxisNominal, "an AxisNominal (axis_nominal)")
     bandwidth_Hz = check_positive("bandwidth_Hz", bandwidth_Hz)
     for name, fields in (("error_weight", error_weight), ("output_weight", output_weight),
@@ -352,6 +379,16 @@ def design_axis(nominal, *, bandwidth_Hz, error_weight, output_weight, output_co
         check_mapping(name, fields, "a dict of keyword arguments", empty=True)
     output_corner = check_positive("output_corner", output_corner)
     dk_iterations = check_integer("dk_iterations", dk_iterations, minimum=1)
+    return {"bandwidth_Hz": float(bandwidth_Hz),
+            "error_weight": {k: float(v) for k, v in error_weight.items()},
+            "output_weight": {k: float(v) for k, v in output_weight.items()},
+            "output_corner": float(output_corner),
+            "rolloff": {k: (int(v) if k == "order" else float(v)) for k, v in rolloff.items()},
+            "dk_iterations": int(dk_iterations)}
+
+
+def _axis_problem(nominal, params, W_m=None):
+    """The w-plane plant, the spread, its weight (fitted unless given) and the synthesis plant."""
     fs = fsm.SAMPLING_FREQUENCY_HZ
     T_s = 1 / fs
     omega_rad_s = 2 * np.pi * nominal.frequency_Hz
@@ -360,21 +397,177 @@ def design_axis(nominal, *, bandwidth_Hz, error_weight, output_weight, output_co
     G_w = ident.d2c(ct.series(zinv, nominal.g_nominal), method="tustin")
     spread = nominal.spread(nominal.g_nominal)
     hull = np.maximum.accumulate(spread)                                # non-decreasing
-    W_m = unc.fit_covering_weight(nu, hull, order=1, starts=1, inputs="u", outputs="y_Delta",
-                                  name="W_m")
+    if W_m is None:
+        W_m = unc.fit_covering_weight(nu, hull, order=1, starts=1, inputs="u",
+                                      outputs="y_Delta", name="W_m")
     cover = unc.coverage(W_m, nu, spread)
-    omega_b = 2 * np.pi * bandwidth_Hz
-    H_e = robust.sensitivity_weight(**error_weight, bandwidth_rad_s=omega_b, inputs="v_e",
-                                    outputs="y1", name="H_e")
-    H_y = robust.complementary_sensitivity_weight(**output_weight,
-                                                  bandwidth_rad_s=output_corner * omega_b,
-                                                  inputs="v_y", outputs="y2", name="H_y")
-    W_u = genplant.rolloff_weight(genplant.RolloffWeight(**rolloff))
+    omega_b = 2 * np.pi * params["bandwidth_Hz"]
+    H_e = robust.sensitivity_weight(**params["error_weight"], bandwidth_rad_s=omega_b,
+                                    inputs="v_e", outputs="y1", name="H_e")
+    H_y = robust.complementary_sensitivity_weight(
+        **params["output_weight"], bandwidth_rad_s=params["output_corner"] * omega_b,
+        inputs="v_y", outputs="y2", name="H_y")
+    W_u = genplant.rolloff_weight(genplant.RolloffWeight(**params["rolloff"]))
     plant = fsm.axis_design_plant(G_w, W_m, H_e, H_y, W_u, fs=fs, delay_samples=None)
-    dk = robust.musyn(plant, BLOCKS, 1, 1, DK_W_PLANE, d_order="auto", max_iter=dk_iterations)
-    return AxisDesign(G_w=G_w, spread=spread, hull=hull, W_m=W_m, coverage=cover, plant=plant,
-                      dk=dk, K_w=dk.K, K_d=ct.c2d(dk.K, T_s, "tustin"), zinv=zinv,
-                      bandwidth_Hz=float(bandwidth_Hz))
+    return dict(G_w=G_w, spread=spread, hull=hull, W_m=W_m, coverage=cover, plant=plant,
+                zinv=zinv)
+
+
+def _axis_design(parts, dk, params):
+    return AxisDesign(**parts, dk=dk, K_w=dk.K,
+                      K_d=ct.c2d(dk.K, 1 / fsm.SAMPLING_FREQUENCY_HZ, "tustin"),
+                      bandwidth_Hz=params["bandwidth_Hz"], params=params)
+
+
+@dataclass(frozen=True)
+class AxisDKRecord:
+    """The DK-iteration's end point as committed (:func:`read_axis_design`): the fields of
+    :class:`piezolib.robust.MusynResult` that the notebook shows.
+
+    Attributes
+    ----------
+    K : control.StateSpace
+        The w-plane controller.
+    mu_peak, mu_lower_peak : float
+        μ_RP upper and lower bound peaks on :data:`DK_W_PLANE`.
+    stop_reason : str
+    history : pandas.DataFrame
+        One row per iteration (:attr:`piezolib.robust.MusynResult.history`).
+    elapsed : float
+        Wall time of the DK-iteration when it ran [s] (information only).
+    """
+
+    K: object
+    mu_peak: float
+    mu_lower_peak: float
+    stop_reason: str
+    history: pd.DataFrame
+    elapsed: float
+
+
+def axis_record_path():
+    """Where the committed axis design lives: ``data/controllers/fsm_axis_design.json``.
+
+    Examples
+    --------
+    >>> axis_record_path().name
+    'fsm_axis_design.json'
+    """
+    return paths.data_dir() / "controllers" / AXIS_RECORD_NAME
+
+
+def _ss_dict(sys):
+    sys = ct.ss(sys)
+    return {"A": sys.A.tolist(), "B": sys.B.tolist(), "C": sys.C.tolist(), "D": sys.D.tolist(),
+            "dt": (None if sys.dt in (None, 0) else float(sys.dt))}
+
+
+def _ss_of(d):
+    D = np.array(d["D"], dtype=float)
+    A = np.array(d["A"], dtype=float)
+    n = A.size and int(round(np.sqrt(A.size)))
+    return ct.ss(A.reshape(n, n), np.array(d["B"], dtype=float).reshape(n, D.shape[1]),
+                 np.array(d["C"], dtype=float).reshape(D.shape[0], n), D,
+                 0 if d.get("dt") is None else d["dt"])
+
+
+def write_axis_design(design, nominal, path=None):
+    """Write the end point of :func:`design_axis` as JSON (default :func:`axis_record_path`).
+
+    The record holds the design's parameters, the nominal it was designed on
+    (to refuse another), the weight W_m, the controller K_w and the DK history.
+
+    Parameters
+    ----------
+    design : AxisDesign
+        From :func:`design_axis`.
+    nominal : AxisNominal
+        The nominal it was designed on.
+    path : str or Path, optional
+
+    Returns
+    -------
+    Path
+    """
+    check_type("design", design, AxisDesign, "an AxisDesign (design_axis)")
+    check_type("nominal", nominal, AxisNominal, "an AxisNominal (axis_nominal)")
+    path = axis_record_path() if path is None else check_path("path", path)
+    if not design.params:
+        raise ValueError("design: has no params (make it with design_axis)")
+    W = ct.tf(design.W_m)
+    hist = design.dk.history
+    doc = {"format": 1,
+           "what": "mu controller of one mirror axis (notebook 10): "
+                   "piezolib.problem.fsm_control.design_axis, w-plane of the 6400 Hz loop with "
+                   "one sample of delay; re-derived by the slow test "
+                   "tests/problem/test_fsm_control.py",
+           "pair": list(nominal.pair), "nominal_order": int(nominal.g_nominal.nstates),
+           "params": design.params, "g_nominal": _ss_dict(nominal.g_nominal),
+           "W_m": {"num": np.ravel(W.num[0][0]).tolist(), "den": np.ravel(W.den[0][0]).tolist()},
+           "K_w": _ss_dict(design.K_w),
+           "mu_peak": float(design.dk.mu_peak), "mu_lower_peak": float(design.dk.mu_lower_peak),
+           "stop_reason": str(design.dk.stop_reason),
+           "history": {"columns": [str(c) for c in hist.columns],
+                       "rows": [[(None if x is None else float(x)) for x in r]
+                                for r in hist.itertuples(index=False)]},
+           "seconds": float(getattr(design.dk, "elapsed", float("nan")))}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(doc, indent=1, allow_nan=False) + "\n", encoding="utf-8")
+    return path
+
+
+def read_axis_design(nominal, *, bandwidth_Hz, error_weight, output_weight, output_corner,
+                     rolloff, dk_iterations, path=None):
+    """The committed axis design rebuilt around ``nominal`` (no DK-iteration).
+
+    The parameters are those of :func:`design_axis`; the record must have been
+    designed with the same ones and on the same nominal (its response on the
+    excited lines within :data:`RECORD_NOMINAL_TOLERANCE`), else ``ValueError``
+    says to re-derive it.  The synthesis plant is rebuilt from the parameters
+    and the record's weight W_m, whose coverage of the levels' spread is
+    recomputed.
+
+    Parameters
+    ----------
+    nominal : AxisNominal
+    bandwidth_Hz, error_weight, output_weight, output_corner, rolloff, dk_iterations
+        As :func:`design_axis`.
+    path : str or Path, optional
+        Default :func:`axis_record_path`.
+
+    Returns
+    -------
+    AxisDesign
+        Its ``dk`` is an :class:`AxisDKRecord`.
+    """
+    params = _design_params(nominal, bandwidth_Hz, error_weight, output_weight, output_corner,
+                            rolloff, dk_iterations)
+    path = axis_record_path() if path is None else check_path("path", path)
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+        g_rec = _ss_of(doc["g_nominal"])
+        W_m = ct.tf(doc["W_m"]["num"], doc["W_m"]["den"], inputs="u", outputs="y_Delta",
+                    name="W_m")
+        K_w = _ss_of(doc["K_w"])
+        hist = pd.DataFrame(doc["history"]["rows"], columns=doc["history"]["columns"])
+        dk = AxisDKRecord(K=K_w, mu_peak=float(doc["mu_peak"]),
+                          mu_lower_peak=float(doc["mu_lower_peak"]),
+                          stop_reason=str(doc["stop_reason"]), history=hist,
+                          elapsed=float(doc["seconds"]))
+        rec_params, rec_pair = doc["params"], tuple(doc["pair"])
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
+        raise ValueError(f"path: {path} is not an axis design record ({exc})") from None
+    if rec_params != params:
+        raise ValueError(f"path: the record {path} was designed with {rec_params}, not "
+                         f"{params}: re-derive it (design_axis, write_axis_design)")
+    zl = nominal.zl
+    ref = _response(nominal.g_nominal, zl)
+    diff = float(np.max(np.abs(_response(g_rec, zl) - ref)) / np.max(np.abs(ref)))
+    if rec_pair != tuple(nominal.pair) or not diff <= RECORD_NOMINAL_TOLERANCE:
+        raise ValueError(f"nominal: the record {path} was designed on another nominal (pair "
+                         f"{rec_pair}, response differs by {diff:.2g} relative): re-derive it "
+                         "(design_axis, write_axis_design)")
+    return _axis_design(_axis_problem(nominal, params, W_m=W_m), dk, params)
 
 
 @dataclass(frozen=True)

@@ -33,7 +33,7 @@ from piezolib import files
 from piezolib import identification as ident
 from piezolib import uncertainty as unc
 from piezolib._checks import (check_band, check_finite_array, check_index_pair, check_integer,
-                              check_integers, check_path, check_type)
+                              check_integers, check_nonnegative, check_path, check_type)
 from piezolib.problem import fsm_benchmark as fsm
 from piezolib.problem import paths
 
@@ -42,7 +42,7 @@ __all__ = ["LevelBLAs", "level_blas", "LinearModels", "fit_linear_models", "Line
            "fit_nonlinear_models", "LevelSpreadWeight", "level_spread_weight",
            "level_label", "BANDS_HZ", "HAMMERSTEIN", "SCHEDULED", "WIDE_ORDERS",
            "ORDER_CURVE_FILE", "OrderCurve", "derive_order_curve", "write_order_curve",
-           "read_order_curve"]
+           "read_order_curve", "CurveSelection"]
 
 #: Frequency bands [Hz] over which the BLA's change with the level is split.
 BANDS_HZ = ((0, 600), (600, 900), (900, 1100), (1100, 1500), (1500, 3000))
@@ -162,8 +162,8 @@ class LinearModels:
     ----------
     models : dict {str: (int or "all", control.StateSpace)}
         Name -> (training level [mV], discrete model, 3 inputs [V] -> 3 outputs [m]).
-    selections : dict {int: identification.OrderSelection}
-        The order selection per level.
+    selections : dict {int: identification.OrderSelection or CurveSelection}
+        The order selection per level (``order``, ``orders``, ``validation_error``).
     baseline_order : int
     G_all : ndarray, shape (3, 3, F)
         The mean BLA of the levels [m/V] (the all-levels model's data).
@@ -202,13 +202,36 @@ class LinearModels:
                              for lv, sel in self.selections.items()}).rename_axis("order")
 
 
-def fit_linear_models(blas, orders, baseline_order):
+@dataclass(frozen=True)
+class CurveSelection:
+    """An order chosen from a committed validation curve (:meth:`OrderCurve.selection`).
+
+    Attributes
+    ----------
+    order : int
+        The candidate with the smallest validation error.
+    orders : ndarray of int
+        The candidates.
+    validation_error : ndarray
+        Their validation errors (relative FRF error on the other group).
+    """
+
+    order: int
+    orders: np.ndarray
+    validation_error: np.ndarray
+
+
+def fit_linear_models(blas, orders, baseline_order, curve=None):
     """Per level: the order chosen by validation and the baselines' order; one for all levels.
 
     Candidate orders are fitted on the BLA of one group of realisations and
     scored on the other's; the chosen order is refitted on the level's whole
     BLA.  The all-levels model is fitted to the mean of the levels' BLAs at
-    the order chosen at 200 mV.
+    the order chosen at 200 mV.  Given a committed ``curve`` whose orders
+    include the candidates, the choice is read from its validation errors
+    instead of fitting every candidate (the same numbers: the curve is the
+    same validation; its slow test re-derives it), and only the chosen orders
+    are fitted.
 
     Parameters
     ----------
@@ -217,6 +240,8 @@ def fit_linear_models(blas, orders, baseline_order):
         Candidate orders.
     baseline_order : int
         The published baselines' order (28), fitted too.
+    curve : OrderCurve, optional
+        The validation curve (:func:`read_order_curve`) the choice is read from.
 
     Returns
     -------
@@ -225,11 +250,17 @@ def fit_linear_models(blas, orders, baseline_order):
     check_type("blas", blas, LevelBLAs, "a LevelBLAs (level_blas)")
     orders = check_integers("orders", orders, minimum=1)
     baseline_order = check_integer("baseline_order", baseline_order, minimum=1)
+    if curve is not None:
+        check_type("curve", curve, OrderCurve, "an OrderCurve (read_order_curve)")
+        curve.selection(fsm.LEVELS_MV[0], orders)          # the candidates lie on the curve
     fs = fsm.SAMPLING_FREQUENCY_HZ
     common = dict(input_labels=fsm.INPUT_LABELS, output_labels=fsm.OUTPUT_LABELS)
     models, selections = {}, {}
     for lv, bl in blas.blas.items():
-        sel = ident.select_order(bl.G_groups[0], bl.G_groups[1], bl.frequency_Hz, fs, orders)
+        if curve is None:
+            sel = ident.select_order(bl.G_groups[0], bl.G_groups[1], bl.frequency_Hz, fs, orders)
+        else:
+            sel = curve.selection(lv, orders)
         selections[lv] = sel
         models[f"ours, order chosen ({sel.order}), trained at {lv} mV"] = (lv, ident.fit_frf(
             bl.G, bl.frequency_Hz, fs, sel.order, **common))
@@ -670,7 +701,8 @@ def level_spread_weight(blas, linear, pair=(2, 2), order=4):
 
 #: The wide candidate range of the order validation curve: up to the subspace fit's largest
 #: order (``identification.MAX_ROWS`` block rows, order + 8 by default).
-WIDE_ORDERS = (24, 32, 40, 48, 56, 64, 72, 80, 88, ident.MAX_ROWS - 8)
+WIDE_ORDERS = (24, 32, 40, 48, 56, 64, 72, 80, 88, 92, 96, 104, 112, 120, 128, 136, 144, 152,
+               ident.MAX_ROWS - 8)
 #: The committed curve, relative to ``data/``.
 ORDER_CURVE_FILE = "models/fsm_order_curve.json"
 
@@ -701,6 +733,53 @@ class OrderCurve:
         """The order with the smallest validation error at ``level_mV``."""
         return int(self.orders[int(np.argmin(self.validation_error[level_mV]))])
 
+    def selection(self, level_mV, orders):
+        """The choice among ``orders`` (all on the curve) at ``level_mV``.
+
+        Parameters
+        ----------
+        level_mV : int
+        orders : sequence of int
+            Candidates, each one of :attr:`orders`.
+
+        Returns
+        -------
+        CurveSelection
+
+        Examples
+        --------
+        >>> read_order_curve().selection(300, (24, 32, 40, 48)).order
+        40
+        """
+        level = fsm._level(level_mV)
+        if level not in self.validation_error:
+            raise ValueError(f"level_mV: the curve has levels {sorted(self.validation_error)} "
+                             f"mV, got {level_mV}")
+        orders = np.asarray(check_integers("orders", orders, minimum=1), dtype=int)
+        missing = [int(n) for n in orders if int(n) not in self.orders]
+        if missing:
+            raise ValueError(f"orders: {missing} are not on the curve (orders {self.orders})")
+        errors = np.array([self.validation_error[level][self.orders.index(int(n))]
+                           for n in orders])
+        return CurveSelection(order=int(orders[int(np.argmin(errors))]), orders=orders,
+                              validation_error=errors)
+
+    def margin(self, level_mV):
+        """How far the next-lowest validation error lies above the best (absolute, [-])."""
+        e = np.sort(np.asarray(self.validation_error[level_mV]))
+        return float(e[1] - e[0])
+
+    def smallest_within(self, level_mV, tolerance):
+        """The smallest order whose validation error is within ``tolerance`` (absolute, [-])
+        of the curve's minimum at ``level_mV`` (the choice robust to the curve's jitter)."""
+        tolerance = check_nonnegative("tolerance", tolerance)
+        e = np.asarray(self.validation_error[level_mV])
+        return int(self.orders[int(np.flatnonzero(e <= e.min() + tolerance)[0])])
+
+    def percent(self):
+        """The validation errors [%] per level label (for the figure)."""
+        return {level_label(lv): 100 * np.asarray(e) for lv, e in self.validation_error.items()}
+
     def interior(self, level_mV):
         """Whether the best order lies inside the range (not at either end)."""
         return self.orders[0] < self.best(level_mV) < self.orders[-1]
@@ -720,8 +799,10 @@ class OrderCurve:
                                              f"{linear.linear.selections[lv].order}: "
                                              f"{linear.own(lv):.2f} %)")
             lines.append(f"{lv} mV: best order {self.best(lv)} of {self.orders[0]}-"
-                         f"{self.orders[-1]}, {where}; its test NRMSE "
-                         f"{self.test_nrmse[lv]:.2f} %{own}")
+                         f"{self.orders[-1]}, {where} (the next-best order "
+                         f"{100 * self.margin(lv):.3f} points above; the smallest order within "
+                         f"0.1 points of the minimum: {self.smallest_within(lv, 1e-3)}); its "
+                         f"test NRMSE {self.test_nrmse[lv]:.2f} %{own}")
         return "\n".join(lines)
 
 
@@ -795,7 +876,7 @@ def read_order_curve(path=None):
     --------
     >>> curve = read_order_curve()
     >>> curve.orders[0], curve.orders[-1]
-    (24, 92)
+    (24, 160)
     """
     path = _order_curve_path(path)
     try:

@@ -119,3 +119,19 @@ def test_a_stable_fit_of_an_unstable_frf_warns_with_its_error():
     H = np.ravel(U(np.exp(2j * np.pi * f / fs)))[None, None, :]
     with pytest.warns(FitQualityWarning, match="outside the unit circle"):
         fit_frf(H, f, fs, 1)
+
+
+def test_the_block_row_limit_allows_order_max_rows_minus_8_and_refuses_one_row_more():
+    """MAX_ROWS (168): order MAX_ROWS - 8 with the default n_rows = order + 8 fits (notebook
+    10's order curve reaches 160); one row more is refused before any work, naming n_rows."""
+    from piezolib.identification.freqfit import MAX_ROWS
+
+    assert MAX_ROWS == 168
+    f = np.linspace(1.0, 990.0, 200)
+    G = response(resonant_system(), f)[:1, :1]                   # SISO, 200 lines
+    model = fit_frf(G, f, FS, MAX_ROWS - 8, iterations=0)
+    assert model.nstates == MAX_ROWS - 8
+    with pytest.raises(ValueError, match="n_rows"):
+        fit_frf(G, f, FS, MAX_ROWS - 7)                          # default n_rows = MAX_ROWS + 1
+    with pytest.raises(ValueError, match="n_rows"):
+        fit_frf(G, f, FS, 8, n_rows=MAX_ROWS + 1)

@@ -102,3 +102,81 @@ def test_design_and_verify_refuse_what_is_not_their_input():
                                 output_corner=5.0, rolloff={}, dk_iterations=1)
     with pytest.raises(ValueError, match="nominal_order"):
         fsm_control.axis_nominal(None, F_HZ, 0)
+
+
+PARAMS = dict(bandwidth_Hz=20.0,
+              error_weight=dict(low_frequency_bound=0.01, high_frequency_bound=2.0),
+              output_weight=dict(low_frequency_bound=5.0, high_frequency_bound=0.1),
+              output_corner=5.0,
+              rolloff=dict(hf_gain=0.1, lf_gain=1e3, frequency=2 * np.pi * 2000.0, order=2),
+              dk_iterations=1)
+
+
+def _small_nominal(scale=(0.9, 1.0, 1.1)):
+    """A 2-state axis nominal with the levels' models a gain apart."""
+    model = _mimo()
+    G_all = np.asarray(model(ZL))
+    linear = _linear(model, G_all)
+    models = dict(linear.models)
+    for lv, s in zip(fsm.LEVELS_MV, scale):
+        models[f"ours, order chosen (3), trained at {lv} mV"] = (lv, model * s)
+    linear = fsm_models.LinearModels(models=models, selections=linear.selections,
+                                     baseline_order=28, G_all=G_all)
+    return fsm_control.axis_nominal(linear, F_HZ, 2, orders=(1,))
+
+
+def test_the_axis_record_gives_back_its_design_and_refuses_other_parameters_or_nominals(tmp_path):
+    nominal = _small_nominal()
+    design = fsm_control.design_axis(nominal, **PARAMS)
+    path = fsm_control.write_axis_design(design, nominal, tmp_path / "axis.json")
+    back = fsm_control.read_axis_design(nominal, **PARAMS, path=path)
+    omega = np.logspace(0, 4, 30)
+    assert np.allclose(np.ravel(back.K_w(1j * omega)), np.ravel(design.K_w(1j * omega)))
+    assert back.dk.mu_peak == design.dk.mu_peak
+    assert list(back.dk.history.columns) == list(design.dk.history.columns)
+    assert np.allclose(np.ravel(back.W_m(1j * omega)), np.ravel(design.W_m(1j * omega)))
+    assert back.coverage.covers == design.coverage.covers
+    # the loop rebuilt from the record is the designed one
+    mu_back = fsm_control.verify_axis(nominal, back).mu_upper
+    assert mu_back == pytest.approx(fsm_control.verify_axis(nominal, design).mu_upper, rel=1e-9)
+    with pytest.raises(ValueError, match="designed with"):
+        fsm_control.read_axis_design(nominal, **{**PARAMS, "bandwidth_Hz": 25.0}, path=path)
+    with pytest.raises(ValueError, match="nominal: .*another nominal"):
+        other = fsm_control.axis_nominal(_linear(_mimo() * 1.01, np.asarray(_mimo()(ZL))), F_HZ,
+                                         2, orders=(1,))
+        fsm_control.read_axis_design(other, **PARAMS, path=path)
+    (tmp_path / "bad.json").write_text("{}")
+    with pytest.raises(ValueError, match="path: .*not an axis design record"):
+        fsm_control.read_axis_design(nominal, **PARAMS, path=tmp_path / "bad.json")
+
+
+def test_the_committed_axis_record_is_the_notebooks_design():
+    import json
+
+    doc = json.loads(fsm_control.axis_record_path().read_text())
+    assert doc["pair"] == [2, 2] and doc["nominal_order"] == 12
+    assert doc["params"]["dk_iterations"] == 8 and doc["params"]["bandwidth_Hz"] == 20.0
+    assert doc["mu_lower_peak"] <= doc["mu_peak"] * (1 + 1e-6) and doc["mu_peak"] < 1
+
+
+@pytest.mark.slow
+def test_rederived_axis_design_lands_on_the_committed_record():
+    """design_axis from scratch (the notebook's parameters) against the committed record:
+    the same order, mu_RP within the claim's precision 0.002, the same verification."""
+    import json
+
+    doc = json.loads(fsm_control.axis_record_path().read_text())
+    params = doc["params"]
+    data = fsm_models.level_blas()
+    linear = fsm_models.fit_linear_models(data, (24, 32, 40, 48), 28,
+                                          curve=fsm_models.read_order_curve())
+    nominal = fsm_control.axis_nominal(linear, data.frequency_Hz, doc["nominal_order"],
+                                       pair=tuple(doc["pair"]))
+    fresh = fsm_control.design_axis(nominal, **params)
+    committed = fsm_control.read_axis_design(nominal, **params)
+    assert abs(fresh.dk.mu_peak - committed.dk.mu_peak) < 0.002
+    assert abs(fresh.K_w.nstates - committed.K_w.nstates) <= 2
+    v_fresh = fsm_control.verify_axis(nominal, fresh)
+    v_committed = fsm_control.verify_axis(nominal, committed)
+    assert abs(v_fresh.mu_upper - v_committed.mu_upper) < 0.002
+    assert v_fresh.loops["stable"].all() and v_committed.loops["stable"].all()

@@ -128,6 +128,64 @@ def test_committed_order_curve_reaches_the_fits_largest_order():
     assert "order" in curve.table().index.name
 
 
+def test_each_levels_best_order_lies_strictly_inside_the_committed_curve():
+    curve = fsm_models.read_order_curve()
+    for lv in fsm.LEVELS_MV:
+        assert curve.orders[0] < curve.best(lv) < curve.orders[-1], lv
+        assert curve.interior(lv)
+        # the choice does not hang on the curve's jitter: no lower order within 0.1 points
+        assert curve.smallest_within(lv, 1e-3) == curve.best(lv)
+    # the working models' candidates are the curve's first points
+    assert curve.selection(300, (24, 32, 40, 48)).order == 40
+
+
+def _curve(errors_300=(0.09, 0.05, 0.04, 0.06)):
+    orders = (8, 16, 24, 32)
+    errors = {100: [0.09, 0.05, 0.06, 0.07], 200: [0.09, 0.08, 0.05, 0.045],
+              300: list(errors_300)}
+    return fsm_models.OrderCurve(orders=orders, validation_error=errors,
+                                 test_nrmse={100: 5.0, 200: 4.0, 300: 3.0}, seconds=1.0)
+
+
+def test_a_curve_says_where_its_best_lies_and_chooses_among_a_subset():
+    curve = _curve()
+    assert [curve.best(lv) for lv in fsm.LEVELS_MV] == [16, 32, 24]
+    assert curve.interior(100) and not curve.interior(200)        # 200 mV: best at the top
+    assert curve.margin(100) == pytest.approx(0.01)
+    sel = curve.selection(200, (8, 16, 24))
+    assert sel.order == 24 and list(sel.orders) == [8, 16, 24]
+    assert np.allclose(sel.validation_error, [0.09, 0.08, 0.05])
+    # the smallest order within a tolerance of the minimum
+    assert curve.smallest_within(200, 0.0) == 32 and curve.smallest_within(200, 0.006) == 24
+    assert set(curve.percent()) == {"100 mV", "200 mV", "300 mV"}
+    assert "AT THE END" in curve.description()
+    with pytest.raises(ValueError, match="orders: .*not on the curve"):
+        curve.selection(100, (8, 12))
+    with pytest.raises(ValueError, match="level_mV"):
+        curve.selection(150, (8,))
+    with pytest.raises(ValueError, match="tolerance"):
+        curve.smallest_within(100, -1.0)
+
+
+def test_fit_linear_models_reads_the_choice_from_a_curve():
+    """Given a curve, only the chosen orders are fitted: the choice is the curve's."""
+    z = np.exp(2j * np.pi * F_HZ / fsm.SAMPLING_FREQUENCY_HZ)
+    G = np.empty((3, 3, F_HZ.size), dtype=complex)
+    G[...] = 1e-6 * 0.5 / (z - 0.5)
+    groups = (G, G)
+    blas = {lv: SimpleNamespace(**vars(_bla(G)), G_groups=groups) for lv in fsm.LEVELS_MV}
+    data = fsm_models.LevelBLAs(train={}, blas=blas, file_problems={})
+    curve = _curve(errors_300=(0.05, 0.09, 0.09, 0.09))
+    linear = fsm_models.fit_linear_models(data, (8, 16), 4, curve=curve)
+    assert {lv: s.order for lv, s in linear.selections.items()} == {100: 16, 200: 16, 300: 8}
+    assert linear.chosen(300) in linear.models and linear.at_baseline(300) in linear.models
+    assert linear.order_all == 16
+    with pytest.raises(ValueError, match="orders: .*not on the curve"):
+        fsm_models.fit_linear_models(data, (8, 12), 4, curve=curve)
+    with pytest.raises(TypeError, match="curve"):
+        fsm_models.fit_linear_models(data, (8, 16), 4, curve={})
+
+
 @pytest.mark.slow
 def test_rederived_order_curve_lands_on_the_committed_one():
     committed = fsm_models.read_order_curve()
@@ -136,3 +194,15 @@ def test_rederived_order_curve_lands_on_the_committed_one():
         assert curve.best(lv) == committed.best(lv)
         assert np.allclose(curve.validation_error[lv], committed.validation_error[lv], atol=1e-5)
         assert abs(curve.test_nrmse[lv] - committed.test_nrmse[lv]) < 0.01
+
+
+@pytest.mark.slow
+def test_the_working_models_choice_read_from_the_curve_is_the_one_fitting_every_candidate():
+    data = fsm_models.level_blas()
+    orders = (24, 32, 40, 48)
+    fitted = fsm_models.fit_linear_models(data, orders, 28)
+    read = fsm_models.fit_linear_models(data, orders, 28, curve=fsm_models.read_order_curve())
+    for lv in fsm.LEVELS_MV:
+        assert fitted.selections[lv].order == read.selections[lv].order
+        assert np.allclose(fitted.selections[lv].validation_error,
+                           read.selections[lv].validation_error, atol=1e-5)

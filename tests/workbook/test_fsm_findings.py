@@ -24,8 +24,8 @@ def _results():
     models = {**{n: (lv, None) for lv, n in names.items()},
               **{f"ours, order 28, trained at {lv} mV": (lv, None) for lv in LEVELS},
               "ours, one model for all levels (order 40)": ("all", None)}
-    linear = fsm_models.LinearModels(models=models, selections={lv: SimpleNamespace(order=40)
-                                                                for lv in LEVELS},
+    linear = fsm_models.LinearModels(models=models, selections={lv: SimpleNamespace(
+                                         order=40, orders=[24, 32, 40, 48]) for lv in LEVELS},
                                      baseline_order=28, G_all=None)
     scores = fsm_models.LinearScores(
         linear=linear, scores={n: {lv: _score(lv, 5.0) for lv in LEVELS} for n in models},
@@ -61,8 +61,10 @@ def _results():
 def test_the_claims_come_in_the_tables_order_with_their_precision():
     rows = fsm_findings.claim_rows(*_results())
     assert len(rows) == 4 * 3 + 2 * 3 + 2 + 4 + 4
-    assert rows[0]["quantity"] == "test NRMSE, linear model at 100 mV (order 40)"
-    assert rows[0]["note"] == ("published 28th-order BLA at the same level: 8.38 %; "
+    assert rows[0]["quantity"] == ("test NRMSE, working linear model at 100 mV (order 40, best "
+                                   "of 24-48)")
+    assert rows[0]["note"] == ("the model the scheduled model, the weights and the mu designs "
+                               "use; published 28th-order BLA at the same level: 8.38 %; "
                                "lower is better")
     assert rows[18]["quantity"] == "level-spread envelope of v_a3 -> d_3, peak"
     assert rows[18]["ours"] == 0.5 and rows[18]["note"] == "at 900.0 Hz"
@@ -99,3 +101,27 @@ def test_the_summary_names_the_levels_where_the_scheduled_model_beats_the_lfr():
     assert "why the Hammerstein model fails: 60 %" in lines[6]
     assert "envelope peak 0.50 at 900 Hz, covered by an order-4 weight" in lines[7]
     assert lines[-1].startswith("the mirror as a whole: the 3 × 3 μ controller")
+
+
+def _curve(best_at_end=False):
+    orders = (24, 48, 64, 92, 160)
+    errors = {100: [0.09, 0.06, 0.055, 0.057, 0.06], 200: [0.09, 0.046, 0.045, 0.041, 0.046],
+              300: [0.09, 0.05, 0.049, 0.043, 0.0425 if best_at_end else 0.047]}
+    return fsm_models.OrderCurve(orders=orders, validation_error=errors,
+                                 test_nrmse={100: 5.55, 200: 4.94, 300: 4.49}, seconds=1.0)
+
+
+def test_the_linear_baseline_rows_come_from_the_wide_curve_and_say_where_its_best_lies():
+    scores = _results()[0]
+    rows = {r["quantity"]: r for r in fsm_findings.order_curve_claim_rows(_curve(), scores)}
+    assert rows["linear model at 100 mV: order chosen by validation over 24-160"]["ours"] == 64
+    assert rows["linear model at 300 mV: the chosen order lies inside 24-160"]["ours"] is True
+    row = rows["test NRMSE, linear model at 200 mV (order 92, best of 24-160)"]
+    assert row["ours"] == 4.94 and "working model (order 40): 5.00 %" in row["note"]
+    line = fsm_findings.order_curve_summary_line(_curve(), scores)
+    assert "64, 92, 92 (each inside the range)" in line
+    # a curve whose best is its last order says so
+    at_end = {r["quantity"]: r for r in fsm_findings.order_curve_claim_rows(
+        _curve(best_at_end=True), scores)}
+    assert at_end["linear model at 300 mV: the chosen order lies inside 24-160"]["ours"] is False
+    assert "NOT all inside" in fsm_findings.order_curve_summary_line(_curve(True), scores)

@@ -21,5 +21,6 @@ own_stage       notebook 08: records, identification, weight, hysteresis, design
 mixed_mu        notebook 09: mu against the coefficient box, the mixed-mu trade-off
 real_benchmark  notebook 10: the fine steering mirror's BLA, scores and level weight
 mirror_steps    notebook 10: the mirror's closed-loop step matrix, 3 x 3 mu beside 3 SISO loops
+fsm_orders      notebook 10: the linear models' order validation curve per level
 sweeps          notebook 11 and ``python -m piezolib sweep``: the Pareto front
 """
