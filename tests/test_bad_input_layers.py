@@ -1038,7 +1038,8 @@ CASES = {
                                                                             "negative": [-1.0]},
          "periods": POSITIVE_INT, "frequencies_Hz": {"empty": [], "negative": [-1.0]},
          "amplitude_um": POSITIVE, "delay_samples": {"negative": -1},
-         "loop_rate_Hz": {**POSITIVE, "other rate": 5000.0}}),
+         "loop_rate_Hz": {**POSITIVE, "other rate": 5000.0},
+         "noise_seeds": {"one": 1, "fraction": 2.5, "text": "x"}}),
     "your_stage_claims.record_claims": (
         Fill(records=bare(_OWN.OwnRecords), identification=None, weight=None, choice=None,
              loop=None, verification=None, experiments=None),

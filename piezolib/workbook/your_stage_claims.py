@@ -100,19 +100,29 @@ def record_claims(claims, records, identification, weight, choice, loop, verific
             claims.add(c, f"||H_y T||, {name}", None,
                        float(verification.table.loc["||H_y T||", name]))
     if ran(experiments):
-        t4, t5 = experiments.table4.table, experiments.table5.table
-        for A in t4.columns:
+        t4, t5 = experiments.table4, experiments.table5
+        for A in t4.table.columns:
             for case in ("I", "II", "III"):
-                claims.add(c, f"hysteresis %, {A:g} V, case {case}", None,
-                           float(t4.loc[f"case_{case}", A]), unit="%")
+                _add_cell(claims, c, f"hysteresis %, {A:g} V, case {case}", t4, f"case_{case}", A)
             if experiments.chosen4 is not None:
-                claims.add(c, f"hysteresis %, {A:g} V, case II with {experiments.chosen_name}",
-                           None, float(experiments.chosen4.table.loc["case_II", A]), unit="%")
-        for f in t5.columns:
+                _add_cell(claims, c, f"hysteresis %, {A:g} V, case II with "
+                          f"{experiments.chosen_name}", experiments.chosen4, "case_II", A)
+        for f in t5.table.columns:
             for case in ("I", "II", "III"):
-                claims.add(c, f"tracking error %, {f:g} Hz, case {case}", None,
-                           float(t5.loc[f"case_{case}", f]), unit="%")
+                _add_cell(claims, c, f"tracking error %, {f:g} Hz, case {case}", t5,
+                          f"case_{case}", f)
     return claims
+
+
+def _add_cell(claims, section, quantity, result, row, column):
+    """One cell of a Table 4/5-style result as a claim: with seeds, the mean and its interval."""
+    value = float(result.table.loc[row, column])
+    if result.seeds is None:
+        claims.add(section, quantity, None, value, unit="%")
+    else:
+        claims.add(section, quantity, None, value, unit="%",
+                   interval=result.interval(row, column),
+                   note=f"mean over {len(result.seeds)} noise seeds, 95 % interval")
 
 
 def stage_checks(*results):

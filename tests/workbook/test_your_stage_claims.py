@@ -8,6 +8,7 @@ from piezolib import hysteresis as hy
 from piezolib.records import Record
 from piezolib.workbook import your_stage as own
 from piezolib.workbook import your_stage_claims as own_claims
+from piezolib.workbook import your_stage_control as own_control
 from piezolib.workbook import your_stage_hysteresis as own_hysteresis
 from piezolib.workbook.report import ClaimTable
 
@@ -53,3 +54,31 @@ def test_known_truth_checks_without_a_truth_state_the_pi_fit_only():
     assert own_claims.known_truth_checks(None, None, None, choice, None, None) == {
         "PI fits its loops within 0.5 % of stroke (the stage's hysteresis is made of plays)":
         True}
+
+
+class _Seeded:
+    """Stands in for an ExperimentResult run with noise seeds (what record_claims reads)."""
+
+    table = pd.DataFrame({10.0: [5.0, 1.0, 0.2]}, index=["case_I", "case_II", "case_III"])
+    seeds = (7, 8, 9)
+
+    def interval(self, row, column):
+        value = self.table.loc[row, column]
+        return 0.9 * value, 1.2 * value
+
+
+def test_experiment_rows_run_with_noise_seeds_carry_their_interval(monkeypatch):
+    monkeypatch.setattr(hy, "fit_dahl",
+                        lambda data, gamma_a, **kw: hy.fit_pi(data, n_plays=2, offset=True))
+    loops = own_hysteresis.HysteresisLoops({"raw": loop_pair()}, {}, 100.0)
+    choice = own_hysteresis.fit_hysteresis(loops, ["raw"], [], gamma_a=30.0, plays=4,
+                                           ceiling_percent=5.0)
+    skipped = own.Skipped(own.NO_PLANT_NOTE)
+    records = own.OwnRecords(None, {"raw": Record(*loop_pair(), FS)}, FS)
+    experiments = own_control.Experiments(_Seeded(), _Seeded(), None, "Dahl", 0, 0.0)
+    frame = own_claims.record_claims(ClaimTable("own_stage", "test"), records, skipped, skipped,
+                                     choice, skipped, skipped, experiments).frame()
+    row = frame.set_index("quantity").loc["tracking error %, 10 Hz, case III"]
+    assert (row.ours, row.low, row.high) == (0.2, 0.9 * 0.2, 1.2 * 0.2)
+    # a rerun that moves the mean by less than a quarter of the interval keeps the file
+    assert np.isclose(row.precision, (1.2 - 0.9) * 0.2 / 4) and "3 noise seeds" in row.note
