@@ -35,8 +35,13 @@ def _kernel():
     """The compiled loop (numba imported and the function compiled or loaded once)."""
     import numba
 
+    # a module global, not a closure cell: numba keys a cached function on the pickled
+    # contents of its closure, and a dispatcher pickles differently in every process, so a
+    # closure over it missed the disk cache and recompiled the loop in every kernel (3-4 s)
+    global _convert
+
     @numba.njit(cache=True, nogil=True)
-    def convert(v, lsb, code_lo, code_hi):
+    def _convert(v, lsb, code_lo, code_hi):
         # _Converter.convert_scalar: round half to even, limit the code, back to volts
         out = np.rint(v / lsb)
         out = max(out, code_lo)
@@ -83,7 +88,7 @@ def _kernel():
             for i in range(N):
                 ub = u_b[k - delay, i] if k >= delay else 0.0
                 u_c = u_f[k] + ub
-                u_dac = convert(u_c, dac[0], dac[1], dac[2])
+                u_dac = _convert(u_c, dac[0], dac[1], dac[2])
                 v_cmd = u_dac * gain
                 log[0, k, i], log[1, k, i], log[2, k, i] = u_c, u_dac, v_cmd
                 v_a[i] = v_cmd
@@ -116,7 +121,7 @@ def _kernel():
                 analog = z[0, i] + noise[k + 1, i]
                 log[4, k, i] = y_k[i]
                 log[5, k + 1, i] = analog
-                v_y[i] = convert(analog, adc[0], adc[1], adc[2])
+                v_y[i] = _convert(analog, adc[0], adc[1], adc[2])
                 log[6, k + 1, i] = v_y[i]
         return -1
 
