@@ -3,6 +3,7 @@ the module index of docs/architecture.md kept true."""
 
 import ast
 import dataclasses
+import functools
 import importlib
 import inspect
 import json
@@ -39,9 +40,15 @@ def layer_of(path):
     return None
 
 
+@functools.lru_cache(maxsize=None)
+def _parsed(path):
+    """The syntax tree of a source file (parsed once for all the checks of this module)."""
+    return ast.parse(path.read_text(), filename=str(path))
+
+
 def imports_of(path):
     """(module name, at module level?) for every import statement of a source file."""
-    tree = ast.parse(path.read_text(), filename=str(path))
+    tree = _parsed(path)
     module_level = {id(node) for node in tree.body}
     package = ".".join(("piezolib",) + path.relative_to(PACKAGE).with_suffix("").parts[:-1])
     found = []
@@ -87,28 +94,40 @@ def test_package_init_imports_nothing_eagerly():
     assert all(not n.startswith("piezolib") for n in names), names
 
 
-def _loaded_after(code):
-    out = subprocess.run([sys.executable, "-c", code + "\nimport sys, json\n"
-                          "print(json.dumps(sorted(sys.modules)))"],
-                         capture_output=True, text=True, check=True)
-    return set(json.loads(out.stdout.strip().splitlines()[-1]))
+#: imported in this order by one fresh interpreter, sys.modules recorded after each
+IMPORT_STEPS = ("control", "piezolib.robust", "piezolib.hysteresis", "piezolib.uncertainty",
+                "piezolib.identification", "piezolib.signals")
 
 
-def test_robust_imports_no_paper_pandas_or_plotting():
-    loaded = _loaded_after("import piezolib.robust")
+@pytest.fixture(scope="module")
+def loaded_after():
+    """Step -> the modules loaded once it and every step before it are imported (one fresh
+    interpreter for all steps: a module a step may not load is absent after it only if no
+    earlier step loaded it either, so a step passes alone if it passes here)."""
+    code = "\n".join(["import importlib, json, sys", "steps = {}"]
+                     + [f"importlib.import_module({m!r}); steps[{m!r}] = sorted(sys.modules)"
+                        for m in IMPORT_STEPS] + ["print(json.dumps(steps))"])
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    return {m: set(names) for m, names in
+            json.loads(out.stdout.strip().splitlines()[-1]).items()}
+
+
+def test_robust_imports_no_paper_pandas_or_plotting(loaded_after):
+    loaded = loaded_after["piezolib.robust"]
     assert "piezolib.robust.mu" in loaded          # the import did load the toolkit
     assert "pandas" not in loaded
     assert not {m for m in loaded if m.startswith(("piezolib.problem",
                                                    "piezolib.workbook"))}
     # python-control 0.10 imports matplotlib itself; piezolib.robust must add nothing to it
-    by_control = _loaded_after("import control")
+    by_control = loaded_after["control"]
     assert {m for m in loaded if m.startswith("matplotlib")} <= by_control
 
 
 @pytest.mark.parametrize("module", ["piezolib.hysteresis", "piezolib.uncertainty",
                                     "piezolib.identification", "piezolib.signals"])
-def test_toolkit_packages_import_without_the_paper(module):
-    loaded = _loaded_after(f"import {module}")
+def test_toolkit_packages_import_without_the_paper(module, loaded_after):
+    loaded = loaded_after[module]
     assert module in loaded
     assert "piezolib.problem.paper" not in loaded
     assert "piezolib.workbook.plotting" not in loaded
@@ -207,7 +226,7 @@ def _import_graph(sources, package=PACKAGE):
     names = {_module_name(p, package): p for p in sources}
     graph = {}
     for name, path in names.items():
-        tree = ast.parse(path.read_text(), filename=str(path))
+        tree = _parsed(path)
         package = name if path.name == "__init__.py" else name.rpartition(".")[0]
         targets = set()
         for node in ast.walk(tree):
