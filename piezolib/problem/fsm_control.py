@@ -132,10 +132,13 @@ def _response(g, zl):
     return np.ravel(g(zl))
 
 
-def _levels_spread(g_level, g, zl):
-    """The levels' relative error around ``g`` on every line (max over levels)."""
-    return np.max([np.abs(_response(gl, zl) / _response(g, zl) - 1) for gl in g_level.values()],
-                  axis=0)
+def _levels_spread(g_level, g, zl, level_responses=None):
+    """The levels' relative error around ``g`` on every line (max over levels); ``g`` and the
+    levels' models may be given as their responses on ``zl`` (arrays) to evaluate them once."""
+    resp = g if isinstance(g, np.ndarray) else _response(g, zl)
+    if level_responses is None:
+        level_responses = [_response(gl, zl) for gl in g_level.values()]
+    return np.max([np.abs(r / resp - 1) for r in level_responses], axis=0)
 
 
 @dataclass(frozen=True)
@@ -158,6 +161,9 @@ class AxisNominal:
     frequency_Hz : ndarray
         The excited lines.
     nominal_order : int
+    level_responses : list of ndarray, optional
+        The responses of ``g_level`` on the excited lines (computed once; default computed
+        when needed).
     """
 
     pair: tuple
@@ -168,6 +174,7 @@ class AxisNominal:
     hankel_relative: np.ndarray
     frequency_Hz: np.ndarray
     nominal_order: int
+    level_responses: list = field(default=None, repr=False)
 
     @property
     def zl(self):
@@ -176,7 +183,7 @@ class AxisNominal:
 
     def spread(self, g):
         """The levels' relative error around ``g`` on every line (max over levels)."""
-        return _levels_spread(self.g_level, g, self.zl)
+        return _levels_spread(self.g_level, g, self.zl, self.level_responses)
 
     def description(self):
         """The pair, the full and nominal orders and the leading Hankel singular values."""
@@ -241,32 +248,34 @@ def axis_nominal(linear, frequency_Hz, nominal_order, pair=(2, 2),
         r = ct.c2d(ct.balred(g_w_full, order, method="matchdc"), T_s, "tustin")
         return ct.ss(r.A, r.B, r.C, np.zeros((1, 1)), T_s)
 
-    def frf_error(g, f_max):
+    def frf_error(resp, f_max):
         m = f <= f_max
-        r = _response(g, zl)[m] - bla_pair[m]
+        r = resp[m] - bla_pair[m]
         return (100 * np.sqrt(np.mean(np.abs(r) ** 2) / np.mean(np.abs(bla_pair[m]) ** 2)),
                 100 * np.max(np.abs(r) / np.abs(bla_pair[m])))
 
     resonances = (f >= RESONANCES_HZ[0]) & (f <= RESONANCES_HZ[1])
+    level_responses = [_response(g, zl) for g in g_level.values()]     # evaluated once
     rows, reduced = {}, {}
     table_orders = sorted({*orders, nominal_order}) + [g_full.nstates]
     for order in table_orders:
         g = g_full if order == g_full.nstates else truncated(order)
         reduced[order] = g
-        below_100 = frf_error(g, 100)
+        resp = _response(g, zl)
+        below_100 = frf_error(resp, 100)
         rows[order] = {
             "rms error < 100 Hz [%]": below_100[0],
             "max error < 100 Hz [%]": below_100[1],
-            "rms error < 300 Hz [%]": frf_error(g, 300)[0],
-            "rms error < 1100 Hz [%]": frf_error(g, 1100)[0],
+            "rms error < 300 Hz [%]": frf_error(resp, 300)[0],
+            "rms error < 1100 Hz [%]": frf_error(resp, 1100)[0],
             "levels' spread, peak 500-1100 Hz":
-                float(_levels_spread(g_level, g, zl)[resonances].max())}
+                float(_levels_spread(g_level, resp, zl, level_responses)[resonances].max())}
     hankel = ct.hankel_singular_values(g_w_full)
     return AxisNominal(pair=tuple(pair), g_full=g_full, g_level=g_level,
                        g_nominal=reduced[nominal_order],
                        reduction=pd.DataFrame(rows).T.rename_axis("order"),
                        hankel_relative=hankel / hankel[0], frequency_Hz=f,
-                       nominal_order=nominal_order)
+                       nominal_order=nominal_order, level_responses=level_responses)
 
 
 @dataclass(frozen=True)
