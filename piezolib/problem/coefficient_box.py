@@ -308,8 +308,8 @@ def stability_margins(G, H_m, controllers, grid=MARGIN_GRID, certificate_grid=CE
     Per controller: the exact margin (zero exclusion,
     :func:`piezolib.uncertainty.parametric_stability_margin`); mixed mu of the
     loop matrix with real blocks and with complex ones
-    (:func:`piezolib.uncertainty.parametric.mu_stability_margin`, the peak refined
-    off the grid); the small-gain certificate of the exact envelope
+    (:func:`piezolib.uncertainty.parametric.mu_stability_margin`, the grid bounded for
+    its peak only, the peak refined off the grid); the small-gain certificate of the exact envelope
     (:func:`~piezolib.uncertainty.small_gain_spread`) and of the weight H_m
     (:func:`~piezolib.uncertainty.weight_certified_spread`).
 
@@ -339,8 +339,8 @@ def stability_margins(G, H_m, controllers, grid=MARGIN_GRID, certificate_grid=CE
         norm_HmT, hm = unc.weight_certified_spread(H_m, G, K, omega_cert)
         results[name] = ControllerMargins(
             exact=margin, omega=omega,
-            real=parametric.mu_stability_margin(G, K, omega, real=True),
-            complex=parametric.mu_stability_margin(G, K, omega, real=False),
+            real=parametric.mu_stability_margin(G, K, omega, real=True, peak=True),
+            complex=parametric.mu_stability_margin(G, K, omega, real=False, peak=True),
             small_gain=unc.small_gain_spread(G, K, omega_cert), norm_HmT=norm_HmT, hm=hm)
     return BoxMargins(results)
 

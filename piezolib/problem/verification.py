@@ -51,7 +51,7 @@ from piezolib.robust.margins import sampled_loop_radius
 from piezolib.robust.mu import mussv
 from piezolib.robust.reduction import reduce_controller
 
-__all__ = ["Verification", "DesignVerification", "Table3Study", "FINE_GRID", "SAMPLED_DELAYS",
+__all__ = ["Verification", "DesignVerification", "RecordedBound", "Table3Study", "FINE_GRID", "SAMPLED_DELAYS",
            "RE_DERIVATION_RTOL", "regularisation_check", "sampled_radii",
            "delay_aware_problem", "dk_iteration_checks", "compare_rederived",
            "reduction_by_order", "verify_delay_aware", "delay_sweep", "tustin_check",
@@ -108,6 +108,11 @@ def _mu_on(P, K, omega=FINE_GRID, blk=DESIGN_BLOCK_STRUCTURE):
     piezolib.robust.mu.MuResult
     """
     return mussv(lft_response(P, K, omega), blk, omega)
+
+
+def _mu_peak(P, K, omega=FINE_GRID, blk=DESIGN_BLOCK_STRUCTURE):
+    """The peak of :func:`_mu_on`'s upper bound, without the lower bound it does not need."""
+    return mussv(lft_response(P, K, omega), blk, omega, lower=False, peak=True).upper.max()
 
 
 def regularisation_check(G, H_m, H_e, H_y, omega=FINE_GRID):
@@ -363,9 +368,9 @@ def reduction_by_order(K, G, P, orders, omega=FINE_GRID):
         weighted = reduce_controller(K, order, weight, method="residualize")
         hsv = weighted.hsv
         rows.append({"order": order,
-                     "mu_RP, plain truncation": _mu_on(P, plain.K, omega).upper.max()
+                     "mu_RP, plain truncation": _mu_peak(P, plain.K, omega)
                      if is_stable(G, plain.K) else np.inf,
-                     "mu_RP, G S-weighted residualisation": _mu_on(P, weighted.K, omega).upper.max(),
+                     "mu_RP, G S-weighted residualisation": _mu_peak(P, weighted.K, omega),
                      "||(K - K_r) G S||": weighted.weighted_error})
     if hsv is None:
         raise ValueError("orders must name at least one order")
@@ -386,7 +391,8 @@ class DesignVerification:
         {name: MuResult} on the grid (Pade delay).
     lower, per_block
         The lower bound on the achievable mu_RP and its per-block values
-        (:func:`piezolib.robust.achievable.structured_lower_bound`).
+        (:func:`piezolib.robust.achievable.structured_lower_bound`), or a
+        :class:`RecordedBound` and () when it was given.
     checks, reference_checks : dict
         As :class:`Verification`.
     text : str
@@ -432,8 +438,35 @@ def _order(K):
     return ct.ss(K).nstates
 
 
+@dataclass(frozen=True)
+class RecordedBound:
+    """A lower bound on the achievable mu_RP found before by
+    :func:`piezolib.robust.achievable.structured_lower_bound` on the same plant
+    (e.g. the design run's delay sweep), used instead of searching again.
+
+    Attributes
+    ----------
+    value : float
+        The bound (dimensionless).
+    source : str
+        Where it was found.
+
+    Examples
+    --------
+    >>> print(RecordedBound(0.8551, "the design run's delay sweep"))
+    lower bound 0.8551 (the design run's delay sweep)
+    """
+
+    value: float
+    source: str
+
+    def __str__(self):
+        return f"lower bound {self.value:.4f} ({self.source})"
+
+
 def verify_delay_aware(K_full, K_reduced, K_fixed, G, H_m, H_e, H_y, *, plant, fs,
-                       delay_samples, fixed_mu=None, omega=FINE_GRID, rolloff=DESIGN_ROLLOFF):
+                       delay_samples, fixed_mu=None, omega=FINE_GRID, rolloff=DESIGN_ROLLOFF,
+                       lower=None):
     """The delay-aware designs, recomputed on the fine grid and in the sampled loop.
 
     Per design: mu_RP bounds on ``plant`` (Pade delay) and with the exact delay
@@ -461,6 +494,10 @@ def verify_delay_aware(K_full, K_reduced, K_fixed, G, H_m, H_e, H_y, *, plant, f
         Frequencies [rad/s].
     rolloff : piezolib.problem.genplant.RolloffWeight
         Roll-off of the exact-delay response.
+    lower : float, optional
+        The lower bound of :func:`~piezolib.robust.achievable.structured_lower_bound` on
+        ``plant`` found before (the design run's delay sweep at ``delay_samples``: its
+        H-infinity search, re-derived by the slow tests); None or NaN: searched here.
 
     Returns
     -------
@@ -474,12 +511,18 @@ def verify_delay_aware(K_full, K_reduced, K_fixed, G, H_m, H_e, H_y, *, plant, f
     effective_delay(check_positive("fs", fs), delay_samples)
     if fixed_mu is not None:
         fixed_mu = check_positive("fixed_mu", fixed_mu)
+    if lower is not None and not (isinstance(lower, (float, np.floating)) and np.isnan(lower)):
+        lower = check_positive("lower", lower)
     omega = check_frequency_grid("omega", omega, min_length=2)
     designs = {f"DK full order ({_order(K_full)})": K_full,
                f"DK reduced ({_order(K_reduced)})": K_reduced,
                f"fixed-order mu ({_order(K_fixed)})": K_fixed}
     mu = {name: _mu_on(plant, K, omega) for name, K in designs.items()}
-    lower, per_block = structured_lower_bound(plant, DESIGN_BLOCK_STRUCTURE, 1, 1)
+    if lower is None or np.isnan(lower):
+        lower, per_block = structured_lower_bound(plant, DESIGN_BLOCK_STRUCTURE, 1, 1)
+    else:
+        lower, per_block = RecordedBound(lower, "recorded by the design run's delay sweep, "
+                                                "the same search on this plant"), ()
     rows = {}
     for name, K in designs.items():
         M_exact = delayed_closed_loop_response(K, G, H_m, H_e, H_y, omega, fs=fs,
@@ -515,7 +558,7 @@ def verify_delay_aware(K_full, K_reduced, K_fixed, G, H_m, H_e, H_y, *, plant, f
             [f"radius, {d} delay" for d in SAMPLED_DELAYS], fixed_name].max() < 1,
         "roll-off met (|K| < 10 above 1e5 rad/s)":
             table.loc["max |K| above 1e5 rad/s [V/V]", fixed_name] < 10}
-    text = f"{achievable_range(lower, fixed)}\n{lower}"
+    text = f"{achievable_range(lower.value, fixed)}\n{lower}"
     return DesignVerification(table, designs, mu, lower, per_block,
                               {k: bool(v) for k, v in checks.items()},
                               {k: bool(v) for k, v in reference.items()}, text)

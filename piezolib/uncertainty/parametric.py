@@ -196,7 +196,7 @@ def parametric_loop_response(G, K, spread, omega):
     return np.repeat(m[:, None, :], n, axis=1)
 
 
-def mu_stability_margin(G, K, omega, *, real=True, lower=False, xatol=1e-9):
+def mu_stability_margin(G, K, omega, *, real=True, lower=False, xatol=1e-9, peak=False):
     """Robust-stability margin of the loop (G, K) against the coefficient box, by mu.
 
     mu is computed at unit spread on :func:`parametric_loop_response` (M is
@@ -220,6 +220,10 @@ def mu_stability_margin(G, K, omega, *, real=True, lower=False, xatol=1e-9):
         ``mu.lower`` is 0 on the grid.
     xatol : float, optional
         Tolerance of the peak search in log10(omega).
+    peak : bool, optional
+        Bound the grid for its peak only (``mussv(..., peak=True)``): the margin is the
+        same, ``mu`` holds valid bounds that are tight only where a frequency could set
+        the peak.  Not with ``lower``.
 
     Returns
     -------
@@ -236,8 +240,10 @@ def mu_stability_margin(G, K, omega, *, real=True, lower=False, xatol=1e-9):
     omega = check_frequencies(omega)
     if omega.size < 3 or np.any(np.diff(omega) <= 0):
         raise ValueError("omega must hold at least 3 increasing frequencies")
-    if not isinstance(real, bool) or not isinstance(lower, bool):
-        raise TypeError("real and lower must be True or False")
+    if not isinstance(real, bool) or not isinstance(lower, bool) or not isinstance(peak, bool):
+        raise TypeError("real, lower and peak must be True or False")
+    if peak and lower:
+        raise ValueError("peak=True bounds the peak only: it does not combine with lower=True")
     polys = loop_polynomials(G, K)
     if not np.all(np.roots(polys.c0[::-1]).real < 0):
         raise ValueError("the nominal loop (G, K) is unstable: no robust-stability margin")
@@ -247,7 +253,7 @@ def mu_stability_margin(G, K, omega, *, real=True, lower=False, xatol=1e-9):
     def upper_at(w):
         return mussv(parametric_loop_response(G, K, 1.0, [w]), blk, lower=False).upper[0]
 
-    mu = mussv(parametric_loop_response(G, K, 1.0, omega), blk, omega, lower=lower)
+    mu = mussv(parametric_loop_response(G, K, 1.0, omega), blk, omega, lower=lower, peak=peak)
     k = int(np.argmax(mu.upper))
     lo, hi = np.log10(omega[max(k - 1, 0)]), np.log10(omega[min(k + 1, omega.size - 1)])
     found = opt.minimize_scalar(lambda x: -upper_at(10 ** x), bounds=(lo, hi),

@@ -211,3 +211,18 @@ def test_verify_delay_aware_of_a_small_problem(small):
     assert result.fixed_mu == result.full_mu == result.reduced_mu
     assert not result.reference_checks["fixed-order synthesis beats reduction (by 0.02)"]
     assert result.lower.value <= result.fixed_mu and 0 < result.fixed_radius(1) < 1
+
+
+def test_verify_delay_aware_takes_a_recorded_lower_bound(small):
+    G, H_m, H_e, H_y, K = small
+    P = genplant.delay_aware_plant(G, H_m, H_e, H_y, fs=FS)
+    result = verification.verify_delay_aware(K, K, K, G, H_m, H_e, H_y, plant=P, fs=FS,
+                                             delay_samples=1, omega=np.logspace(0, 6, 40),
+                                             lower=0.5)
+    assert isinstance(result.lower, verification.RecordedBound) and result.per_block == ()
+    assert result.lower.value == 0.5 and "0.5000" in result.text
+    # a recorded bound above every design fails the check that no design is below it
+    high = verification.verify_delay_aware(K, K, K, G, H_m, H_e, H_y, plant=P, fs=FS,
+                                           delay_samples=1, omega=np.logspace(0, 6, 40),
+                                           lower=1e3)
+    assert not high.checks["no design below the lower bound on achievable mu"]

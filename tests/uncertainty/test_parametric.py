@@ -101,3 +101,16 @@ def test_bad_input_is_named():
         mu_stability_margin(G3, K3, [10.0, 1.0, 100.0])
     with pytest.raises(TypeError, match="real"):
         mu_stability_margin(G3, K3, W, real=1)
+
+
+def test_the_peak_only_margin_is_the_full_grid_margin():
+    for real in (True, False):
+        full = mu_stability_margin(G3, K3, W, real=real)
+        fast = mu_stability_margin(G3, K3, W, real=real, peak=True)
+        assert (fast.spread, fast.spread_upper, fast.omega) == (full.spread, full.spread_upper,
+                                                                full.omega)
+        assert np.all(fast.mu.upper >= full.mu.upper * (1 - 1e-9))     # still bounds
+    with pytest.raises(ValueError, match="peak"):
+        mu_stability_margin(G3, K3, W, peak=True, lower=True)
+    with pytest.raises(TypeError, match="peak"):
+        mu_stability_margin(G3, K3, W, peak="yes")
