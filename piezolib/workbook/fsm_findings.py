@@ -247,9 +247,9 @@ def summary_lines(blas, scores, change, nonlinear, weight, nominal, design, veri
     off = coupling.off_diagonal
     change_from_200 = levels_table.loc["BLA change from 200 mV (rms) [%]"]
     return [
-        f"linear models per level (orders "
+        f"working linear models per level (orders "
         f"{', '.join(str(linear.selections[lv].order) for lv in levels)}, chosen by validation "
-        f"on the other group): test NRMSE {slashed(same['ours, order chosen'])} % against the "
+        f"on the other group over {_range(linear.selections[levels[0]].orders)}): test NRMSE {slashed(same['ours, order chosen'])} % against the "
         f"published 28th-order BLA's {slashed(same['published BLA (28), same level'])} % "
         f"(100 / 200 / 300 mV)",
         f"at the baseline's order {linear.baseline_order}: "

@@ -95,7 +95,8 @@ def test_the_summary_names_the_levels_where_the_scheduled_model_beats_the_lfr():
                                         moves=pd.DataFrame([[1.2], [0.8], [1.0]]), pair=(2, 2))
     lines = fsm_findings.summary_lines(blas, scores, change, nonlinear, weight, nominal, design,
                                        verified, coupling)
-    assert lines[0].startswith("linear models per level (orders 40, 40, 40")
+    assert lines[0].startswith("working linear models per level (orders 40, 40, 40, chosen by "
+                               "validation on the other group over 24-48)")
     nonlinear_line = next(x for x in lines if x.startswith("one model for all levels, not"))
     assert "below the LFR at 100 mV; above it at 200 mV, 300 mV" in nonlinear_line
     assert "why the Hammerstein model fails: 60 %" in lines[6]
