@@ -1047,6 +1047,10 @@ CASES = {
         {"claims": RESULT, "records": RESULT, "identification": RESULT, "weight": RESULT,
          "choice": RESULT, "loop": RESULT, "verification": RESULT, "experiments": RESULT,
          "truth": RESULT}),
+    "your_stage_claims.written_tables": (
+        Fill(experiments=bare(_OWN_C.Experiments)),
+        {"experiments": RESULT, "path": {"missing": InTmp("missing.csv", None),
+                                         "not a claim table": InTmp("t.csv", "a,b\n1,2\n")}}),
     "your_stage_claims.stage_checks": (dict(results=None), {"results": {"text": "abc",
                                                                  "number": 3}}),
     "your_stage_claims.known_truth_checks": (

@@ -15,6 +15,7 @@ no row and no check.
 """
 
 import control as ct
+import pandas as pd
 
 from piezolib._checks import check_nonnegative, check_type
 from piezolib.workbook.report import ClaimTable
@@ -24,7 +25,8 @@ from piezolib.workbook.your_stage import (NO_PLANT_NOTE, TRUTH_TOP_RAD_S, Identi
 from piezolib.workbook.your_stage_control import Experiments, LoopDesign, Verification
 from piezolib.workbook.your_stage_hysteresis import HysteresisChoice
 
-__all__ = ["record_claims", "stage_checks", "known_truth_checks", "summary_lines"]
+__all__ = ["record_claims", "written_tables", "stage_checks", "known_truth_checks",
+           "summary_lines"]
 
 #: Section of the claims this notebook writes.
 SECTION = "own stage"
@@ -100,29 +102,72 @@ def record_claims(claims, records, identification, weight, choice, loop, verific
             claims.add(c, f"||H_y T||, {name}", None,
                        float(verification.table.loc["||H_y T||", name]))
     if ran(experiments):
-        t4, t5 = experiments.table4, experiments.table5
-        for A in t4.table.columns:
-            for case in ("I", "II", "III"):
-                _add_cell(claims, c, f"hysteresis %, {A:g} V, case {case}", t4, f"case_{case}", A)
-            if experiments.chosen4 is not None:
-                _add_cell(claims, c, f"hysteresis %, {A:g} V, case II with "
-                          f"{experiments.chosen_name}", experiments.chosen4, "case_II", A)
-        for f in t5.table.columns:
-            for case in ("I", "II", "III"):
-                _add_cell(claims, c, f"tracking error %, {f:g} Hz, case {case}", t5,
-                          f"case_{case}", f)
+        for quantity, result, row, column in _experiment_cells(experiments):
+            value = float(result.table.loc[row, column])
+            if result.seeds is None:
+                claims.add(c, quantity, None, value, unit="%")
+            else:
+                claims.add(c, quantity, None, value, unit="%",
+                           interval=result.interval(row, column),
+                           note=f"mean over {len(result.seeds)} noise seeds, 95 % interval")
     return claims
 
 
-def _add_cell(claims, section, quantity, result, row, column):
-    """One cell of a Table 4/5-style result as a claim: with seeds, the mean and its interval."""
-    value = float(result.table.loc[row, column])
-    if result.seeds is None:
-        claims.add(section, quantity, None, value, unit="%")
-    else:
-        claims.add(section, quantity, None, value, unit="%",
-                   interval=result.interval(row, column),
-                   note=f"mean over {len(result.seeds)} noise seeds, 95 % interval")
+def _experiment_cells(experiments):
+    """(quantity, result, row, column) of each Table 4/5-style claim, in the claims' order."""
+    t4, t5 = experiments.table4, experiments.table5
+    for A in t4.table.columns:
+        for case in ("I", "II", "III"):
+            yield f"hysteresis %, {A:g} V, case {case}", t4, f"case_{case}", A
+        if experiments.chosen4 is not None:
+            yield (f"hysteresis %, {A:g} V, case II with {experiments.chosen_name}",
+                   experiments.chosen4, "case_II", A)
+    for f in t5.table.columns:
+        for case in ("I", "II", "III"):
+            yield f"tracking error %, {f:g} Hz, case {case}", t5, f"case_{case}", f
+
+
+def written_tables(experiments, path):
+    """Tables 4-5 of ``experiments`` with the values its claim table at ``path`` holds.
+
+    A rerun whose means move within their precision leaves the claim table
+    as it was (:func:`piezolib.workbook.report.save_results`); a figure drawn
+    from these tables is then unchanged too.
+
+    Parameters
+    ----------
+    experiments : Experiments
+    path : path-like
+        The claim table written after :func:`record_claims` (``nb.claims.save()``).
+
+    Returns
+    -------
+    table4, table5 : pandas.DataFrame
+        As ``experiments.table4_view`` (Table 4 with the chosen model's Case II
+        as a further row) and ``experiments.table5.table``.
+
+    Raises
+    ------
+    ValueError
+        When the file lacks one of the experiments' claims.
+    """
+    check_type("experiments", experiments, Experiments, "the Experiments of run_experiments")
+    frame = pd.read_csv(path)
+    if not {"quantity", "ours"} <= set(frame.columns):
+        raise ValueError(f"path: {path} is not a claim table (no 'quantity' and 'ours' columns)")
+    ours = dict(zip(frame["quantity"], frame["ours"]))
+    table4, table5 = experiments.table4_view, experiments.table5.table.copy()
+    extra = next(iter(experiments.extra4), None)
+    for quantity, result, row, column in _experiment_cells(experiments):
+        if quantity not in ours:
+            raise ValueError(f"path: {path} has no claim {quantity!r}: write the claims of "
+                             "these experiments first (record_claims, then save)")
+        if result is experiments.table5:
+            table5.loc[row, column] = float(ours[quantity])
+        else:
+            table4.loc[extra if result is experiments.chosen4 else row, column] = \
+                float(ours[quantity])
+    return table4, table5
 
 
 def stage_checks(*results):

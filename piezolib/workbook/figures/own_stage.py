@@ -18,6 +18,7 @@ from piezolib._checks import check_finite_array, check_signals, check_positive
 from piezolib.records import Record
 from piezolib import robust
 from piezolib.workbook import plotting
+from piezolib.workbook import your_stage_claims
 from piezolib.workbook.your_stage import ran
 from piezolib.workbook.style import PALETTE, db, new_figure
 from piezolib.workbook.figures.identification import bode_overlay
@@ -414,9 +415,18 @@ def own_stage_mu(verification, omega):
         v.loop.H_e, v.loop.H_y)
 
 
-def own_stage_experiments(experiments, feedforward="Dahl feedforward"):
-    """:func:`extra_own_stage_experiments` of the Tables 4-5-style runs."""
+def own_stage_experiments(experiments, feedforward="Dahl feedforward", written=None):
+    """:func:`extra_own_stage_experiments` of the Tables 4-5-style runs.
+
+    ``written``: the claim table they were written to (``nb.claims.save()``); the
+    figure then draws the values it holds (:func:`your_stage_claims.written_tables`).
+    """
     if not ran(experiments):
         return _skipped("experiments", experiments)
-    return extra_own_stage_experiments(experiments.table4.table, experiments.table5.table,
-                                       experiments.extra4, feedforward=feedforward)
+    if written is None:
+        return extra_own_stage_experiments(experiments.table4.table, experiments.table5.table,
+                                           experiments.extra4, feedforward=feedforward)
+    table4, table5 = your_stage_claims.written_tables(experiments, written)
+    extra = {label: table4.loc[label] for label in experiments.extra4}
+    return extra_own_stage_experiments(table4.drop(index=list(extra)), table5, extra,
+                                       feedforward=feedforward)
