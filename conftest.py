@@ -3,14 +3,16 @@ doctests of piezolib/ (set here, at the root, so that each path run alone gets t
 
 The order of the two xdist workers' work: each test file (so each notebook) runs whole on one
 worker (``--dist loadfile``), the files that share an expensive session fixture run together
-(:data:`SHARED_UNITS`, so it is computed once), and the longest units start first, by the
-seconds recorded in ``tests/file_durations.json`` (longest-first keeps both workers busy to the
-end; a file not listed there counts 0.05 s per test). Refresh that record after a change in
-where the time goes::
+(:data:`SHARED_UNITS`, so it is computed once), and the longest units start first (longest-first
+keeps both workers busy to the end), by the seconds recorded in ``tests/test_durations.json``:
+each test of at least :data:`LONG_TEST_S` by its id, the others as an average per file (a file
+not recorded counts :data:`DEFAULT_TEST_S` a test).  The record orders the work only: every test
+runs whatever it says.  Refresh it after a change in where the time goes, from both steps::
 
-    pytest --file-durations tests/file_durations.json
+    pytest --record-durations tests/test_durations.json
+    pytest -m slow --record-durations tests/test_durations.json
 
-The record orders the work only: every test runs whatever it says.
+(each run replaces the entries of the tests it ran and keeps the others).
 """
 
 import json
@@ -27,10 +29,12 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 # requests, so the interactive controls draw their static figure by themselves)
 
 ROOT = pathlib.Path(__file__).parent
-#: seconds per test file (its setups, calls and teardowns) of a recorded run
-FILE_DURATIONS = ROOT / "tests" / "file_durations.json"
-#: seconds a test of a file missing from FILE_DURATIONS counts
-DEFAULT_TEST_SECONDS = 0.05
+#: the recorded seconds of tests: {"tests": {test id: s}, "files": {file: [s, n tests]}}
+TEST_DURATIONS = ROOT / "tests" / "test_durations.json"
+#: a test that takes at least this (setup, call and teardown) is recorded by its id
+LONG_TEST_S = 0.5
+#: seconds a test of a file missing from TEST_DURATIONS counts
+DEFAULT_TEST_S = 0.05
 #: test files -> the work unit they share (their session fixture is then made once)
 SHARED_UNITS = {
     # paper_design (tests/robust/conftest.py): the paper problem's DK design
@@ -49,17 +53,30 @@ def _unit_of(nodeid):
     return SHARED_UNITS.get(path, path)
 
 
-def _recorded_durations(path=FILE_DURATIONS):
+def _recorded_durations(path=TEST_DURATIONS):
     try:
-        return json.loads(path.read_text())
+        record = json.loads(path.read_text())
     except (OSError, ValueError):
-        return {}
+        record = {}
+    return record.get("tests", {}), record.get("files", {})
+
+
+def _expected_seconds(nodeids, tests, files):
+    """The recorded seconds of these tests (a file's average for a short test)."""
+    total = 0.0
+    for nodeid in nodeids:
+        if nodeid in tests:
+            total += tests[nodeid]
+        else:
+            seconds, count = files.get(_file_of(nodeid), (0.0, 0))
+            total += seconds / count if count else DEFAULT_TEST_S
+    return total
 
 
 def pytest_addoption(parser):
-    parser.addoption("--file-durations", metavar="PATH", default=None,
-                     help="write the seconds each test file took (setup, call, teardown) "
-                          "to PATH as JSON, the order of the xdist work (conftest.py)")
+    parser.addoption("--record-durations", metavar="PATH", default=None,
+                     help="merge the seconds each test took (setup, call, teardown) into the "
+                          "JSON record at PATH, the order of the xdist work (conftest.py)")
 
 
 @pytest.hookimpl(optionalhook=True)
@@ -70,7 +87,7 @@ def pytest_xdist_make_scheduler(config, log):
         return None
     from xdist.scheduler import LoadFileScheduling
 
-    seconds = _recorded_durations()
+    tests, files = _recorded_durations()
 
     class LongestFirstFileScheduling(LoadFileScheduling):
         _ordered = False
@@ -80,12 +97,8 @@ def pytest_xdist_make_scheduler(config, log):
 
         def _assign_work_unit(self, node):
             if not self._ordered:       # the first assignment: the work queue is complete
-                def cost(unit):
-                    files = {_file_of(n) for n in unit[1]}
-                    known = sum(seconds.get(f, 0.0) for f in files)
-                    unknown = sum(1 for n in unit[1] if _file_of(n) not in seconds)
-                    return known + DEFAULT_TEST_SECONDS * unknown
-                units = sorted(self.workqueue.items(), key=cost, reverse=True)
+                units = sorted(self.workqueue.items(), reverse=True,
+                               key=lambda unit: _expected_seconds(unit[1], tests, files))
                 self.workqueue.clear()
                 self.workqueue.update(units)
                 self._ordered = True
@@ -94,23 +107,37 @@ def pytest_xdist_make_scheduler(config, log):
     return LongestFirstFileScheduling(config, log)
 
 
-class _FileDurations:
-    """Sums each test file's report durations; writes them at the end of the session."""
+class _RecordDurations:
+    """Sums each test's report durations; merges them into the record at the session's end."""
 
     def __init__(self, path):
         self.path = pathlib.Path(path)
         self.seconds = {}
 
     def pytest_runtest_logreport(self, report):
-        path = _file_of(report.nodeid)
-        self.seconds[path] = self.seconds.get(path, 0.0) + report.duration
+        self.seconds[report.nodeid] = self.seconds.get(report.nodeid, 0.0) + report.duration
 
     def pytest_sessionfinish(self, session):
-        rounded = {f: round(s, 1) for f, s in sorted(self.seconds.items())}
-        self.path.write_text(json.dumps(rounded, indent=1) + "\n")
+        tests, files = _recorded_durations(self.path)
+        short = {}
+        for nodeid, seconds in self.seconds.items():
+            if seconds >= LONG_TEST_S:
+                tests[nodeid] = round(seconds, 2)
+            else:
+                tests.pop(nodeid, None)
+                total = short.setdefault(_file_of(nodeid), [0.0, 0])
+                total[0] += seconds
+                total[1] += 1
+        # a file's short tests: the run that ran more of them (the default step, not `-m slow`)
+        for path, (seconds, count) in short.items():
+            if count >= files.get(path, (0.0, 0))[1]:
+                files[path] = [round(seconds, 3), count]
+        self.path.write_text(json.dumps({"tests": dict(sorted(tests.items())),
+                                         "files": dict(sorted(files.items()))}, indent=0)
+                             + "\n")
 
 
 def pytest_configure(config):
-    path = config.getoption("--file-durations", default=None)
+    path = config.getoption("--record-durations", default=None)
     if path and not hasattr(config, "workerinput"):      # the controller (or a plain run)
-        config.pluginmanager.register(_FileDurations(path), "file-durations")
+        config.pluginmanager.register(_RecordDurations(path), "record-durations")
