@@ -37,6 +37,7 @@ STARTS = ("virgin", "rest")
 DAHL_STARTS = STARTS + ("maximum",)
 
 
+_EPS = np.finfo(float).eps
 #: Largest scale (and inverse of the smallest) of alpha1, alpha2 and the steady
 #: state gamma_a / alpha2 whose products stay inside double precision.
 _SCALE_LIMIT = 1e150
@@ -288,11 +289,17 @@ class StrokeDynamics:
         m, q = self.m, self.q
         if self.disc < 0:
             em = np.exp(m * sigma)
-            return em * np.cos(q * sigma), em * sigma * np.sinc(q * sigma / np.pi)
+            # np.sinc(q sigma / pi), its operations inlined (this runs in every fit's
+            # innermost loop): sin(y) / y with y = pi (q sigma / pi), eps where y = 0
+            t = np.pi * (q * sigma / np.pi)
+            t = np.where(t, t, _EPS)
+            return em * np.cos(q * sigma), em * sigma * (np.sin(t) / t)
         y = q * sigma
         ep, en = np.exp(self.slow * sigma), np.exp(self.fast * sigma)
         ec = 0.5 * (ep + en)
         small = y < 1e-3
+        if q > 0 and not small.any():           # the series is not used anywhere
+            return ec, (ep - en) / (2.0 * q)
         series = np.exp(m * sigma) * sigma * (1.0 + y * y / 6.0 + y ** 4 / 120.0)
         with np.errstate(divide="ignore", invalid="ignore"):
             direct = (ep - en) / (2.0 * q) if q > 0 else series
@@ -335,10 +342,34 @@ def strokes(u, direction0=1):
     s = np.where(idx >= 0, d[np.maximum(idx, 0)], direction0).astype(int)
     if s.size == 0:
         return []
-    change = np.flatnonzero(np.diff(s)) + 1
-    starts = np.r_[0, change]
-    stops = np.r_[change, s.size]
-    return [(int(a), int(b), int(s[a])) for a, b in zip(starts, stops)]
+    change = (np.flatnonzero(np.diff(s)) + 1).tolist()
+    return [(int(a), int(b), int(s[a])) for a, b in zip([0] + change, change + [s.size])]
+
+
+#: Stroke lists of recent records (:func:`_runs`): a fit simulates the same records with
+#: hundreds of parameter sets.
+_RUNS_CACHE = {}
+_RUNS_CACHE_SIZE = 64
+
+
+def _runs(u, direction0):
+    """:func:`strokes` of a record already checked, remembered by its bytes."""
+    key = (u.tobytes(), u.dtype.str, u.shape, int(direction0))
+    runs = _RUNS_CACHE.get(key)
+    if runs is None:
+        runs = tuple(strokes(u, direction0))
+        if len(_RUNS_CACHE) >= _RUNS_CACHE_SIZE:
+            _RUNS_CACHE.pop(next(iter(_RUNS_CACHE)))
+        _RUNS_CACHE[key] = runs
+    return runs
+
+
+def _start(model, dyn):
+    """:meth:`DahlModel.initial_state` from the model's dynamics ``dyn`` (not built again)."""
+    if model.start == "virgin":
+        return np.zeros(2), 1
+    s = 1 if model.start == "maximum" else -1
+    return dyn.z_ss[s].copy(), s
 
 
 def initial_state_of(model, z0=None, direction0=None):
@@ -424,18 +455,32 @@ def dahl_hysteresis(model, x, z0=None, direction0=None, return_state=False, dire
         directions = check_finite_array("directions", directions, ndim=1)
         check_same_length(x=x, directions=directions)
     z_init, s0 = initial_state_of(model, z0, direction0)
-    dyn = StrokeDynamics(model)
+    H, z = _driven(StrokeDynamics(model), x, strokes(directions, s0), z_init, s0, guided)
+    return (H, z) if return_state else H
+
+
+def _driven(dyn, x, runs, z_init, s0, guided):
+    """(H, z) of :func:`dahl_hysteresis` for checked input, the strokes ``runs`` given."""
     z = np.empty((x.size, 2))
     z[0] = z_init
     H = np.empty(x.size)
     H[0] = dyn.C[s0] @ z[0]
-    for start, stop, s in strokes(directions, s0):
+    for start, stop, s in runs:
         sigma = s * (x[start + 1:stop + 1] - x[start])
         if guided:          # noise may carry x back behind the stroke's start
             sigma = np.maximum(sigma, 0.0)
         z[start + 1:stop + 1] = dyn.propagate(s, sigma, z[start])
         H[start + 1:stop + 1] = z[start + 1:stop + 1] @ dyn.C[s]
-    return (H, z) if return_state else H
+    return H, z
+
+
+def _z1_driven(model, pairs):
+    """z1 of one model driven by each measured (noisy) x, the directions from its input v:
+    ``dahl_hysteresis(model, x, return_state=True, directions=v)[1][:, 0]`` per (v, x) of
+    ``pairs`` (checked records), the model's dynamics built once."""
+    dyn = StrokeDynamics(model)
+    z_init, s0 = _start(model, dyn)
+    return [_driven(dyn, x, _runs(v, s0), z_init, s0, True)[1][:, 0] for v, x in pairs]
 
 
 def feedforward(model, x_r, z0=None, direction0=None):
@@ -594,7 +639,7 @@ def _simulate_records(model, records, z0=None, s0=None):
     be 0 (checked by the public callers).
     """
     dyn = StrokeDynamics(model)
-    z_start, s_start = model.initial_state()
+    z_start, s_start = _start(model, dyn)
     z0 = z_start if z0 is None else z0
     s0 = s_start if s0 is None else s0
     g = model.g_a
@@ -607,7 +652,7 @@ def _simulate_records(model, records, z0=None, s0=None):
         x = np.empty(v.size)
         x[0] = g * v[0] - H[0] + model.x0
         out.append((x, H, z))
-        runs.append(strokes(v, s0))
+        runs.append(_runs(v, s0))
     for rank in range(max(len(r) for r in runs)):
         batch = [(i, runs[i][rank]) for i in range(len(records)) if rank < len(runs[i])]
         s = np.array([run[2] for i, run in batch])
@@ -721,7 +766,7 @@ def _solve_strokes(dyn, s, Z, x_start, targets, n_grid=48):
     cw, cpw, cnw, cnpw, C = _stroke_constants(dyn, s, Z - z_ss)
     counts = np.array([tg.size for tg in targets])
     seg = np.repeat(np.arange(K), counts)
-    offsets = np.r_[0, np.cumsum(counts)[:-1]]
+    offsets = np.concatenate(([0], np.cumsum(counts)[:-1]))
     base = x_start + np.einsum("ki,ki->k", C, z_ss)
     y = s[seg] * (np.concatenate(targets) - base[seg])
     # magnitudes of the terms of Phi: es(sigma) <= 2 / max(q, |m|) for every sigma, so the

@@ -26,7 +26,7 @@ from piezolib._checks import check_integer, check_positive, check_signals
 from piezolib.hysteresis.common import (FitScores, check_loops, covariance, estimates, loop_errors,
                                         warn_about)
 from piezolib.hysteresis.dahl import (DAHL_STARTS, FORMS, DahlModel, NotInvertibleError,
-                                      dahl_hysteresis, simulate_dahl, simulate_dahl_records,
+                                      _z1_driven, simulate_dahl, simulate_dahl_records,
                                       strokes)
 from piezolib.progress import postfix, progress
 
@@ -132,11 +132,6 @@ def _unit_model(form, alpha1, alpha2, start):
     return DahlModel(alpha1, alpha2, 0.0, 1.0, 1.0, 1.0, form=form, start=start)
 
 
-def _z1_on_input_strokes(model, v, x):
-    """z1 driven by a (noisy) measured x, with directions taken from the input v."""
-    return dahl_hysteresis(model, x, return_state=True, directions=v)[1][:, 0]
-
-
 #: Fit bounds of alpha1 * R and alpha2 * R^2 (R: output range).  The upper
 #: bounds reach the first-order limit: for alpha1 R >> 1 the fast mode of
 #: the stroke dynamics (path length 1/alpha1) is negligible and the model
@@ -186,8 +181,8 @@ def _equation_error(form, data, paths, log_a1, log_a2, g_bounds, offset, start):
     """
     unit = _unit_model(form, math.exp(log_a1), math.exp(log_a2), start)
     rows, rhs = [], []
-    for (v, x, used), path, w in zip(data, paths, _loop_weights(data)):
-        z1 = _z1_on_input_strokes(unit, v, path)
+    z1s = _z1_driven(unit, [(v, path) for (v, x, used), path in zip(data, paths)])
+    for (v, x, used), z1, w in zip(data, z1s, _loop_weights(data)):
         columns = [v[used], -z1[used]] + ([np.ones(used.size)] if offset else [])
         rows.append(w * np.column_stack(columns))
         rhs.append(w * x[used])

@@ -341,3 +341,26 @@ def test_parameters_beyond_double_precision_are_refused(overrides, name):
     with pytest.raises(ValueError, match=name):
         model(**overrides)
     model(gamma_a=1e-300)                   # a vanishing hysteresis is only weak: accepted
+
+
+def test_a_record_changed_in_place_is_simulated_anew():
+    # the strokes of a record are remembered by its content, never by the array object
+    m = model()
+    v = np.r_[np.linspace(0.0, 3.0, 31), np.linspace(2.9, 1.0, 20), np.linspace(1.1, 2.0, 10)]
+    first = hy.simulate_dahl_records(m, [v])[0].x
+    v[35:] = v[35]                              # a rest, then nothing moves: other strokes
+    again = hy.simulate_dahl_records(m, [v])[0].x
+    fresh = hy.simulate_dahl(m, v.copy()).x
+    assert np.array_equal(again, fresh) and not np.array_equal(again, first)
+
+
+def test_oscillatory_and_overdamped_strokes_match_the_closed_form():
+    # parts(): the sinc-like and the sinh-like term against expm(N sigma) = ec I + es P
+    from scipy.linalg import expm
+    for a1, a2 in ((3.0, 2.0), (1.0, 4.0), (2.0, 1.0)):   # over-, under-, critically damped
+        dyn = hy.StrokeDynamics(hy.DahlModel(a1, a2, 0.0, 1.0, 1.0, 1.0, form="bliman_sorine"))
+        sigma = np.array([0.0, 1e-6, 0.3, 2.0])
+        ec, es = dyn.parts(sigma)
+        for k, sg in enumerate(sigma):
+            E = expm(dyn.N[1] * sg)
+            assert np.allclose(ec[k] * np.eye(2) + es[k] * dyn.P[1], E, rtol=1e-12, atol=1e-14)
