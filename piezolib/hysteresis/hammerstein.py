@@ -35,12 +35,20 @@ from piezolib._checks import check_count, check_finite_array, check_integer, che
 from piezolib.hysteresis.common import (FitScores, FitWarning, check_loops, covariance,
                                         estimates, loop_errors, warn_about)
 from piezolib.hysteresis.pi import MAX_PLAYS, PI_STARTS, PIModel, pi_regressors
+from piezolib.hysteresis.preisach import (PreisachModel, _grid, check_levels, default_range,
+                                          preisach_model, preisach_parameters,
+                                          preisach_regressors, preisach_warnings)
 from piezolib.hysteresis.select import split_record
 from piezolib.identification.continuous import zoh_coefficients
 from piezolib.robust.preview import zpetc
 
 __all__ = ["HammersteinModel", "HammersteinFit", "fit_hammerstein", "unit_dc_dynamics",
-           "AUTO_ORDERS", "STUCK_RATIO"]
+           "AUTO_ORDERS", "STUCK_RATIO", "OPERATORS"]
+
+#: The hysteresis operators :func:`fit_hammerstein` fits: Prandtl-Ishlinskii plays
+#: (:class:`~piezolib.hysteresis.pi.PIModel`) and ramped-relay Preisach elements
+#: (:class:`~piezolib.hysteresis.preisach.PreisachModel`).
+OPERATORS = ("pi", "preisach")
 
 
 def _unit_gain(b, a):
@@ -102,11 +110,11 @@ def _filter_at_rest(b, a, u):
 
 @dataclass(frozen=True)
 class HammersteinModel:
-    """A PI hysteresis operator followed by discrete linear dynamics of unit DC gain.
+    """A PI (or Preisach) hysteresis operator followed by discrete linear dynamics of unit DC gain.
 
     Attributes
     ----------
-    hysteresis : PIModel
+    hysteresis : PIModel or PreisachModel
         The rate-independent part, x-unit output (its offset x0 included).
     b, a : tuple of float
         The dynamics G(q) = B(q^-1) / A(q^-1) at ``fs`` (``lfilter`` form,
@@ -133,8 +141,8 @@ class HammersteinModel:
     fs: float
 
     def __post_init__(self):
-        if not isinstance(self.hysteresis, PIModel):
-            raise TypeError("hysteresis must be a PIModel, got "
+        if not isinstance(self.hysteresis, (PIModel, PreisachModel)):
+            raise TypeError("hysteresis must be a PIModel or a PreisachModel, got "
                             f"{type(self.hysteresis).__name__}")
         b = check_finite_array("b", self.b, ndim=1, min_length=1, real=True)
         a = check_finite_array("a", self.a, ndim=1, min_length=1, real=True)
@@ -169,7 +177,8 @@ class HammersteinModel:
 
     @property
     def static_part(self):
-        """(W, x0) of the hysteresis part (:attr:`PIModel.static_part`): G has unit DC gain."""
+        """(W, x0) of the hysteresis part (:attr:`PIModel.static_part`,
+        :attr:`~piezolib.hysteresis.preisach.PreisachModel.static_part`): G has unit DC gain."""
         return self.hysteresis.static_part
 
     def feedforward(self, x_r):
@@ -182,9 +191,11 @@ class HammersteinModel:
         model's exact inverse gives the input.  With minimum-phase dynamics
         the model follows x_r exactly when x_r rests for its first
         ``preview`` samples (the model starts at rest); a quasi-static
-        inverse (the PI inverse alone) leaves the dynamics' phase and gain at
+        inverse (the hysteresis inverse alone) leaves the dynamics' phase and gain at
         the reference's frequencies, which for slow creep-like poles fitted
-        near z = 1 reaches about 1 % of stroke at 1 Hz.
+        near z = 1 reaches about 1 % of stroke at 1 Hz.  A Preisach operator
+        is inverted sample by sample
+        (:meth:`~piezolib.hysteresis.preisach.PreisachModel.feedforward`).
 
         Examples
         --------
@@ -226,6 +237,12 @@ class HammersteinFit(FitScores):
     order_scores : dict
         With ``order="auto"``: {(na, nb): RMS % after the middle turning
         point of the fit before it}, the validation that chose the order.
+    operator : {"pi", "preisach"}
+        The hysteresis operator of the model.
+    operator_scores : dict
+        With ``operator="auto"``: {operator: RMS % after each record's middle
+        turning point of its fit before it (the best order's)}, the
+        validation that chose the operator; empty otherwise.
 
     Examples
     --------
@@ -249,6 +266,8 @@ class HammersteinFit(FitScores):
     iterations: int = 0
     start_scores: dict = None
     order_scores: dict = None
+    operator: str = "pi"
+    operator_scores: dict = None
 
 
 def _weights_step(data, regs, b, a, offset, n):
@@ -460,19 +479,24 @@ def _held_out_percent(data, regs, theta, offset, b, a, first):
     return math.sqrt(float(np.mean(np.square(out))))
 
 
-def _choose_order(data, r, start, offset, delay, orders, iterations, tol):
+def _split_halves(data):
+    """Each record's middle turning point and its rows up to it (the part a validation fits)."""
+    cut = [split_record(v, x, 0.5)[1][2] for v, x, used in data]
+    return cut, [(v, x, used[used <= k]) for (v, x, used), k in zip(data, cut)]
+
+
+def _choose_order(data, regs, n, offset, delay, orders, iterations, tol):
     """The order whose fit before each record's middle turning point predicts best after it.
 
+    ``regs`` are the operator's regressors (``n`` columns) on the whole records.
     Returns the order and {order: held-out RMS %}.
     """
-    cut = [split_record(v, x, 0.5)[1][2] for v, x, used in data]
-    early = [(v, x, used[used <= k]) for (v, x, used), k in zip(data, cut)]
-    regs = pi_regressors(data, r, start)
+    cut, early = _split_halves(data)
     _, _, theta0 = _weights_step(_quasi_static_rows(early), regs, np.r_[np.zeros(delay), 1.0],
-                                 np.array([1.0]), offset, r.size)
+                                 np.array([1.0]), offset, n)
     scores, costs = {}, {}
     for na, nb in orders:
-        b, a, A, rhs, theta, costs[(na, nb)], k = _alternate(early, regs, theta0, offset, r.size,
+        b, a, A, rhs, theta, costs[(na, nb)], k = _alternate(early, regs, theta0, offset, n,
                                                              na, nb, delay, iterations, tol)
         scores[(na, nb)] = _held_out_percent(data, regs, theta, offset, b, a, cut)
     # the samples after the middle rarely hold a step: among the orders that predict them
@@ -529,8 +553,9 @@ def _check_output_moves(loops, discard):
 
 
 def fit_hammerstein(loops, fs, order="auto", n_plays=10, dynamics=None, delay=1, offset=True,
-                    start="auto", discard=0, thresholds=None, iterations=30, tol=1e-6):
-    """Fit a PI operator followed by linear dynamics to records at their full rate.
+                    start="auto", discard=0, thresholds=None, iterations=30, tol=1e-6,
+                    operator="pi", levels=16):
+    """Fit a PI (or Preisach) operator followed by linear dynamics to records at their full rate.
 
     The first weights (and the start state) come from the records' loops:
     a PI fit through a delay of ``delay`` samples on every sample but the
@@ -582,6 +607,16 @@ def fit_hammerstein(loops, fs, order="auto", n_plays=10, dynamics=None, delay=1,
         Most alternations of weights and dynamics.
     tol : float, optional
         Stop when the residual falls by less than this fraction.
+    operator : {"pi", "preisach", "auto"}, optional
+        The hysteresis operator: Prandtl-Ishlinskii plays (``n_plays``,
+        ``thresholds``), a ramped-relay Preisach grid of ``levels`` steps over
+        the records' input range (:class:`~piezolib.hysteresis.preisach.PreisachModel`:
+        its virgin curve and loop branches are not tied, as a PI operator's
+        are), or "auto": each fitted before each record's middle turning point
+        and scored after it (with ``order="auto"`` its best order's score),
+        the smaller score wins (:attr:`HammersteinFit.operator_scores`).
+    levels : int, optional
+        Grid steps of the Preisach operator (:data:`~piezolib.hysteresis.preisach.MAX_LEVELS`).
 
     Returns
     -------
@@ -620,6 +655,8 @@ def fit_hammerstein(loops, fs, order="auto", n_plays=10, dynamics=None, delay=1,
     if not isinstance(offset, (bool, np.bool_)):
         raise TypeError(f"offset must be True or False, got {offset!r}")
     delay = check_integer("delay", delay, minimum=0)
+    if not isinstance(operator, str) or operator not in (*OPERATORS, "auto"):
+        raise ValueError(f"operator must be one of {(*OPERATORS, 'auto')}, got {operator!r}")
     iterations = check_integer("iterations", iterations, minimum=1)
     tol = check_positive("tol", tol)
     orders = ()
@@ -644,54 +681,51 @@ def fit_hammerstein(loops, fs, order="auto", n_plays=10, dynamics=None, delay=1,
     need = 4 * (max((na + nb for na, nb in orders), default=0) + 1)
     if any(v.size < need for v, x, used in data):
         raise ValueError(f"each record needs at least {need} samples (4 x (na + nb + 1))")
-
-    # the first weights and the start state: PI through a delay, on the quasi-static samples
-    quiet = _quasi_static_rows(data)
-    delayed = (np.r_[np.zeros(delay), 1.0], np.array([1.0]))
-    starts = PI_STARTS if start == "auto" else (start,)
-    first = {s0: _weights_step(quiet, pi_regressors(data, r, s0), *delayed, offset, r.size)
-             for s0 in starts}
-    scores = {s0: math.sqrt(_cost(*sol)) for s0, sol in first.items()}
-    start = min(starts, key=lambda s0: scores[s0])
-    regs = pi_regressors(data, r, start)
-    slope_loops = float(np.sum(first[start][2][:r.size]))
-    order_scores = {}
-    if dynamics is not None:
-        b, a = b_known, a_known
-        A, rhs, theta = _weights_step(data, regs, b, a, offset, r.size)
-        k = 0
-    else:
-        chosen = orders[0]
-        if len(orders) > 1:
-            chosen, order_scores = _choose_order(data, r, start, offset, delay, orders,
-                                                 iterations, tol)
-        b, a, A, rhs, theta, cost, k = _alternate(data, regs, first[start][2], offset, r.size,
-                                                  *chosen, delay, iterations, tol, polish=True)
-        # a lower order is a member of the chosen order's model set: when its own fit on all
-        # the records is far better (RMS below STUCK_RATIO of the chosen one's), the chosen
-        # order's fit is stuck and the lower one stands; a marginal gain is no such evidence
-        # (on a Duhem record at 20 kHz order 3 fitted 0.6 % better than the chosen 4 and its
-        # feedforward tracked at 6 % of stroke against 0.15 %)
-        for lower in (o for o in orders if o[0] <= chosen[0] and o[1] <= chosen[1]
-                      and o != chosen):
-            fit = _alternate(data, regs, first[start][2], offset, r.size, *lower, delay,
-                             iterations, tol, polish=True)
-            if fit[5] < STUCK_RATIO ** 2 * cost:
-                b, a, A, rhs, theta, cost, k = fit
+    if operator != "pi":
+        levels = check_levels(levels, data)
+        v_range = default_range(data)
+    known = (b_known, a_known) if dynamics is not None else None
+    ops = {"pi": lambda s0: (pi_regressors(data, r, s0), r.size),
+           "preisach": lambda s0: (preisach_regressors(data, v_range, levels, s0),
+                                   _grid(v_range, levels)[3].size)}
+    operator_scores = {}
+    if operator == "auto":
+        for name, regressors in ops.items():
+            operator_scores[name] = _held_out_score(data, regressors, start, offset, delay,
+                                                    orders, known, iterations, tol)
+        operator = min(ops, key=lambda name: operator_scores[name])   # ties: "pi"
+    start, scores, b, a, A, rhs, theta, k, order_scores, slope_first = _fit_operator(
+        data, ops[operator], start, offset, delay, orders, known, iterations, tol)
     x0 = float(theta[-1]) if offset else 0.0
-    w = theta[:r.size].copy()
-    w[w <= 1e-12 * float(np.sum(w))] = 0.0
-    model = HammersteinModel(PIModel(tuple(r), tuple(w), x0=x0, start=start), tuple(b),
-                             tuple(a), fs)
-    at_bound = list(w <= 0) + ([False] if offset else [])
-    cov = covariance(A, A @ theta - rhs, int(np.count_nonzero(~np.array(at_bound))))
-    names = [f"w_{i} (r = {ri:.4g})" for i, ri in enumerate(r)] + (["x0"] if offset else [])
-    units = ["x/v"] * r.size + (["x"] if offset else [])
-    parameters = estimates(names, units, theta, [False] * theta.size, cov, at_bound)
-    what = f"fit_hammerstein (start {start!r}, dynamics of order {len(a) - 1})"
-    warn_about(parameters, what)
+    if operator == "pi":
+        slope_loops = float(np.sum(slope_first[:r.size]))
+        w = theta[:r.size].copy()
+        w[w <= 1e-12 * float(np.sum(w))] = 0.0
+        hysteresis = PIModel(tuple(r), tuple(w), x0=x0, start=start)
+        at_bound = list(w <= 0) + ([False] if offset else [])
+        cov = covariance(A, A @ theta - rhs, int(np.count_nonzero(~np.array(at_bound))))
+        names = [f"w_{i} (r = {ri:.4g})" for i, ri in enumerate(r)] + (["x0"] if offset else [])
+        units = ["x/v"] * r.size + (["x"] if offset else [])
+        parameters = estimates(names, units, theta, [False] * theta.size, cov, at_bound)
+    else:
+        n = theta.size - (1 if offset else 0)
+        slope_loops = preisach_model(v_range, levels, slope_first[:n], x0,
+                                     start).static_part[0]
+        w = theta[:n].copy()
+        w[w <= 1e-12 * max(float(np.sum(w)), 1e-300)] = 0.0
+        hysteresis = preisach_model(v_range, levels, w, x0, start)
+        parameters = preisach_parameters(hysteresis, A, rhs, theta, offset)
+    model = HammersteinModel(hysteresis, tuple(b), tuple(a), fs)
+    what = (f"fit_hammerstein ({'' if operator == 'pi' else 'Preisach operator, '}"
+            f"start {start!r}, dynamics of order {len(a) - 1})")
+    if operator == "pi":
+        warn_about(parameters, what)
+    else:                   # many zero weights are normal on a grid: only what matters
+        warn_about([p for p in parameters if p.name == "x0"], what)
+        preisach_warnings(hysteresis, what)
     if dynamics is None:
-        for note in _dynamics_warnings(b, a, fs, data, slope_loops, float(np.sum(w))):
+        for note in _dynamics_warnings(b, a, fs, data, slope_loops,
+                                       float(hysteresis.static_part[0])):
             warnings.warn(f"{what}: {note}", FitWarning, stacklevel=2)
     pairs = [(np.asarray(p[0], dtype=float), np.asarray(p[1], dtype=float))
              for p in _pairs(loops)]
@@ -700,7 +734,79 @@ def fit_hammerstein(loops, fs, order="auto", n_plays=10, dynamics=None, delay=1,
     return HammersteinFit(model=model, x_model=x_model, residuals=res, rms=rms,
                           rms_percent=rms_pct, max_percent=max_pct,
                           parameters=tuple(parameters), iterations=k, start_scores=scores,
-                          order_scores=order_scores)
+                          order_scores=order_scores, operator=operator,
+                          operator_scores=operator_scores)
+
+
+def _first_weights(data, regressors, start, offset, delay):
+    """The start state and the first weights: the operator through a delay, quiet samples.
+
+    Returns (start, {start: score}, regs of the start, first weights).
+    """
+    quiet = _quasi_static_rows(data)
+    delayed = (np.r_[np.zeros(delay), 1.0], np.array([1.0]))
+    starts = PI_STARTS if start == "auto" else (start,)
+    first = {}
+    for s0 in starts:
+        regs, n = regressors(s0)
+        first[s0] = (regs, _weights_step(quiet, regs, *delayed, offset, n))
+    scores = {s0: math.sqrt(_cost(*sol)) for s0, (regs, sol) in first.items()}
+    start = min(starts, key=lambda s0: scores[s0])
+    return start, scores, first[start][0], first[start][1][2]
+
+
+def _fit_operator(data, regressors, start, offset, delay, orders, known, iterations, tol):
+    """One operator's fit: start state, order (by validation), dynamics and weights.
+
+    ``regressors(start)`` gives (regs, n columns).  Returns (start, start scores, b, a, A,
+    rhs, theta, iterations, order scores, first weights).
+    """
+    start, scores, regs, theta_first = _first_weights(data, regressors, start, offset, delay)
+    n = regs[0][0].shape[1]
+    order_scores = {}
+    if known is not None:
+        b, a = known
+        A, rhs, theta = _weights_step(data, regs, b, a, offset, n)
+        k = 0
+    else:
+        chosen = orders[0]
+        if len(orders) > 1:
+            chosen, order_scores = _choose_order(data, regs, n, offset, delay, orders,
+                                                 iterations, tol)
+        b, a, A, rhs, theta, cost, k = _alternate(data, regs, theta_first, offset, n,
+                                                  *chosen, delay, iterations, tol, polish=True)
+        # a lower order is a member of the chosen order's model set: when its own fit on all
+        # the records is far better (RMS below STUCK_RATIO of the chosen one's), the chosen
+        # order's fit is stuck and the lower one stands; a marginal gain is no such evidence
+        # (on a Duhem record at 20 kHz order 3 fitted 0.6 % better than the chosen 4 and its
+        # feedforward tracked at 6 % of stroke against 0.15 %)
+        for lower in (o for o in orders if o[0] <= chosen[0] and o[1] <= chosen[1]
+                      and o != chosen):
+            fit = _alternate(data, regs, theta_first, offset, n, *lower, delay,
+                             iterations, tol, polish=True)
+            if fit[5] < STUCK_RATIO ** 2 * cost:
+                b, a, A, rhs, theta, cost, k = fit
+    return start, scores, b, a, A, rhs, theta, k, order_scores, theta_first
+
+
+def _held_out_score(data, regressors, start, offset, delay, orders, known, iterations, tol):
+    """An operator's RMS % after each record's middle turning point, fitted before it.
+
+    With several orders: the best of :func:`_choose_order`'s scores; with one order or
+    known dynamics, that fit on the first part scored on the rest.
+    """
+    cut, early = _split_halves(data)
+    start, _, regs, theta_first = _first_weights(early, regressors, start, offset, delay)
+    n = regs[0][0].shape[1]
+    if known is not None:
+        _, _, theta = _weights_step(early, regs, *known, offset, n)
+        return _held_out_percent(data, regs, theta, offset, *known, cut)
+    if len(orders) > 1:
+        return min(_choose_order(data, regs, n, offset, delay, orders, iterations, tol)[1]
+                   .values())
+    b, a, A, rhs, theta, cost, k = _alternate(early, regs, theta_first, offset, n, *orders[0],
+                                              delay, iterations, tol, polish=True)
+    return _held_out_percent(data, regs, theta, offset, b, a, cut)
 
 
 def _pairs(loops):
