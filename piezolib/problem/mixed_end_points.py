@@ -16,8 +16,23 @@ land on the same end point every run:
 Each entry is keyed by a SHA-256 of its inputs (every coefficient written with
 12 significant digits), so a study with other models, controllers or options
 finds no entry and searches.  ``data/controllers/mixed_end_points.json`` is
-written by :func:`write_end_points` (``python -m piezolib controllers
---write-mixed`` does not touch it); a slow test re-derives it from scratch.
+written by :func:`write_end_points` from
+:func:`piezolib.problem.coefficient_box.searched_end_points` (about 15 CPU-s;
+``python -m piezolib controllers --write-mixed`` does not touch it)::
+
+    from piezolib.problem import coefficient_box as box, mixed_end_points as ep
+    from piezolib.workbook import pipeline, study
+    st = study.load("reference")
+    G, _, H_e, H_y, _ = pipeline.study_problem(st)
+    sections = {box.DEPLOYED: pipeline.study_sections(st)["K_ours"],
+                box.MIXED: pipeline.study_mixed_sections(st)}
+    ep.write_end_points(*box.searched_end_points(
+        pipeline.study_mixed_designs(st).designs, pipeline.study_controllers(st).K_deployed,
+        sections, G, H_e, H_y, st.loop.fs_Hz))
+
+and the slow test ``tests/problem/test_mixed_end_points.py`` re-derives it from scratch.
+Write it anew when the mixed designs, the deployed sections or a search change (a
+changed input finds no entry: the notebook then searches and stays right, only slower).
 """
 
 import hashlib
