@@ -35,6 +35,10 @@ TEST_DURATIONS = ROOT / "tests" / "test_durations.json"
 LONG_TEST_S = 0.5
 #: seconds a test of a file missing from TEST_DURATIONS counts
 DEFAULT_TEST_S = 0.05
+#: a worker holds its last test until it has more (xdist runs a test knowing the next one), so
+#: a worker whose pending tests take longer than this gets the shortest unit as that "more":
+#: the longest ones then go to whichever worker is free first
+PREFETCH_LONG_S = 10.0
 #: test files -> the work unit they share (their session fixture is then made once)
 SHARED_UNITS = {
     # paper_design (tests/robust/conftest.py): the paper problem's DK design
@@ -102,6 +106,10 @@ def pytest_xdist_make_scheduler(config, log):
                 self.workqueue.clear()
                 self.workqueue.update(units)
                 self._ordered = True
+            pending = [n for unit in self.assigned_work.get(node, {}).values()
+                       for n, done in unit.items() if not done]
+            if _expected_seconds(pending, tests, files) > PREFETCH_LONG_S:
+                self.workqueue.move_to_end(next(reversed(self.workqueue)), last=False)
             super()._assign_work_unit(node)
 
     return LongestFirstFileScheduling(config, log)
