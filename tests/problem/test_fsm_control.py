@@ -180,3 +180,19 @@ def test_rederived_axis_design_lands_on_the_committed_record():
     v_committed = fsm_control.verify_axis(nominal, committed)
     assert abs(v_fresh.mu_upper - v_committed.mu_upper) < 0.002
     assert v_fresh.loops["stable"].all() and v_committed.loops["stable"].all()
+
+
+def test_the_committed_axis_controller_is_the_3x3_records_siso_loop_on_axis_3():
+    """Both records ran design_axis with the same parameters on the same nominal."""
+    import json
+
+    from piezolib.problem import fsm_mimo
+
+    doc = json.loads(fsm_control.axis_record_path().read_text())
+    mimo = fsm_mimo.read_mirror_record()
+    assert doc["params"]["dk_iterations"] == mimo.params["siso_dk_iterations"]
+    assert doc["nominal_order"] == mimo.params["siso_nominal_order"]
+    omega = np.logspace(0, 5, 50)
+    K, K_mimo = fsm_control._ss_of(doc["K_w"]), mimo.siso_K_w[2]
+    assert np.allclose(np.ravel(K(1j * omega)), np.ravel(K_mimo(1j * omega)), rtol=1e-6)
+    assert doc["mu_peak"] == pytest.approx(mimo.siso_mu[2], abs=1e-6)
