@@ -9,8 +9,8 @@ each test of at least :data:`LONG_TEST_S` by its id, the others as an average pe
 not recorded counts :data:`DEFAULT_TEST_S` a test).  The record orders the work only: every test
 runs whatever it says.  Refresh it after a change in where the time goes, from both steps::
 
-    pytest --record-durations tests/test_durations.json
-    pytest -m slow --record-durations tests/test_durations.json
+    pytest --record-durations=tests/test_durations.json
+    pytest -m slow --record-durations=tests/test_durations.json
 
 (each run replaces the entries of the tests it ran and keeps the others).
 """
