@@ -172,7 +172,8 @@ CASES = {
     "robust.loop_margins_mimo": (dict(P=L2, K=I2),
                                  {"P": {**LOOP_PAIR, "wrong shape": ct.ss(G.A, G.B, np.r_[G.C, G.C, G.C], np.zeros((3, 1)))},
                                   "K": {**LOOP_PAIR, "positive feedback": ct.ss([], [], [], -5 * np.eye(2))},
-                                  "omega": GRID, "skew": SKEW}),
+                                  "omega": GRID, "skew": SKEW,
+                                  "input_output": {"text": "yes", "number": 1}}),
     # identification
     "identification.fit_arx": (dict(u=U, y=Y, fs=FS, na=2, nb=2),
                                {"u": SIGNAL, "y": SIGNAL, "fs": POSITIVE}),

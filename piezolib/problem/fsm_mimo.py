@@ -944,7 +944,7 @@ def mirror_margins(models, controllers):
             G_d, K_d = _loop_models(g, K)
             P = ct.series(delay_matrix(G_d.ninputs), G_d)
             try:
-                m = robust.loop_margins_mimo(P, K_d, omega=MARGIN_GRID)
+                m = robust.loop_margins_mimo(P, K_d, omega=MARGIN_GRID, input_output=False)
             except ValueError:
                 rows[(cname, mname)] = {c: np.nan for c in _MARGIN_COLUMNS}
                 continue

@@ -34,6 +34,7 @@ frequency pi / dt.
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import control as ct
 import numpy as np
@@ -125,9 +126,10 @@ class MIMOLoopMargins:
         L = P K (every plant output at once).
     input_loops, output_loops : list of MIMODiskMargin
         Loop-at-a-time margins at each plant input and each plant output.
-    input_output : MIMODiskMargin
+    input_output : MIMODiskMargin or None
         Every plant input and every plant output perturbed at once, independently
-        (MATLAB's MMIO): nu + ny factors, ``worst_factors`` inputs first.
+        (MATLAB's MMIO): nu + ny factors, ``worst_factors`` inputs first (None when
+        not asked for).
 
     Examples
     --------
@@ -268,6 +270,14 @@ def _factors(delta, skew):
         return (1 + (1 - skew) / 2 * delta) / (1 - (1 + skew) / 2 * delta)
 
 
+class _ScalarMu(NamedTuple):
+    """mussv's bounds and Delta for one 1 x 1 complex block (exact: no iterations)."""
+
+    upper: np.ndarray
+    lower: np.ndarray
+    Delta: np.ndarray
+
+
 def _disk(parts, omega, skew, channel, S_grid=None):
     """MIMODiskMargin of the loop whose S realisation is ``parts`` (channel: one only;
     ``S_grid``: S on ``omega`` when the caller has it, shared by the channels of a loop)."""
@@ -289,8 +299,15 @@ def _disk(parts, omega, skew, channel, S_grid=None):
             return np.abs(M[:, 0, 0])
         return mussv(M, blk, lower=False).upper
 
+    def mu(M):
+        if M.shape[1] == 1:         # one scalar block: mu = |M| exactly, Delta = 1 / M
+            with np.errstate(divide="ignore"):
+                return _ScalarMu(np.abs(M[:, 0, 0]), np.abs(M[:, 0, 0]),
+                                 np.where(M == 0, 0, 1 / np.where(M == 0, 1, M)))
+        return mussv(M, blk)
+
     Mgrid = matrices(omega, S_grid)
-    r = mussv(Mgrid, blk)
+    r = mu(Mgrid)
     ub, lb = r.upper, r.lower
     k = int(np.argmax(ub))
     w_peak, peak = float(omega[k]), float(ub[k])
@@ -303,7 +320,7 @@ def _disk(parts, omega, skew, channel, S_grid=None):
         if -res.fun > peak:
             peak, w_peak = float(-res.fun), float(res.x)
     # the lower bound at the refined point and on the grid
-    r_peak = mussv(matrices(np.array([w_peak])), blk)
+    r_peak = mu(matrices(np.array([w_peak])))
     lows = np.r_[lb, r_peak.lower]
     deltas = np.concatenate([r.Delta, r_peak.Delta])
     freqs = np.r_[omega, w_peak]
@@ -457,18 +474,23 @@ def _input_output_parts(P, K, Li):
     """
     Pn, Kn = ct.ss(P), ct.ss(K)
     dt = Li.dt
-    Pn = ct.ss(Pn.A, Pn.B, Pn.C, Pn.D, dt, inputs=[f"up{i}" for i in range(P.ninputs)],
-               outputs=[f"y{i}" for i in range(P.noutputs)])
-    Kn = ct.ss(Kn.A, Kn.B, -Kn.C, -Kn.D, dt, inputs=[f"ym{i}" for i in range(P.noutputs)],
-               outputs=[f"uc{i}" for i in range(P.ninputs)])      # negative feedback: u_c = -K y_m
     nu, ny = P.ninputs, P.noutputs
-    sums = [ct.summing_junction([f"uc{i}", f"wi{i}"], f"up{i}", dt=dt) for i in range(nu)]
-    sums += [ct.summing_junction([f"y{i}", f"wo{i}"], f"ym{i}", dt=dt) for i in range(ny)]
-    N = ct.interconnect([Pn, Kn] + sums,
-                        inputs=[f"wi{i}" for i in range(nu)] + [f"wo{i}" for i in range(ny)],
-                        outputs=[f"uc{i}" for i in range(nu)] + [f"y{i}" for i in range(ny)])
-    N = ct.ss(N)
-    A, B, C, D = (np.asarray(x, float) for x in (N.A, N.B, N.C, N.D))
+    Ap, Bp, Cp, Dp = (np.asarray(x, float) for x in (Pn.A, Pn.B, Pn.C, Pn.D))
+    Ak, Bk, Ck, Dk = (np.asarray(x, float) for x in (Kn.A, Kn.B, Kn.C, Kn.D))
+    npx, nkx = Ap.shape[0], Ak.shape[0]
+    # z = [u_c; y] with u_c = -(C_k x_k + D_k (y + w_o)), y = C_p x_p + D_p (u_c + w_i):
+    # E z = C_z x + D_z w, solved in closed form (feedthrough on both sides is an algebraic
+    # loop, which ct.interconnect refuses)
+    E = np.block([[np.eye(nu), Dk], [-Dp, np.eye(ny)]])
+    if np.linalg.cond(E) > 1 / np.finfo(float).eps:
+        raise ValueError("K: the loop is not well-posed: I + D_K D_P is singular (the "
+                         "feedthroughs of K and P cancel)")
+    Cz = np.block([[np.zeros((nu, npx)), -Ck], [Cp, np.zeros((ny, nkx))]])
+    Dz = np.block([[np.zeros((nu, nu)), -Dk], [Dp, np.zeros((ny, ny))]])
+    C, D = np.linalg.solve(E, Cz), np.linalg.solve(E, Dz)
+    Bx = np.block([[Bp, np.zeros((npx, ny))], [np.zeros((nkx, nu)), Bk]])  # [u_p; y_m] -> x
+    A = la.block_diag(Ap, Ak) + Bx @ C
+    B = Bx @ (D + np.eye(nu + ny))                    # u_p = u_c + w_i, y_m = y + w_o
     if A.size:
         _, (scale, _) = la.matrix_balance(A, permute=False, separate=True)
         A = A * scale[None, :] / scale[:, None]
@@ -476,7 +498,7 @@ def _input_output_parts(P, K, Li):
     return A, B, C, D + np.eye(nu + ny), (float(dt) if dt else 0.0)
 
 
-def loop_margins_mimo(P, K, omega=None, skew=0.0):
+def loop_margins_mimo(P, K, omega=None, skew=0.0, input_output=True):
     """Multi-loop and loop-at-a-time disk margins at the plant input and output.
 
     As MATLAB's ``diskmargin(P, C)`` (its MMI/MMO, DMI/DMO and MMIO): L = K P broken at
@@ -493,6 +515,9 @@ def loop_margins_mimo(P, K, omega=None, skew=0.0):
         Frequency grid [rad/s] as in :func:`disk_margin_mimo`.
     skew : float
         Skew sigma of the disk.
+    input_output : bool
+        Also the margin with every input and output perturbed at once (MMIO, nu + ny
+        blocks: the most expensive of the five); False leaves it None.
 
     Returns
     -------
@@ -516,11 +541,15 @@ def loop_margins_mimo(P, K, omega=None, skew=0.0):
     Li, Lo = _series(P, K), _series(K, P)
     pi, wi, skew = _prepare("K P", Li, omega, skew)
     po, wo, _ = _prepare("P K", Lo, omega, skew)
-    pio = _input_output_parts(P, K, Li)
-    wio = wi if omega is not None else np.union1d(wi, wo)
+    if not isinstance(input_output, bool):
+        raise TypeError(f"input_output must be True or False, got {input_output!r}")
+    both = None
+    if input_output:
+        wio = wi if omega is not None else np.union1d(wi, wo)
+        both = _disk(_input_output_parts(P, K, Li), wio, skew, None)
     Si, So = _response(*pi, wi), _response(*po, wo)
     return MIMOLoopMargins(input=_disk(pi, wi, skew, None, Si),
                            output=_disk(po, wo, skew, None, So),
                            input_loops=_each_channel(pi, wi, skew, Si),
                            output_loops=_each_channel(po, wo, skew, So),
-                           input_output=_disk(pio, wio, skew, None))
+                           input_output=both)

@@ -208,6 +208,21 @@ def test_input_output_margin_worst_factors_destabilise_and_it_is_the_smallest():
     assert np.max(np.abs(delta)) == pytest.approx(io.alpha_upper, rel=1e-6)
 
 
+def test_input_output_margin_with_feedthrough_in_plant_and_controller():
+    # D_P and D_K both nonzero: an algebraic loop that the interconnection solves in closed
+    # form (ct.interconnect refused it with a RuntimeError)
+    a = 10.0
+    P = ct.ss([[0, a], [-a, 0]], np.eye(2), [[1, a], [-a, 1]], [[0.2, 0.0], [0.05, 0.1]])
+    C = ct.ss([[-50.0]], [[50.0, 0.0]], [[0.5], [0.0]], [[1.0, -2.0], [0.0, 1.0]])
+    m = loop_margins_mimo(P, C)
+    io = m.input_output
+    assert io.alpha <= min(m.input.alpha, m.output.alpha) * (1 + 1e-9)
+    Fi, Fo = np.diag(io.worst_factors[:2]), np.diag(io.worst_factors[2:])
+    w = 1j * io.worst_frequency
+    L = np.asarray(C(w)).reshape(2, 2) @ Fo @ np.asarray(P(w)).reshape(2, 2) @ Fi
+    assert np.linalg.svd(np.eye(2) + L, compute_uv=False)[-1] < 1e-6
+
+
 def test_siso_input_output_margin_against_brute_force():
     # one loop, a factor at the plant input and one at its output: 1 + L f1 f2 = 0
     G = ct.tf(25, [1, 10, 10, 10])
