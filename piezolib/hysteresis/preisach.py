@@ -92,6 +92,50 @@ def preisach_regressors(data, v_range, levels, start):
     return out
 
 
+def pruned_regressors(data, v_range, levels, start, offset):
+    """(regs, keep): :func:`preisach_regressors` on the :func:`independent_columns` ``keep``."""
+    regs = preisach_regressors(data, v_range, levels, start)
+    keep = independent_columns(data, regs, offset)
+    # column-major: the Hammerstein fit filters each column along time (40 % faster)
+    return [(np.asfortranarray(E[:, keep]), weight) for E, weight in regs], keep
+
+
+def scatter(keep, weights, n):
+    """All ``n`` element weights from those of the kept columns (the others 0)."""
+    w = np.zeros(n)
+    w[keep] = weights
+    return w
+
+
+def independent_columns(data, regs, offset, rtol=1e-9):
+    """Indices of element columns that are not (numerically) combinations of the others.
+
+    An element that never switches on the records is a constant (collinear
+    with the offset), two that switch together are equal: their weights are
+    not identifiable, and a singular normal matrix sends every later solve to
+    a QR of the tall regressor (10 x dearer).  A pivoted Cholesky of the
+    weighted Gram matrix (the offset first) keeps each column whose part
+    orthogonal to the kept ones is above ``rtol`` of its norm; the dropped
+    elements get weight 0 (what they add is a kept column's, or nothing).
+    """
+    G = 0.0
+    for (v, x, used), (E, weight) in zip(data, regs):
+        A = weight * np.hstack([E[used]] + ([np.ones((used.size, 1))] if offset else []))
+        G = G + A.T @ A
+    n = G.shape[0] - (1 if offset else 0)
+    diag = np.diag(G).copy()
+    L = np.zeros_like(G)
+    kept, order = [], ([n] if offset else []) + list(np.argsort(-diag[:n]))
+    for k in order:
+        res = G[k, k] - L[k, :len(kept)] @ L[k, :len(kept)]
+        if not res > rtol * diag[k] or diag[k] == 0:
+            continue
+        col = len(kept)
+        L[:, col] = (G[:, k] - L[:, :col] @ L[k, :col]) / math.sqrt(res)
+        kept.append(k)
+    return np.array(sorted(k for k in kept if k < n), dtype=int)
+
+
 def fold_linear(v_range, levels, weights, x0):
     """(weights, linear, x0) with the share of the r = 0 ramps common to all moved to ``linear``.
 
@@ -508,19 +552,19 @@ def fit_preisach(loops, levels=16, offset=True, start="auto", discard=0, v_range
     levels = check_levels(levels, data)
     v_range = default_range(data) if v_range is None else _check_range("v_range", v_range)
     starts = PI_STARTS if start == "auto" else (start,)
-    solved = {s0: _solve(data, preisach_regressors(data, v_range, levels, s0), offset)
-              for s0 in starts}
-    scores = {s0: float(np.linalg.norm(A @ th - b)) for s0, (A, b, th) in solved.items()} \
+    n_all = _grid(v_range, levels)[3].size
+    solved = {}
+    for s0 in starts:
+        regs, keep = pruned_regressors(data, v_range, levels, s0, offset)
+        solved[s0] = (*_solve(data, regs, offset), keep)
+    scores = {s0: float(np.linalg.norm(A @ th - b)) for s0, (A, b, th, k) in solved.items()} \
         if start == "auto" else {}
     start = min(starts, key=lambda s0: float(np.linalg.norm(solved[s0][0] @ solved[s0][2]
                                                              - solved[s0][1])))
-    A, b, theta = solved[start]
-    n = A.shape[1] - (1 if offset else 0)
-    w = theta[:n].copy()
-    w[w <= 1e-12 * max(float(np.sum(w)), 1e-300)] = 0.0
+    A, b, theta, keep = solved[start]
     x0 = float(theta[-1]) if offset else 0.0
-    model = preisach_model(v_range, levels, w, x0, start)
-    parameters = preisach_parameters(model, A, b, theta, offset)
+    model = preisach_model(v_range, levels, scatter(keep, theta[:keep.size], n_all), x0, start)
+    parameters = preisach_parameters(model, A, b, theta, offset, keep)
     what = f"fit_preisach (start {start!r})"
     warn_about([p for p in parameters if p.name == "x0"], what)
     preisach_warnings(model, what)
@@ -534,19 +578,25 @@ def fit_preisach(loops, levels=16, offset=True, start="auto", discard=0, v_range
 
 def preisach_model(v_range, levels, w, x0, start):
     """The :class:`PreisachModel` of fitted element weights (linear share folded)."""
-    w, linear, x0 = fold_linear(v_range, levels, np.maximum(w, 0.0), x0)
+    w = np.maximum(np.asarray(w, dtype=float), 0.0)
+    w[w <= 1e-12 * max(float(np.sum(w)), 1e-300)] = 0.0      # rounding of the active set
+    w, linear, x0 = fold_linear(v_range, levels, w, x0)
     return PreisachModel(v_range, levels, tuple(w), linear=linear, x0=x0, start=start)
 
 
-def preisach_parameters(model, A, b, theta, offset):
-    """ParameterEstimate of each fitted element weight (as fitted, before the fold) and x0."""
+def preisach_parameters(model, A, b, theta, offset, keep):
+    """ParameterEstimate of each fitted element weight (as fitted, before the fold) and x0.
+
+    The elements the records cannot tell apart from others (not in ``keep``) are not listed.
+    """
     n = A.shape[1] - (1 if offset else 0)
     at_bound = list(theta[:n] <= 1e-12 * max(float(np.sum(theta[:n])), 1e-300)) + \
         ([False] if offset else [])
     free = ~np.array(at_bound)
     cov = np.full((theta.size, theta.size), np.nan)    # a weight on its bound: no interval
     cov[np.ix_(free, free)] = covariance(A[:, free], A @ theta - b, int(np.count_nonzero(free)))
-    names = [f"w (r = {r:.4g}, c = {c:.4g})" for r, c in model.elements] + \
+    elements = model.elements
+    names = [f"w (r = {elements[k][0]:.4g}, c = {elements[k][1]:.4g})" for k in keep] + \
         (["x0"] if offset else [])
     units = ["x"] * n + (["x"] if offset else [])
     return estimates(names, units, np.r_[np.where(at_bound[:n], 0.0, theta[:n]), theta[n:]],
