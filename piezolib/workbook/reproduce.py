@@ -33,7 +33,7 @@ from piezolib.workbook import study as studies
 from piezolib.workbook.outputs import (data_dir, notebooks_dir, project_root,
                                        study_figures_dir, study_results_dir)
 
-__all__ = ["DATA_STEPS", "DATA_CHECKS", "DATA_FILES", "GATHERING", "KERNEL_ENVIRONMENT", "list_notebooks", "notebook_waves", "default_jobs", "inject_study", "study_spec",
+__all__ = ["DATA_STEPS", "DATA_CHECKS", "DATA_FILES", "STUDY_DESIGNS", "GATHERING", "KERNEL_ENVIRONMENT", "list_notebooks", "notebook_waves", "default_jobs", "inject_study", "study_spec",
            "run_notebook", "run", "remove_stale_temporaries", "NotebookFailure"]
 
 #: Data-generating steps run before the notebooks, as "module:function" names
@@ -48,6 +48,17 @@ DATA_CHECKS = ["piezolib.problem.stage_data:check_experiment_files"]
 #: The files those checks look at, as "module:function" names of functions that take no
 #: arguments and return them (for the line saying how many were checked).
 DATA_FILES = ["piezolib.problem.stage_data:experiment_paths"]
+
+#: Designs a study other than the reference needs before its notebooks run, as
+#: (name prefixes of the notebooks that use them, what, "module:function" taking the study):
+#: computed once, in the reproduce process (in parallel where the design allows), so that
+#: no notebook cell waits minutes for them and no two notebooks design the same twice.
+STUDY_DESIGNS = [
+    (("04_", "05_", "06_", "09_", "12_"), "study controllers (DK designs)",
+     "piezolib.workbook.pipeline:study_controllers"),
+    (("09_",), "study mixed-mu designs (D,G-K, one per performance scale, 2 processes)",
+     "piezolib.workbook.pipeline:study_mixed_designs"),
+]
 
 #: Name prefixes of the notebooks that read every other notebook's table
 #: (the reproduction report): they run after all the others have finished.
@@ -301,10 +312,15 @@ def run(selection=None, timeout=600, keep_going=False, data=True, stream=sys.std
     remove_stale_temporaries(chosen)
     steps = DATA_STEPS if data and not selection else []
     notebooks = list_notebooks(selection)
-    counter = _Counter(stream, len(steps) + len(notebooks))
+    designs = [] if chosen.is_reference else [
+        (what, step) for prefixes, what, step in STUDY_DESIGNS
+        if any(p.name.startswith(prefixes) for p in notebooks)]
+    counter = _Counter(stream, len(steps) + len(designs) + len(notebooks))
     start_all = time.perf_counter()
     try:
         failures = _run_data_steps(steps, counter, stream)
+        if not failures or keep_going:
+            failures += _run_design_steps(designs, chosen, counter)
         if not failures or keep_going:
             for wave in notebook_waves(notebooks):
                 failures += _run_wave(wave, jobs, counter, keep_going, stream,
@@ -385,6 +401,22 @@ def _run_data_steps(steps, counter, stream):
             counter.line(step, time.perf_counter() - start, f"FAILED: {type(exc).__name__}: {exc}")
             return 1
         counter.line("data files", time.perf_counter() - start, status)
+    return 0
+
+
+def _run_design_steps(steps, study, counter):
+    """The study's designs (:data:`STUDY_DESIGNS`), one line each; returns the number of
+    failures (stops at the first)."""
+    for what, step in steps:
+        start = time.perf_counter()
+        module, func = step.split(":")
+        try:
+            found = getattr(importlib.import_module(module), func)(study)
+        except Exception as exc:  # report and stop, like a notebook
+            counter.line(what, time.perf_counter() - start,
+                         f"FAILED: {type(exc).__name__}: {exc}")
+            return 1
+        counter.line(what, time.perf_counter() - start, f"ok ({getattr(found, 'source', 'ok')})")
     return 0
 
 

@@ -56,3 +56,34 @@ def test_a_cell_past_its_time_limit_is_a_failure_naming_the_notebook_and_the_cel
     assert "00_slow.ipynb" in lines[0] and "FAILED at cell 1: timed out: the cell ran longer " \
                                             "than 1 s" in lines[0]
     assert lines[-1].startswith("1 step(s) failed")
+
+
+def designs_of(study):                  # a stand-in for a design step (module-level: by name)
+    designs_of.studies.append(study.name)
+    return type("Designs", (), {"source": "designed now"})()
+
+
+designs_of.studies = []
+
+
+def test_a_studys_designs_are_steps_before_its_notebooks(workbook, monkeypatch):
+    # before: notebook 09 designed the study's nine mixed-mu controllers inside a cell and
+    # passed the 600 s cell limit (studies/wide_error_weight.toml)
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell('study = "reference"'),
+                                         nbformat.v4.new_code_cell("x = 1")])
+    nb.cells[0].metadata["tags"] = ["parameters"]
+    nbformat.write(nb, workbook / "notebooks" / "09_mixed.ipynb")
+    nbformat.write(nb, workbook / "notebooks" / "01_other.ipynb")
+    (workbook / "studies").mkdir()
+    (workbook / "studies" / "other.toml").write_text('name = "other"\n')
+    step = f"{__name__}:designs_of"
+    monkeypatch.setattr(reproduce, "STUDY_DESIGNS", [(("09_",), "mixed designs", step),
+                                                     (("05_",), "unused designs", step)])
+    out = io.StringIO()
+    assert reproduce.run(data=False, stream=out, study="other") == 0
+    lines = out.getvalue().splitlines()
+    assert lines[0].startswith("[1/3] mixed designs") and lines[0].endswith("ok (designed now)")
+    assert designs_of.studies == ["other"]              # once; 05's step: no 05 notebook
+    out = io.StringIO()
+    assert reproduce.run(data=False, stream=out) == 0     # the reference: committed designs
+    assert designs_of.studies == ["other"] and out.getvalue().startswith("[1/2] 01_other")
