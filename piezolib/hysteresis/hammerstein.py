@@ -35,7 +35,7 @@ from piezolib._checks import check_count, check_finite_array, check_integer, che
 from piezolib.hysteresis.common import (FitScores, FitWarning, check_loops, covariance,
                                         estimates, loop_errors, warn_about)
 from piezolib.hysteresis.pi import MAX_PLAYS, PI_STARTS, PIModel, pi_regressors
-from piezolib.hysteresis.preisach import (PreisachModel, _grid, check_levels, default_range,
+from piezolib.hysteresis.preisach import (MAX_LEVELS, PreisachModel, _grid, check_levels, default_range,
                                           preisach_model, preisach_parameters,
                                           preisach_regressors, preisach_warnings,
                                           pruned_regressors, scatter)
@@ -678,6 +678,8 @@ def fit_hammerstein(loops, fs, order="auto", n_plays=10, dynamics=None, delay=1,
     delay = check_integer("delay", delay, minimum=0)
     if not isinstance(operator, str) or operator not in (*OPERATORS, "auto"):
         raise ValueError(f"operator must be one of {(*OPERATORS, 'auto')}, got {operator!r}")
+    levels = check_count("levels", levels, maximum=MAX_LEVELS, minimum=2,
+                         why="the Preisach regressor has a column per element and sample")
     iterations = check_integer("iterations", iterations, minimum=1)
     tol = check_positive("tol", tol)
     orders = ()
