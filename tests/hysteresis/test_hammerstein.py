@@ -145,3 +145,19 @@ def test_the_fit_reaches_the_error_of_the_true_dynamics_where_the_alternation_st
         fit = hy.fit_hammerstein((v, x), 20000.0)
         known = hy.fit_hammerstein((v, x), 20000.0, dynamics=ct.tf(raw.b, raw.a, 1 / 20000.0))
     assert fit.rms_percent[0] < 1.003 * known.rms_percent[0]
+
+
+def test_auto_keeps_the_pi_fit_bit_for_bit_where_plays_predict_best():
+    """A stage whose hysteresis is a sum of plays: "auto" validates both operators and keeps
+    the PI fit, exactly the fit operator="pi" returns."""
+    true = hy.HammersteinModel(hy.PIModel(R, W, x0=0.2), *hy.unit_dc_dynamics(G, FS), FS)
+    v = raw_input()
+    x = true.simulate(v) + np.random.default_rng(1).normal(0, 1e-3, v.size)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", hy.FitWarning)
+        auto = hy.fit_hammerstein((v, x), FS, order=(3, 3), thresholds=R)
+        pi = hy.fit_hammerstein((v, x), FS, order=(3, 3), thresholds=R, operator="pi")
+    assert set(auto.operator_scores) == set(hy.OPERATORS)
+    assert auto.operator == pi.operator == "pi" and pi.operator_scores == {}
+    assert auto.operator_scores["pi"] < auto.operator_scores["preisach"]
+    assert auto.model == pi.model and np.array_equal(auto.x_model[0], pi.x_model[0])
