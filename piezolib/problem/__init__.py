@@ -29,6 +29,8 @@ stage_identification  notebook 01: the virtual stage's calibration and identific
 coefficient_set  notebook 02: the 729-model set, E_m, H_m's coverage, the exact margin of a loop
 coefficient_box  notebook 09: the coefficient box as real blocks, margins per controller, the
                  chosen mixed-mu design checked, claims and summary lines
+mixed_end_points  notebook 09: the committed end points of its searches (the trade-off's
+                  H-inf bounds, the sampled-loop margin brackets), keyed by their inputs
 
 :func:`piezolib.problem.paper.problem` returns the models G, H_m, H_e, H_y, K
 that the other modules here take explicitly (plant first, then the weights);
@@ -41,4 +43,4 @@ __all__ = ["paper", "genplant", "stage", "stage_batch", "stage_loop_kernel", "st
            "weighting", "fsm_benchmark", "paths",
            "fsm_models", "fsm_control", "fsm_causal", "fsm_mimo",
            "published_audit", "stage_identification", "coefficient_set", "coefficient_box",
-           "foreign_hysteresis"]
+           "mixed_end_points", "foreign_hysteresis"]
