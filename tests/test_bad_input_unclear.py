@@ -90,7 +90,7 @@ def test_frf_error_blames_the_models_sample_time():
 
 @pytest.mark.parametrize("call, limit", [
     (lambda: ident.fit_frf(np.ones(20), np.linspace(1, 100, 20), 1000.0, 2, n_rows=10 ** 6),
-     "n_rows must be at most 100"),
+     "n_rows must be at most 168"),
     (lambda: unc.random_model_set(G3, 0.05, 10 ** 10), "count must be at most 1,000,000"),
     (lambda: unc.sampled_loop_poles(unc.random_model_set(G3, 0.05, 2), ct.tf([1.0], [1.0], 1e-3),
                                     1e-3, delay_samples=10 ** 6),
