@@ -242,6 +242,14 @@ def warn_about(parameters, what, stacklevel=3):
     return bad
 
 
+def loop_pairs(loops):
+    """The (v, x) pairs of ``loops`` as a list (a single (v, x) pair allowed)."""
+    if isinstance(loops, tuple) and len(loops) == 2 and np.ndim(loops[0]) == 1 \
+            and np.size(loops[0]) > 2:
+        return [loops]
+    return list(loops)
+
+
 def check_loops(loops, discard=0, stride=1, what="loops"):
     """Validated loops as a list of (v, x, used), ``used`` the residual samples.
 
@@ -257,11 +265,8 @@ def check_loops(loops, discard=0, stride=1, what="loops"):
         ``discard`` (the data cannot show a loop).
     """
     from piezolib.hysteresis.dahl import strokes
-    if isinstance(loops, tuple) and len(loops) == 2 and np.ndim(loops[0]) == 1 \
-            and np.size(loops[0]) > 2:
-        loops = [loops]                       # a single (v, x) pair
     try:
-        loops = list(loops)
+        loops = loop_pairs(loops)
     except TypeError:
         raise TypeError(f"{what} must be a sequence of (v, x) pairs of 1-D arrays") from None
     if not loops:

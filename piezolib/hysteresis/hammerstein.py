@@ -42,7 +42,7 @@ import scipy.signal as sg
 
 from piezolib._checks import check_count, check_finite_array, check_integer, check_positive
 from piezolib.hysteresis.common import (FitScores, FitWarning, check_loops, covariance,
-                                        estimates, loop_errors, warn_about)
+                                        estimates, loop_errors, loop_pairs, warn_about)
 from piezolib.hysteresis.pi import MAX_PLAYS, PI_STARTS, PIModel, pi_regressors
 from piezolib.hysteresis.preisach import (MAX_LEVELS, PreisachModel, _grid, check_levels, default_range,
                                           preisach_model, preisach_parameters,
@@ -782,7 +782,7 @@ def fit_hammerstein(loops, fs, order="auto", n_plays=10, dynamics=None, delay=1,
                                        float(hysteresis.static_part[0])):
             warnings.warn(f"{what}: {note}", FitWarning, stacklevel=2)
     pairs = [(np.asarray(p[0], dtype=float), np.asarray(p[1], dtype=float))
-             for p in _pairs(loops)]
+             for p in loop_pairs(loops)]
     x_model = [model.simulate(v) for v, x in pairs]
     res, rms, rms_pct, max_pct = loop_errors(x_model, pairs, discard)
     return HammersteinFit(model=model, x_model=x_model, residuals=res, rms=rms,
@@ -897,8 +897,3 @@ def _preisach_at(data, thin, regressors, start, offset, delay, b, a, known, tol)
     return (regs, b, a, *_weights_step(data, regs, b, a, offset, n))
 
 
-def _pairs(loops):
-    if isinstance(loops, tuple) and len(loops) == 2 and np.ndim(loops[0]) == 1 \
-            and np.size(loops[0]) > 2:
-        return [loops]
-    return list(loops)

@@ -20,7 +20,7 @@ import scipy.optimize as opt
 
 from piezolib._checks import check_count, check_finite_array, check_integer
 from piezolib.hysteresis.common import (FitScores, FitWarning, check_loops, covariance, estimates,
-                                        loop_errors, warn_about)
+                                        loop_errors, loop_pairs, warn_about)
 from piezolib.hysteresis.dahl import NotInvertibleError, strokes
 
 # pi_regressors is shared with hammerstein.py (checked inputs), not part of the API
@@ -434,16 +434,10 @@ def fit_pi(loops, n_plays=10, offset=True, start="auto", discard=0, thresholds=N
     if at_bound[0]:
         what += ": the linear weight w_0 is 0 (no exact inverse)"
     warn_about(parameters, what)
-    x_model = [model.simulate(np.asarray(pair[0], dtype=float))
-               for pair in _pairs(loops)]
-    res, rms, rms_pct, max_pct = loop_errors(x_model, _pairs(loops), discard)
+    pairs = loop_pairs(loops)
+    x_model = [model.simulate(np.asarray(pair[0], dtype=float)) for pair in pairs]
+    res, rms, rms_pct, max_pct = loop_errors(x_model, pairs, discard)
     return PIFit(model=model, x_model=x_model, residuals=res, rms=rms, rms_percent=rms_pct,
                  max_percent=max_pct, parameters=tuple(parameters), start_scores=scores)
 
 
-def _pairs(loops):
-    """The (v, x) pairs of already validated ``loops`` (a single pair allowed)."""
-    if isinstance(loops, tuple) and len(loops) == 2 and np.ndim(loops[0]) == 1 \
-            and np.size(loops[0]) > 2:
-        return [loops]
-    return list(loops)

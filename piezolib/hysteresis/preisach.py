@@ -36,7 +36,7 @@ import scipy.optimize as opt
 
 from piezolib._checks import check_count, check_finite_array
 from piezolib.hysteresis.common import (FitScores, FitWarning, check_loops, covariance, estimates,
-                                        loop_errors, warn_about)
+                                        loop_errors, loop_pairs, warn_about)
 from piezolib.hysteresis.dahl import NotInvertibleError
 from piezolib.hysteresis.pi import PI_STARTS, play_outputs
 
@@ -557,10 +557,9 @@ def fit_preisach(loops, levels=16, offset=True, start="auto", discard=0, v_range
     for s0 in starts:
         regs, keep = pruned_regressors(data, v_range, levels, s0, offset)
         solved[s0] = (*_solve(data, regs, offset), keep)
-    scores = {s0: float(np.linalg.norm(A @ th - b)) for s0, (A, b, th, k) in solved.items()} \
-        if start == "auto" else {}
-    start = min(starts, key=lambda s0: float(np.linalg.norm(solved[s0][0] @ solved[s0][2]
-                                                             - solved[s0][1])))
+    norms = {s0: float(np.linalg.norm(A @ th - b)) for s0, (A, b, th, k) in solved.items()}
+    scores = norms if start == "auto" else {}
+    start = min(starts, key=norms.get)
     A, b, theta, keep = solved[start]
     x0 = float(theta[-1]) if offset else 0.0
     model = preisach_model(v_range, levels, scatter(keep, theta[:keep.size], n_all), x0, start)
@@ -568,7 +567,7 @@ def fit_preisach(loops, levels=16, offset=True, start="auto", discard=0, v_range
     what = f"fit_preisach (start {start!r})"
     warn_about([p for p in parameters if p.name == "x0"], what)
     preisach_warnings(model, what)
-    pairs = _pairs(loops)
+    pairs = loop_pairs(loops)
     x_model = [model.simulate(np.asarray(p[0], dtype=float)) for p in pairs]
     res, rms, rms_pct, max_pct = loop_errors(x_model, pairs, discard)
     return PreisachFit(model=model, x_model=x_model, residuals=res, rms=rms,
@@ -628,8 +627,3 @@ def _solve(data, regs, offset):
     return A, b, theta
 
 
-def _pairs(loops):
-    if isinstance(loops, tuple) and len(loops) == 2 and np.ndim(loops[0]) == 1 \
-            and np.size(loops[0]) > 2:
-        return [loops]
-    return list(loops)

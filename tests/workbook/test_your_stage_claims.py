@@ -68,7 +68,9 @@ class _Seeded:
         return 0.9 * value, 1.2 * value
 
 
-def test_experiment_rows_run_with_noise_seeds_carry_their_interval(monkeypatch):
+@pytest.fixture
+def seeded_claims(monkeypatch):
+    """(experiments, claim frame) of a run without a plant whose experiments used seeds."""
     monkeypatch.setattr(hy, "fit_dahl",
                         lambda data, gamma_a, **kw: hy.fit_pi(data, n_plays=2, offset=True))
     loops = own_hysteresis.HysteresisLoops({"raw": loop_pair()}, {}, 100.0)
@@ -77,25 +79,21 @@ def test_experiment_rows_run_with_noise_seeds_carry_their_interval(monkeypatch):
     skipped = own.Skipped(own.NO_PLANT_NOTE)
     records = own.OwnRecords(None, {"raw": Record(*loop_pair(), FS)}, FS)
     experiments = own_control.Experiments(_Seeded(), _Seeded(), None, "Dahl", 0, 0.0)
-    frame = own_claims.record_claims(ClaimTable("own_stage", "test"), records, skipped, skipped,
-                                     choice, skipped, skipped, experiments).frame()
+    return experiments, own_claims.record_claims(ClaimTable("own_stage", "test"), records,
+                                                 skipped, skipped, choice, skipped, skipped,
+                                                 experiments).frame()
+
+
+def test_experiment_rows_run_with_noise_seeds_carry_their_interval(seeded_claims):
+    _, frame = seeded_claims
     row = frame.set_index("quantity").loc["tracking error %, 10 Hz, case III"]
     assert (row.ours, row.low, row.high) == (0.2, 0.9 * 0.2, 1.2 * 0.2)
     # a rerun that moves the mean by less than a quarter of the interval keeps the file
     assert np.isclose(row.precision, (1.2 - 0.9) * 0.2 / 4) and "3 noise seeds" in row.note
 
 
-def test_written_tables_hold_the_values_of_the_claim_table(monkeypatch, tmp_path):
-    monkeypatch.setattr(hy, "fit_dahl",
-                        lambda data, gamma_a, **kw: hy.fit_pi(data, n_plays=2, offset=True))
-    loops = own_hysteresis.HysteresisLoops({"raw": loop_pair()}, {}, 100.0)
-    choice = own_hysteresis.fit_hysteresis(loops, ["raw"], [], gamma_a=30.0, plays=4,
-                                           ceiling_percent=5.0)
-    skipped = own.Skipped(own.NO_PLANT_NOTE)
-    records = own.OwnRecords(None, {"raw": Record(*loop_pair(), FS)}, FS)
-    experiments = own_control.Experiments(_Seeded(), _Seeded(), None, "Dahl", 0, 0.0)
-    frame = own_claims.record_claims(ClaimTable("own_stage", "test"), records, skipped, skipped,
-                                     choice, skipped, skipped, experiments).frame()
+def test_written_tables_hold_the_values_of_the_claim_table(seeded_claims, tmp_path):
+    experiments, frame = seeded_claims
     frame.loc[frame.quantity == "tracking error %, 10 Hz, case III", "ours"] = 0.21  # kept
     frame.to_csv(tmp_path / "own_stage.csv", index=False)
     table4, table5 = own_claims.written_tables(experiments, tmp_path / "own_stage.csv")
