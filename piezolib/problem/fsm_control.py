@@ -471,13 +471,17 @@ def _ss_dict(sys):
             "dt": (None if sys.dt in (None, 0) else float(sys.dt))}
 
 
-def _ss_of(d):
-    D = np.array(d["D"], dtype=float)
-    A = np.array(d["A"], dtype=float)
-    n = A.size and int(round(np.sqrt(A.size)))
-    return ct.ss(A.reshape(n, n), np.array(d["B"], dtype=float).reshape(n, D.shape[1]),
-                 np.array(d["C"], dtype=float).reshape(D.shape[0], n), D,
-                 0 if d.get("dt") is None else d["dt"])
+def _ss_of(d, name="record"):
+    """The state space of a :func:`_ss_dict` (also of the mirror's records, fsm_mimo)."""
+    try:
+        D = np.array(d["D"], dtype=float)
+        A = np.array(d["A"], dtype=float)
+        n = A.size and int(round(np.sqrt(A.size)))
+        A, B, C = (A.reshape(n, n), np.array(d["B"], dtype=float).reshape(n, D.shape[1]),
+                   np.array(d["C"], dtype=float).reshape(D.shape[0], n))
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ValueError(f"{name}: not a state-space record ({exc})") from None
+    return ct.ss(A, B, C, D, 0 if d.get("dt") is None else d["dt"])
 
 
 def write_axis_design(design, nominal, path=None):

@@ -44,6 +44,7 @@ from piezolib._checks import (check_frequency_grid, check_integer, check_integer
                               check_stable, check_type)
 from piezolib.problem import fsm_benchmark as fsm
 from piezolib.problem import fsm_control, genplant, paths
+from piezolib.problem.fsm_control import _ss_dict, _ss_of
 from piezolib.problem.fsm_models import LinearModels
 
 __all__ = ["N_AXES", "MIMO_BLOCKS", "DESIGN_PARAMETERS", "RECORD_NAME", "mirror_model",
@@ -431,24 +432,6 @@ def block_diagonal(controllers):
         if k.ninputs != 1 or k.noutputs != 1:
             raise ValueError(f"controllers[{i}] must be SISO")
     return ct.append(*[ct.ss(k) for k in controllers])
-
-
-def _ss_dict(sys):
-    sys = ct.ss(sys)
-    return {"A": sys.A.tolist(), "B": sys.B.tolist(), "C": sys.C.tolist(), "D": sys.D.tolist()}
-
-
-def _ss_of(d, name):
-    try:
-        A, B, C, D = (np.array(d[k], dtype=float).reshape(-1) for k in "ABCD")
-        D = np.array(d["D"], dtype=float)
-        n = int(round(np.sqrt(A.size)))
-        A = np.array(d["A"], dtype=float).reshape(n, n)
-        B = np.array(d["B"], dtype=float).reshape(n, D.shape[1])
-        C = np.array(d["C"], dtype=float).reshape(D.shape[0], n)
-    except (KeyError, TypeError, ValueError) as exc:
-        raise ValueError(f"{name}: not a state-space record ({exc})") from None
-    return ct.ss(A, B, C, D)
 
 
 def _tf_dict(w):
