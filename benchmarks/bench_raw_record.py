@@ -2,9 +2,9 @@
 family and rate: the Hammerstein fit against the best achievable error, fit CPU time per 50 k
 samples, and its feedforward of a sine of the record's stroke on the generating stage.
 
-Each record is fitted with the default (operator="auto": PI plays or a Preisach grid, chosen
-by the held-out score; the op column names the one kept) and, for comparison, with PI plays
-alone (operator="pi").
+Each record is fitted with operator="auto" (PI plays or a Preisach grid, chosen by the
+held-out score; the op column names the one kept) and, for comparison, with PI plays alone
+(operator="pi", the default).
 
     nice -n 10 python benchmarks/bench_raw_record.py
 """

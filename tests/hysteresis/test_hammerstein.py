@@ -155,7 +155,7 @@ def test_auto_keeps_the_pi_fit_bit_for_bit_where_plays_predict_best():
     x = true.simulate(v) + np.random.default_rng(1).normal(0, 1e-3, v.size)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", hy.FitWarning)
-        auto = hy.fit_hammerstein((v, x), FS, order=(3, 3), thresholds=R)
+        auto = hy.fit_hammerstein((v, x), FS, order=(3, 3), thresholds=R, operator="auto")
         pi = hy.fit_hammerstein((v, x), FS, order=(3, 3), thresholds=R, operator="pi")
     assert set(auto.operator_scores) == set(hy.OPERATORS)
     assert auto.operator == pi.operator == "pi" and pi.operator_scores == {}
