@@ -132,11 +132,20 @@ class SOSController:
 
     def to_statespace(self, dtype="float64"):
         """The sections (``dtype`` coefficients) as a control.StateSpace at dt = 1/fs."""
-        sos = self.coefficients(dtype).astype(np.float64)
-        sys = ct.tf([1.0], [1.0], 1.0 / self.fs)
-        for row in sos:
-            sys = sys * ct.tf(row[:3], row[3:], 1.0 / self.fs)
-        return ct.ss(sys, inputs="v_e", outputs="u_b", name=self.name)
+        # section by section in series, each in controllable form (one state for a first-order
+        # row, none for a gain): the product of the sections' polynomials and a tf2ss kept or
+        # dropped their common factors by rounding, so the state count changed between BLAS
+        # kernels (8 or 6 for the deployed controller); here it follows the coefficients
+        A, B, C, D = np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.ones((1, 1))
+        for b0, b1, b2, _, a1, a2 in self.coefficients(dtype).astype(np.float64):
+            order = 2 if (b2 != 0 or a2 != 0) else (1 if (b1 != 0 or a1 != 0) else 0)
+            As = np.array([[-a1, -a2], [1.0, 0.0]])[:order, :order]
+            Bs = np.array([[1.0], [0.0]])[:order]
+            Cs = np.array([[b1 - b0 * a1, b2 - b0 * a2]])[:, :order]
+            n, m = A.shape[0], order
+            A = np.block([[A, np.zeros((n, m))], [Bs @ C, As]])
+            B, C, D = np.vstack([B, Bs @ D]), np.hstack([b0 * C, Cs]), b0 * D
+        return ct.ss(A, B, C, D, 1.0 / self.fs, inputs="v_e", outputs="u_b", name=self.name)
 
     def check_float32(self, rtol=None, what="controller"):
         """Check the float32 sections against these (float64) ones.
