@@ -33,7 +33,7 @@ from piezolib.workbook import study as studies
 from piezolib.workbook.outputs import (data_dir, notebooks_dir, project_root,
                                        study_figures_dir, study_results_dir)
 
-__all__ = ["DATA_STEPS", "DATA_CHECKS", "DATA_FILES", "STUDY_DESIGNS", "GATHERING", "KERNEL_ENVIRONMENT", "list_notebooks", "notebook_waves", "default_jobs", "inject_study", "study_spec",
+__all__ = ["DATA_STEPS", "DATA_CHECKS", "DATA_FILES", "STUDY_DESIGNS", "GATHERING", "EXPECTED_SECONDS", "KERNEL_ENVIRONMENT", "list_notebooks", "notebook_waves", "default_jobs", "inject_study", "study_spec",
            "run_notebook", "run", "remove_stale_temporaries", "NotebookFailure"]
 
 #: Data-generating steps run before the notebooks, as "module:function" names
@@ -63,6 +63,18 @@ STUDY_DESIGNS = [
 #: Name prefixes of the notebooks that read every other notebook's table
 #: (the reproduction report): they run after all the others have finished.
 GATHERING = ("07_",)
+
+#: A notebook's seconds inside ``reproduce`` on an idle 2-core machine, as
+#: ``benchmarks/bench_workbook.py`` printed them: only their order is used, to start the long
+#: notebooks of a wave first so that two kernels finish close together (a notebook not listed
+#: counts as the median, and equal ones go by name).
+EXPECTED_SECONDS = {
+    "00_published_design_audit.ipynb": 8.1, "01_identification.ipynb": 8.8,
+    "02_uncertainty.ipynb": 8.3, "03_dahl_hysteresis.ipynb": 15.1,
+    "04_weighting_design.ipynb": 6.5, "05_mu_synthesis.ipynb": 11.6,
+    "06_tracking_experiments.ipynb": 16.0, "08_your_own_stage.ipynb": 12.4,
+    "09_mixed_mu.ipynb": 14.7, "10_real_piezo_benchmark.ipynb": 26.8, "11_sweeps.ipynb": 20.2,
+    "12_tracking_over_the_set.ipynb": 21.7, "07_reproduction_report.ipynb": 3.8}
 
 #: Environment variables a headless run sets for its kernels unless already set:
 #: figures are saved, not drawn (Agg); threaded BLAS on small problems is slower on
@@ -141,19 +153,28 @@ def notebook_waves(paths):
 
     Within a wave the notebooks are independent (each builds what it needs,
     the controllers come from the committed artifact or the study's disk
-    cache) and may run side by side; the notebooks named in
-    :data:`GATHERING` form a last wave.  Empty waves are left out.
+    cache) and may run side by side, the longest first
+    (:data:`EXPECTED_SECONDS`: with two kernels the wave then ends about
+    when its last notebook does); the notebooks named in :data:`GATHERING`
+    form a last wave.  Empty waves are left out.
 
     Examples
     --------
-    >>> waves = notebook_waves(list_notebooks(["05", "07"]))
+    >>> waves = notebook_waves(list_notebooks(["05", "07", "10"]))
     >>> [[path.name for path in wave] for wave in waves]     # the report gathers, last
-    [['05_mu_synthesis.ipynb'], ['07_reproduction_report.ipynb']]
+    [['10_real_piezo_benchmark.ipynb', '05_mu_synthesis.ipynb'], ['07_reproduction_report.ipynb']]
     """
     paths = _notebook_paths(paths, must_exist=False)
-    first = [p for p in paths if not p.name.startswith(GATHERING)]
+    first = sorted((p for p in paths if not p.name.startswith(GATHERING)),
+                   key=lambda p: (-_expected_seconds(p), p.name))
     last = [p for p in paths if p.name.startswith(GATHERING)]
     return [wave for wave in (first, last) if wave]
+
+
+def _expected_seconds(path):
+    """A notebook's expected seconds (:data:`EXPECTED_SECONDS`; the median if not listed)."""
+    median = sorted(EXPECTED_SECONDS.values())[len(EXPECTED_SECONDS) // 2]
+    return EXPECTED_SECONDS.get(path.name, median)
 
 
 def default_jobs():

@@ -194,3 +194,18 @@ def test_reproduce_first_removes_the_temporary_files_a_killed_run_left(workbook,
     assert other_study.exists()                  # another study's folder: not this run's
     assert str(data) in caplog.text and str(figure) in caplog.text
     assert reproduce.remove_stale_temporaries(study.Study().replace(name="wide")) == [other_study]
+
+
+def test_the_long_notebooks_of_a_wave_start_first():
+    from pathlib import Path
+
+    names = ["00_published_design_audit.ipynb", "10_real_piezo_benchmark.ipynb", "99_new.ipynb",
+             "07_reproduction_report.ipynb", "05_mu_synthesis.ipynb"]
+    waves = reproduce.notebook_waves([Path(n) for n in names])
+    seconds = [reproduce._expected_seconds(p) for p in waves[0]]
+    assert seconds == sorted(seconds, reverse=True) and waves[0][0].name.startswith("10_")
+    assert reproduce._expected_seconds(Path("99_new.ipynb")) == sorted(
+        reproduce.EXPECTED_SECONDS.values())[len(reproduce.EXPECTED_SECONDS) // 2]
+    assert [p.name for p in waves[1]] == ["07_reproduction_report.ipynb"]
+    # every notebook of the workbook has an expectation (a new one would run by the median)
+    assert {p.name for p in reproduce.list_notebooks()} == set(reproduce.EXPECTED_SECONDS)
