@@ -735,7 +735,8 @@ CASES = {
         {"design": {"text": "abc"}, "deployed": {"text": "x"},
          "sections": {"text": "abc", "no deployed": {}}, "G": PLANT, "H_e": {"text": "x"},
          "fs": POSITIVE, "grids": {"text": "x", "empty": [], "not triples": [(1.0, 2.0)]},
-         "spread": POSITIVE, "delay_samples": {"negative": -1, "fraction": 0.5}}),
+         "spread": POSITIVE, "delay_samples": {"negative": -1, "fraction": 0.5},
+         "committed": {"text": "yes"}}),
     "coefficient_box.searched_end_points": (
         Fill(designs=[], deployed=K, sections={_CB.DEPLOYED: SECTIONS_10K}),
         {"designs": {"text": "abc", "not designs": [1, 2]}, "fs": POSITIVE}),

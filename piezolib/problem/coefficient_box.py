@@ -667,7 +667,10 @@ def check_chosen_design(design, deployed, sections, G, H_e, H_y, fs, grids=CHECK
     spread = paper.UNCERTAINTY_SPREAD if spread is None else check_positive("spread", spread)
     for label, sys in (("G", G), ("H_e", H_e), ("H_y", H_y)):
         check_siso(label, check_model(label, sys, proper=True))
+    fs = check_positive("fs", fs)              # before the mu bounds, which take seconds
     delay_samples = check_integer("delay_samples", delay_samples, minimum=0)
+    if not isinstance(committed, bool):
+        raise TypeError(f"committed must be True or False, got {committed!r}")
     if isinstance(grids, str) or not hasattr(grids, "__len__") or len(grids) == 0:
         raise TypeError(f"grids must be a non-empty sequence of (omega_min, omega_max, points), "
                         f"got {grids!r}"[:200])
