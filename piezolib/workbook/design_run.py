@@ -260,7 +260,8 @@ def write_design_run(run, path):
     check_type("run", run, DesignRun, "a DesignRun (derive_design_run)")
     path = check_path("path", path)
     doc = {"format": pipeline.ARTIFACT_FORMAT, "study": run.study, "digest": run.digest,
-           "library": pipeline.library_fingerprint(), "mu": run.mu,
+           "library": pipeline.library_fingerprint(),
+           "mu": {k: _json_number(v) for k, v in run.mu.items()},
            "dk": run.dk.to_dict(), "fixed_order": run.fixed_order.to_dict(),
            "delay_sweep": {str(d): [_json_number(v) for v in pair]
                            for d, pair in run.delay_sweep.items()},
@@ -310,7 +311,8 @@ def read_design_run(path):
         return DesignRun(doc["study"], doc["digest"], str(path),
                          SearchRecord.from_dict(doc["dk"]),
                          SearchRecord.from_dict(doc["fixed_order"]),
-                         {k: float(v) for k, v in doc["mu"].items()}, sweep,
+                         {k: np.nan if v is None else float(v) for k, v in doc["mu"].items()},
+                         sweep,
                          *(pipeline._ss_from_dict(doc["controllers"][name])
                            for name in ("K_full", "K_fixed")))
     except (KeyError, TypeError, ValueError) as exc:

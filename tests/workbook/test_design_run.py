@@ -36,6 +36,15 @@ def test_a_record_reads_back_exactly(tmp_path):
     assert back.mu == run.mu and np.array_equal(back.K_full.A, run.K_full.A)
 
 
+def test_a_failed_mu_value_reads_back_as_nan(tmp_path):
+    # a search whose H-inf step failed has mu NaN: written as null, read back as NaN
+    run = small_run()
+    run = design_run.DesignRun(*[{"fixed order": np.nan} if f == "mu" else getattr(run, f)
+                                 for f in design_run.DesignRun.__dataclass_fields__])
+    back = design_run.read_design_run(design_run.write_design_run(run, tmp_path / "r.json"))
+    assert np.isnan(back.mu["fixed order"])
+
+
 def test_an_edited_record_is_refused_naming_the_file(tmp_path):
     path = design_run.write_design_run(small_run(), tmp_path / "r.json")
     doc = json.loads(path.read_text())
