@@ -16,7 +16,7 @@ import scipy.linalg as la
 from piezolib._checks import (check_channels, check_finite_array, check_integer, check_lti,
                               check_positive, check_proper)
 from piezolib.robust.hinf_central import _AXIS_REL_TOL, _central, _eig_errors, _marginal
-from piezolib.robust.lft import lft_response
+from piezolib.robust.lft import _LoopResponse
 from piezolib.robust.lti import (balance, from_scaled, max_singular_value,
                                  time_scale_of, to_scaled)
 
@@ -271,8 +271,8 @@ def _lft_peak(P, K, omega, omega_s):
     """||F_l(P, K)||_inf and its frequency [rad/s] from the pointwise loop
     (:func:`~piezolib.robust.lft.lft_response`, as ``lft_hinf_norm`` computes it),
     refined by :func:`_refined_peak`."""
-    return _refined_peak(
-        lambda w: _largest_singular_values(lft_response(P, K, w, omega_s=omega_s)), omega)
+    loop = _LoopResponse(P, K, omega_s)          # P and K scaled and balanced once
+    return _refined_peak(lambda w: _largest_singular_values(loop(w)), omega)
 
 
 def _regularization_weight(name, D, rank, reference, weight, option, what):

@@ -107,33 +107,58 @@ def lft_response(P, K, omega, omega_s=None):
     >>> M.shape, np.abs(M[:, 0, 0]).round(4)
     ((2, 1, 1), array([0.0909, 0.9999]))
     """
-    nmeas, ncon = _split(P, K)
-    omega = check_finite_array("omega", omega, ndim=1, min_length=1, real=True)
-    omega_s = time_scale_of(P, K) if omega_s is None else check_positive("omega_s", omega_s)
-    s = 1j * omega / omega_s
-    Ps, Ks = to_scaled(ct.ss(P), omega_s), to_scaled(ct.ss(K), omega_s)
-    (Pw, P_cond), (Kw, K_cond) = _response(Ps, s), _response(Ks, s)
-    M = np.empty((omega.size, P.noutputs - nmeas, P.ninputs - ncon), complex)
-    # near a pole of P or K on the axis (a plant resonance, an integrator) their
-    # responses are huge and the pointwise formula cancels them; there the
-    # balanced closed-loop realisation is the accurate one
-    near_pole = np.maximum(P_cond, K_cond) > _POLE_CONDITION
-    if np.any(near_pole):
-        CL = balance(Ps.lft(Ks, nu=ncon, ny=nmeas))
-        M[near_pole] = _response(CL, s[near_pole])[0]
-    ok = ~near_pole
-    P11, P12 = Pw[ok, :-nmeas, :-ncon], Pw[ok, :-nmeas, -ncon:]
-    P21, P22 = Pw[ok, -nmeas:, :-ncon], Pw[ok, -nmeas:, -ncon:]
-    PK = P22 @ Kw[ok]
-    loop = np.eye(nmeas) - PK
-    # singular relative to the terms it is the difference of (round-off level)
-    sigma_min = np.linalg.svd(loop, compute_uv=False)[:, -1]
-    singular = sigma_min <= 8 * np.finfo(float).eps * (1 + np.linalg.norm(PK, 2, axis=(1, 2)))
-    if np.any(singular):
-        raise ValueError(f"I - P22 K is singular at omega = {omega[ok][singular][0]:.6g} rad/s: "
-                         "F_l(P, K) has a pole on the imaginary axis there")
-    M[ok] = P11 + P12 @ Kw[ok] @ np.linalg.solve(loop, P21)
-    return M
+    loop = _LoopResponse(P, K, omega_s)
+    return loop(check_finite_array("omega", omega, ndim=1, min_length=1, real=True))
+
+
+class _LoopResponse:
+    """F_l(P, K)'s response as a function of frequency, with P and K realised once.
+
+    :func:`lft_response` is ``_LoopResponse(P, K, omega_s)(omega)``; a search that
+    evaluates the same loop at many frequency sets (a peak's refinement)
+    scales and balances P and K once instead of at every call.
+
+    Examples
+    --------
+    >>> P = ct.ss(ct.tf([[[1], [-1]], [[1], [-1]]], [[[1], [1, 1]], [[1], [1, 1]]]))
+    >>> loop, w = _LoopResponse(P, ct.tf(10, 1)), np.array([0.0, 1e3])
+    >>> bool(np.array_equal(loop(w), lft_response(P, ct.tf(10, 1), w)))
+    True
+    """
+
+    def __init__(self, P, K, omega_s=None):
+        self.nmeas, self.ncon = _split(P, K)
+        self.omega_s = (time_scale_of(P, K) if omega_s is None
+                        else check_positive("omega_s", omega_s))
+        self.Ps, self.Ks = to_scaled(ct.ss(P), self.omega_s), to_scaled(ct.ss(K), self.omega_s)
+        self.shape = (P.noutputs - self.nmeas, P.ninputs - self.ncon)
+
+    def __call__(self, omega):
+        """The response on ``omega`` [rad/s] (1-D, finite), shape (len(omega), p1, m1)."""
+        nmeas, ncon, Ps, Ks = self.nmeas, self.ncon, self.Ps, self.Ks
+        s = 1j * omega / self.omega_s
+        (Pw, P_cond), (Kw, K_cond) = _response(Ps, s), _response(Ks, s)
+        M = np.empty((omega.size, *self.shape), complex)
+        # near a pole of P or K on the axis (a plant resonance, an integrator) their
+        # responses are huge and the pointwise formula cancels them; there the
+        # balanced closed-loop realisation is the accurate one
+        near_pole = np.maximum(P_cond, K_cond) > _POLE_CONDITION
+        if np.any(near_pole):
+            CL = balance(Ps.lft(Ks, nu=ncon, ny=nmeas))
+            M[near_pole] = _response(CL, s[near_pole])[0]
+        ok = ~near_pole
+        P11, P12 = Pw[ok, :-nmeas, :-ncon], Pw[ok, :-nmeas, -ncon:]
+        P21, P22 = Pw[ok, -nmeas:, :-ncon], Pw[ok, -nmeas:, -ncon:]
+        PK = P22 @ Kw[ok]
+        loop = np.eye(nmeas) - PK
+        # singular relative to the terms it is the difference of (round-off level)
+        sigma_min = np.linalg.svd(loop, compute_uv=False)[:, -1]
+        singular = sigma_min <= 8 * np.finfo(float).eps * (1 + np.linalg.norm(PK, 2, axis=(1, 2)))
+        if np.any(singular):
+            raise ValueError(f"I - P22 K is singular at omega = {omega[ok][singular][0]:.6g} "
+                             "rad/s: F_l(P, K) has a pole on the imaginary axis there")
+        M[ok] = P11 + P12 @ Kw[ok] @ np.linalg.solve(loop, P21)
+        return M
 
 
 def lft_hinf_norm(P, K, omega, omega_s=None, rtol=1e-9):
@@ -178,8 +203,10 @@ def lft_hinf_norm(P, K, omega, omega_s=None, rtol=1e-9):
     omega = check_finite_array("omega", omega, ndim=1, min_length=2, real=True)
     omega_s = time_scale_of(P, K) if omega_s is None else check_positive("omega_s", omega_s)
 
+    loop = _LoopResponse(P, K, omega_s)
+
     def sigma(w):
-        return np.linalg.norm(lft_response(P, K, np.atleast_1d(w), omega_s), 2, axis=(1, 2))
+        return np.linalg.norm(loop(np.atleast_1d(np.asarray(w, float))), 2, axis=(1, 2))
 
     g = sigma(omega)
     k = int(np.argmax(g))
