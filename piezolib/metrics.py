@@ -16,7 +16,8 @@ import numpy as np
 
 from piezolib._checks import check_finite_array, check_positive, check_same_length
 
-__all__ = ["tracking_error", "tracking_error_percent", "peak_to_peak_error_percent",
+__all__ = ["tracking_error", "tracking_error_percent", "tracking_errors_percent",
+           "peak_to_peak_error_percent",
            "improvement_percent", "mean_interval", "simulation_error"]
 
 
@@ -134,8 +135,44 @@ def tracking_error_percent(x_r, x, range_=None):
     >>> round(tracking_error_percent(x_r, x, range_=12.0), 3)
     2.5
     """
-    e = tracking_error(x_r, x)
-    return float(np.max(np.abs(e))) / _range_of(x_r, range_) * 100
+    x_r = check_finite_array("x_r", x_r, ndim=1, min_length=2, real=True)
+    x = check_finite_array("x", x, ndim=1, min_length=2, real=True)
+    check_same_length(x_r=x_r, x=x)
+    return float(tracking_errors_percent(x_r, x[:, None], range_)[0])
+
+
+def tracking_errors_percent(x_r, X, range_=None):
+    """:func:`tracking_error_percent` of many runs at once: one per column of ``X``.
+
+    Parameters
+    ----------
+    x_r : array_like, shape (n,)
+        Desired displacement (shared by the runs).
+    X : array_like, shape (n, M)
+        Column j: the displacement run j reached (same unit).
+    range_ : float, optional
+        R (same unit); default the peak-to-peak of ``x_r``.
+
+    Returns
+    -------
+    ndarray, shape (M,)
+        Entry j equals ``tracking_error_percent(x_r, X[:, j], range_)`` exactly (the
+        largest |e| is exact in any order).
+
+    Examples
+    --------
+    >>> x_r = [0.0, 5.0, 10.0, 5.0, 0.0]
+    >>> X = [[0.0, 0.0], [4.8, 5.0], [10.1, 10.0], [5.3, 5.1], [0.0, 0.0]]
+    >>> tracking_errors_percent(x_r, X).round(3)          # max |e|: 0.3 and 0.1 of 10
+    array([3., 1.])
+    """
+    x_r = check_finite_array("x_r", x_r, ndim=1, min_length=2, real=True)
+    X = check_finite_array("X", X, ndim=2, real=True)
+    if X.shape[0] != x_r.shape[0]:
+        raise ValueError(f"X must have one row per sample of x_r ({x_r.shape[0]}), got "
+                         f"shape {X.shape}")
+    e = x_r[:, None] - X
+    return np.max(np.abs(e), axis=0) / _range_of(x_r, range_) * 100
 
 
 def improvement_percent(before, after):

@@ -198,6 +198,11 @@ CASES = {
     "metrics.tracking_error": (dict(x_r=U, x=Y), {"x_r": SIGNAL, "x": SIGNAL}),
     "metrics.tracking_error_percent": (dict(x_r=U, x=Y), {"x_r": SIGNAL, "x": SIGNAL}),
     "metrics.peak_to_peak_error_percent": (dict(x_r=U, x=Y), {"x_r": SIGNAL, "x": SIGNAL}),
+    "metrics.tracking_errors_percent": (dict(x_r=U, X=np.column_stack([Y, Y])),
+                                        {"x_r": SIGNAL,
+                                         "X": {"nan": np.column_stack([Y, np.r_[Y[:-1], np.nan]]),
+                                               "1-D": Y, "rows": np.column_stack([Y, Y])[:-1],
+                                               "text": "abc"}}),
     # uncertainty
     "uncertainty.model_set": (dict(G=ct.tf([1.0], [1.0, 3.0, 2.0]), spread=0.05),
                               {"G": LTI_PROPER, "spread": POSITIVE}),   # unstable G allowed

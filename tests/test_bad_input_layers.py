@@ -439,6 +439,13 @@ CASES = {
                        "sections_dtype": {"unknown": "float16", "number": 3},
                        "seeds": SEEDS, "controller": {"text": "abc", "array": np.ones(2)},
                        "feedforward": {"text": "abc", "negative gain": -2.0}}),
+    "loop.batch_tracking_errors": (dict(batch=STAGE_BATCH, v_r=V_R, frequency_Hz=1000.0,
+                                        range_um=12.0),
+                                   {"batch": {**STAGE_BAD, "a stage": STAGE}, "v_r": SIGNAL,
+                                    "frequency_Hz": POSITIVE,
+                                    "discard_periods": {"negative": -1, "all": 100},
+                                    "sections_dtype": {"unknown": "float16"},
+                                    "range_um": POSITIVE}),
     # workbook.experiments
     "experiments.table4_reference": (dict(amplitude_V=5.0),
                                      {"amplitude_V": POSITIVE, "periods": POSITIVE_INT,

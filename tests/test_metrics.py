@@ -131,3 +131,19 @@ def test_mean_interval_along_an_axis_and_its_coverage():
 def test_mean_interval_bad_input(values, kwargs, match):
     with pytest.raises(ValueError, match=match):
         metrics.mean_interval(values, **kwargs)
+
+
+def test_tracking_errors_percent_is_tracking_error_percent_per_column():
+    rng = np.random.default_rng(3)
+    x_r = np.sin(np.linspace(0, 7, 300)) * 6
+    X = x_r[:, None] + rng.normal(0, 0.2, (300, 5))
+    for range_ in (None, 12.0):
+        many = metrics.tracking_errors_percent(x_r, X, range_)
+        assert many.tolist() == [metrics.tracking_error_percent(x_r, X[:, j], range_)
+                                 for j in range(5)]
+    with pytest.raises(ValueError, match="one row per sample"):
+        metrics.tracking_errors_percent(x_r, X[:-1])
+    with pytest.raises(ValueError, match="X"):
+        metrics.tracking_errors_percent(x_r, X[:, 0])
+    with pytest.raises(ValueError, match="X"):
+        metrics.tracking_errors_percent(x_r, np.where(X > 5, np.nan, X))

@@ -391,6 +391,7 @@ class StageBatchSimulation:
             self._h_sum = np.empty(n)
             self._h_rows = list(self._h[2:])
         self._blocks = []               # (7, BLOCK, N): the signals of _SIGNALS by sample
+        self._whole_log = None          # (7, n, N) after run_sections_loop: the blocks' array
         self._k = 0
         self._j = 0                     # row of sample k in the last block
         self._new_block()
@@ -404,6 +405,7 @@ class StageBatchSimulation:
         self._noise = self._noise_rms * draws[:, self._member_stream]
         self._log = np.empty((len(self._SIGNALS), self._BLOCK, bt.size))
         self._blocks.append(self._log)
+        self._whole_log = None          # the log goes on in separate blocks
 
     @staticmethod
     def _convert(v, out, lsb, code_lo, code_hi):
@@ -581,7 +583,7 @@ class StageBatchSimulation:
         u_b = np.zeros((n, N))
         diverged = closed_loop(v_r, u_f, int(delay), state, sections.arrays, u_b, diverged_v)
         stop = n if diverged < 0 else diverged
-        self._blocks, self._log = blocks, blocks[-1]
+        self._blocks, self._log, self._whole_log = blocks, blocks[-1], log
         self._k, self._j = stop, stop % B
         self._v_y = log[6, stop]
         return u_b[:stop + (diverged >= 0)], diverged
@@ -611,19 +613,67 @@ class StageBatchSimulation:
         _warn_members(records, self._batch.fs, stacklevel=3)
         return records
 
+    def samples(self, name):
+        """One signal of every member over the samples applied so far, by sample.
+
+        Parameters
+        ----------
+        name : str
+            One of ``"u"`` (u_c requested [V]), ``"u_dac"``, ``"v_cmd"``, ``"v_a"``,
+            ``"y"`` (noise-free output [V]), ``"analog"`` (before the ADC [V]) or
+            ``"v_y"`` (measured [V]).
+
+        Returns
+        -------
+        ndarray, shape (k, N)
+            Row k: sample k of every member (read-only; a view of the log after
+            :meth:`run_sections_loop`).  Column i is the signal of
+            :meth:`records`' record i (``v_y`` is its ``v_y_V``).
+
+        Examples
+        --------
+        >>> sim = StageBatch.of_seeds(VirtualStage(), [0, 1]).start()
+        >>> for k in range(5):
+        ...     _ = sim.step(1.0)
+        >>> sim.samples("v_y").shape
+        (5, 2)
+        """
+        if name not in self._SIGNALS:
+            raise ValueError(f"name must be one of {self._SIGNALS}, got {name!r}")
+        row, n = self._SIGNALS.index(name), self._k
+        if self._whole_log is not None:          # the compiled loop's: one array
+            out = self._whole_log[row, :n]
+        else:
+            out = np.concatenate([blk[row][:min(self._BLOCK, n - start)]
+                                  for start, blk in zip(range(0, n, self._BLOCK),
+                                                        self._blocks)])
+        out = out.view()
+        out.setflags(write=False)
+        return out
+
+    def saturation_counts(self):
+        """Samples limited anywhere in the chain, per member: the sum of the counts of
+        :meth:`records`' three :class:`~piezolib.problem.stage.Saturation` (DAC/amplifier
+        input, amplifier output, ADC), without building the records.
+
+        Returns
+        -------
+        ndarray of int, shape (N,)
+        """
+        bt = self._batch
+        return sum(np.count_nonzero((x < lo) | (x > hi), axis=0)
+                   for (lo, hi), x in ((bt.dac.limits, self.samples("u")),
+                                       ((bt.out_lo, bt.out_hi), self.samples("v_cmd")),
+                                       (bt.adc.limits, self.samples("analog"))))
+
     def _records(self, members):
         bt = self._batch
         n = self._k
         members = list(members)
 
         def signal(name):
-            # blocks of (BLOCK, N) by sample -> (len(members), n): a row per member
-            row = self._SIGNALS.index(name)
-            out = np.empty((len(members), n))
-            for start, blk in zip(range(0, n, self._BLOCK), self._blocks):
-                stop = min(start + self._BLOCK, n)
-                out[:, start:stop] = blk[row][:stop - start][:, members].T
-            return out
+            # (n, N) by sample -> (len(members), n): a row per member
+            return np.ascontiguousarray(self.samples(name)[:, members].T)
 
         u_dac, v_cmd, y, v_y = (signal(name) for name in ("u_dac", "v_cmd", "y", "v_y"))
         v_a = signal("v_a") if self._amp_limits else v_cmd

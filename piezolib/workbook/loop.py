@@ -26,11 +26,13 @@ from piezolib.problem import paper
 from piezolib._checks import check_finite_array, check_integer, check_positive, check_proper, check_siso
 from piezolib.hysteresis.common import MODEL_REQUIREMENT, HysteresisModel
 from piezolib.hysteresis.dahl import DahlModel
-from piezolib.metrics import peak_to_peak_error_percent, tracking_error_percent
+from piezolib.metrics import (peak_to_peak_error_percent, tracking_error_percent,
+                              tracking_errors_percent)
 from piezolib.robust.discrete import DiscreteController, discretize
 from piezolib.robust.export import SectionFilter, SectionFilterBatch, SOSController
 
-__all__ = ["LoopResult", "discrete_controller", "run_loop", "DISCARD_PERIODS",
+__all__ = ["LoopResult", "discrete_controller", "run_loop", "batch_tracking_errors",
+           "DISCARD_PERIODS",
            "COMPUTATION_DELAY_SAMPLES", "SECTION_DTYPES"]
 
 #: Whole samples between reading v_y[k] and applying the u_b computed from it.
@@ -204,14 +206,8 @@ class LoopResult:
 
     def steady_state(self, frequency_Hz, discard_periods=DISCARD_PERIODS):
         """Slice of the samples after the first ``discard_periods`` periods."""
-        frequency_Hz = check_positive("frequency_Hz", frequency_Hz)
-        discard_periods = check_integer("discard_periods", discard_periods, minimum=0)
-        fs = 1.0 / (self.t_s[1] - self.t_s[0])
-        start = int(round(discard_periods * fs / frequency_Hz))
-        if start >= len(self) - 2:
-            raise ValueError(f"discarding {discard_periods} period(s) of {frequency_Hz:g} Hz "
-                             f"leaves no samples of the {len(self)}-sample run")
-        return slice(start, None)
+        return _steady_state(len(self), self.t_s[1] - self.t_s[0], frequency_Hz,
+                             discard_periods)
 
     def tracking_error_percent(self, frequency_Hz, discard_periods=DISCARD_PERIODS,
                                range_um=None):
@@ -227,6 +223,17 @@ class LoopResult:
         :meth:`tracking_error_percent`."""
         s = self.steady_state(frequency_Hz, discard_periods)
         return peak_to_peak_error_percent(self.x_r_um[s], self.x_um[s], range_um)
+
+
+def _steady_state(n, dt, frequency_Hz, discard_periods):
+    """:meth:`LoopResult.steady_state` of an ``n``-sample run at sample time ``dt`` [s]."""
+    frequency_Hz = check_positive("frequency_Hz", frequency_Hz)
+    discard_periods = check_integer("discard_periods", discard_periods, minimum=0)
+    start = int(round(discard_periods * (1.0 / dt) / frequency_Hz))
+    if start >= n - 2:
+        raise ValueError(f"discard_periods = {discard_periods} period(s) of {frequency_Hz:g} Hz "
+                         f"leaves no samples of the {n}-sample run")
+    return slice(start, None)
 
 
 def _feedforward_signal(feedforward, v_r):
@@ -325,9 +332,7 @@ def run_loop(stage, v_r, *, feedforward=None, controller=None,
     # the reference and the arithmetic first: both paths below would otherwise name an
     # internal signal (u_c) or fail deep in the section filter
     v_r = check_finite_array("v_r", v_r, ndim=1, min_length=2, real=True)
-    if sections_dtype not in SECTION_DTYPES:
-        raise ValueError(f"sections_dtype must be one of {SECTION_DTYPES}, "
-                         f"got {sections_dtype!r}")
+    _check_sections_dtype(sections_dtype)
     if isinstance(stage, StageBatch):
         if seeds is not None:
             raise ValueError("seeds must be None when stage is a StageBatch (its members "
@@ -354,6 +359,12 @@ def run_loop(stage, v_r, *, feedforward=None, controller=None,
         return LoopResult(v_r, u_f, np.zeros_like(v_r), record, ff_text, None, delay)
     u_b, record = _closed_loop(stage, v_r, u_f, _state_space_step(Kd), delay)
     return LoopResult(v_r, u_f, u_b, record, ff_text, Kd, delay)
+
+
+def _check_sections_dtype(sections_dtype):
+    if sections_dtype not in SECTION_DTYPES:
+        raise ValueError(f"sections_dtype must be one of {SECTION_DTYPES}, "
+                         f"got {sections_dtype!r}")
 
 
 def _state_space_step(Kd):
@@ -420,6 +431,77 @@ def _run_batch(batch, v_r, feedforward, controller, delay_samples, sections_dtyp
             for i, record in enumerate(records)]
 
 
+def batch_tracking_errors(batch, v_r, frequency_Hz, *, feedforward=None, controller=None,
+                          delay_samples=COMPUTATION_DELAY_SAMPLES, sections_dtype="float32",
+                          discard_periods=DISCARD_PERIODS, range_um=None):
+    """The tracking error % and the limited samples of every member of a batch, without
+    a :class:`LoopResult` per member.
+
+    Entry i equals, float for float, what ``run_loop(batch, v_r, ...)[i]`` gives with
+    :meth:`LoopResult.tracking_error_percent` ``(frequency_Hz, discard_periods,
+    range_um)`` and :attr:`LoopResult.saturation_count`; with an SOSController the
+    compiled loop's signals are read in place (no record per member: a set of hundreds
+    of members saves their copies).  No :class:`StageSaturationWarning` is issued: the
+    counts say which members were limited.
+
+    Parameters
+    ----------
+    batch : piezolib.problem.stage_batch.StageBatch
+    v_r : array_like
+        Reference [V], 1-D.
+    frequency_Hz : float
+        The reference's frequency [Hz] (the steady state starts after
+        ``discard_periods`` of its periods).
+    feedforward, controller, delay_samples, sections_dtype
+        As in :func:`run_loop`.
+    discard_periods : int
+    range_um : float, optional
+        As in :meth:`LoopResult.tracking_error_percent`.
+
+    Returns
+    -------
+    errors : ndarray, shape (N,)
+        Tracking error [%] of each member (:func:`piezolib.metrics.tracking_error_percent`).
+    saturation_counts : ndarray of int, shape (N,)
+
+    Examples
+    --------
+    >>> from piezolib.problem.stage import VirtualStage
+    >>> from piezolib.problem.stage_batch import StageBatch
+    >>> batch = StageBatch.of_seeds(VirtualStage(), [0, 1])
+    >>> v_r = 2.0 + np.sin(2 * np.pi * 50.0 * np.arange(600) / 1e4)   # 3 periods of 50 Hz
+    >>> errors, counts = batch_tracking_errors(batch, v_r, 50.0, feedforward=0.9,
+    ...                                        controller=paper.controller())
+    >>> errors.shape, counts.tolist()
+    ((2,), [0, 0])
+    """
+    from piezolib.problem.stage_batch import StageBatch           # imported lazily by the package
+    if not isinstance(batch, StageBatch):
+        raise TypeError(f"batch must be a StageBatch, got {type(batch).__name__}")
+    v_r = check_finite_array("v_r", v_r, ndim=1, min_length=2, real=True)
+    steady = _steady_state(len(v_r), 1.0 / batch.fs, frequency_Hz, discard_periods)
+    _check_sections_dtype(sections_dtype)
+    range_um = None if range_um is None else check_positive("range_um", range_um)
+    if isinstance(controller, SOSController):
+        delay = check_integer("delay_samples", delay_samples, minimum=0)
+        if not math.isclose(controller.fs, batch.fs, rel_tol=1e-9):
+            raise ValueError(f"controller sections run at {controller.fs:g} Hz, the stage at "
+                             f"{batch.fs:g} Hz")
+        u_f, _ = _feedforward_signal(feedforward, v_r)
+        sim = _run_sections(batch, v_r, u_f, SectionFilterBatch(controller, sections_dtype,
+                                                                batch.size), delay)[0]
+        v_y, counts = sim.samples("v_y"), sim.saturation_counts()
+    else:
+        results = _run_batch(batch, v_r, feedforward, controller, delay_samples,
+                             sections_dtype)
+        v_y = np.stack([r.v_y_V for r in results], axis=1)
+        counts = np.array([r.saturation_count for r in results])
+    # x = 3 um/V v_y and x_r = 3 um/V v_r, the products LoopResult forms
+    errors = tracking_errors_percent(paper.UM_PER_VOLT * v_r[steady],
+                                     paper.UM_PER_VOLT * v_y[steady], range_um)
+    return errors, counts
+
+
 def _state_space_batch_step(Kd, size):
     """:func:`_state_space_step` for ``size`` members: e and u_b of shape (size,).
 
@@ -440,9 +522,10 @@ def _state_space_batch_step(Kd, size):
     return step
 
 
-def _closed_loop_sections(batch, v_r, u_f, sections, delay):
-    """:func:`_closed_loop_batch` with a section controller, as one compiled loop
-    (:meth:`StageBatchSimulation.run_sections_loop`: the same arithmetic)."""
+def _run_sections(batch, v_r, u_f, sections, delay):
+    """The compiled loop of a section controller on a batch (:meth:`StageBatchSimulation.
+    run_sections_loop`: :func:`_closed_loop_batch`'s arithmetic); (simulation, u_b of
+    shape (n, N)), a ValueError when the loop diverged."""
     sim = batch.start()
     u_b, diverged = sim.run_sections_loop(v_r, u_f, sections, delay, _DIVERGED_V)
     if diverged >= 0:
@@ -451,6 +534,12 @@ def _closed_loop_sections(batch, v_r, u_f, sections, delay):
         raise ValueError(f"the controller output diverged at sample {diverged} "
                          f"(t = {diverged / batch.fs:.4f} s) for seed(s) "
                          f"{bad or list(batch.seeds)}: is the closed loop stable?")
+    return sim, u_b
+
+
+def _closed_loop_sections(batch, v_r, u_f, sections, delay):
+    """:func:`_closed_loop_batch` with a section controller, as one compiled loop."""
+    sim, u_b = _run_sections(batch, v_r, u_f, sections, delay)
     return u_b.T.copy(), sim.records()
 
 

@@ -34,6 +34,7 @@ import pandas as pd
 
 from piezolib._checks import check_integer, check_type
 from piezolib.hysteresis import FitWarning
+from piezolib.hysteresis.common import check_hysteresis_model
 from piezolib.problem import paper
 from piezolib.problem.hysteresis_fits import workbook_dahl_fit, workbook_pi_fit
 from piezolib.problem.stage import StageSaturationWarning, VirtualStage
@@ -48,10 +49,10 @@ from piezolib.uncertainty.sampled import (member_zoh_coefficients, random_model_
 from piezolib.workbook import pipeline
 from piezolib.workbook import study as studies
 from piezolib.workbook.two_dof import two_dof_feedforward
-from piezolib.workbook.experiments import (MIN_MEASURED_S, _positive_values, run_case,
+from piezolib.workbook.experiments import (MIN_MEASURED_S, _positive_values,
                                            tracking_periods, tracking_reference)
 from piezolib.workbook.loop import (COMPUTATION_DELAY_SAMPLES, DISCARD_PERIODS,
-                                    discrete_controller)
+                                    batch_tracking_errors, discrete_controller)
 
 __all__ = ["SetTracking", "tracking_over_set", "MEMBERS_PER_BATCH", "LIGHT_DAMPING",
            "SetTrackingStudy", "SetTrackingRuns", "BoundaryCheck", "CONTROLLER_LABELS",
@@ -189,7 +190,8 @@ def _subset(mset, members):
 
 def tracking_over_set(stage, mset, model, controller=None, case="III", frequencies_Hz=None,
                       amplitude_um=None, discard_periods=DISCARD_PERIODS,
-                      min_measured_s=MIN_MEASURED_S, delay_samples=COMPUTATION_DELAY_SAMPLES):
+                      min_measured_s=MIN_MEASURED_S, delay_samples=COMPUTATION_DELAY_SAMPLES,
+                      batch=None):
     """Run one case of the tracking test on every member of a model set.
 
     Parameters
@@ -212,6 +214,9 @@ def tracking_over_set(stage, mset, model, controller=None, case="III", frequenci
         Default 12 um.
     discard_periods, min_measured_s, delay_samples
         As in :func:`piezolib.workbook.experiments.tracking_test`.
+    batch : StageBatch, optional
+        ``StageBatch.over_model_set(stage, mset)`` when it is built already (the
+        members are taken from it instead of being built again for every run).
 
     Returns
     -------
@@ -219,6 +224,12 @@ def tracking_over_set(stage, mset, model, controller=None, case="III", frequenci
     """
     check_type("stage", stage, VirtualStage, "a VirtualStage")
     check_model_set(mset)
+    check_hysteresis_model("model", model)
+    if batch is not None:
+        check_type("batch", batch, StageBatch, "a StageBatch")
+        if batch.size != mset.size:
+            raise ValueError(f"batch must have one member per member of mset ({mset.size}), "
+                             f"got {batch.size}")
     if case not in ("II", "III"):
         raise ValueError(f"case must be 'II' or 'III' (Case IV is Case III with a "
                          f"TwoDofFeedforward), got {case!r}")
@@ -236,20 +247,21 @@ def tracking_over_set(stage, mset, model, controller=None, case="III", frequenci
         (rho, zeta), unstable = (None, None), unstable_members(mset)
     stable = np.setdiff1d(np.arange(mset.size), unstable)
     chunks = [stable[i:i + MEMBERS_PER_BATCH] for i in range(0, len(stable), MEMBERS_PER_BATCH)]
-    batches = [StageBatch.over_model_set(stage, _subset(mset, members)) for members in chunks]
+    batches = [StageBatch.over_model_set(stage, _subset(mset, members)) if batch is None
+               else StageBatch([batch.stages[k] for k in members]) for members in chunks]
     errors = np.full((mset.size, len(frequencies_Hz)), np.nan)
     saturated = np.zeros((mset.size, len(frequencies_Hz)), dtype=int)
     for j, f in enumerate(frequencies_Hz):
         periods = tracking_periods(f, discard_periods, min_measured_s)
         v_r = tracking_reference(f, periods, amplitude_um, stage.fs)[1]
-        for members, batch in zip(chunks, batches):
+        for members, some in zip(chunks, batches):
             with warnings.catch_warnings():
-                # counted per member below: a warning per batch would say less
+                # counted per member: a warning per batch would say less
                 warnings.simplefilter("ignore", StageSaturationWarning)
-                runs = run_case(case, batch, v_r, model, controller, delay_samples=delay)
-            errors[members, j] = [r.tracking_error_percent(f, discard_periods, amplitude_um)
-                                  for r in runs]
-            saturated[members, j] = [r.saturation_count for r in runs]
+                errors[members, j], saturated[members, j] = batch_tracking_errors(
+                    some, v_r, f, feedforward=model,
+                    controller=controller if case == "III" else None, delay_samples=delay,
+                    discard_periods=discard_periods, range_um=amplitude_um)
             samples += len(members) * len(v_r)
     columns = pd.Index(frequencies_Hz, name="frequency_Hz")
     index = pd.RangeIndex(mset.size, name="member")
@@ -495,12 +507,17 @@ class SetTrackingStudy:
                 f"Case IV (PI), {ours_label}": ("III", two_dof["PI"], ours, True)}
         experiments = self.study.experiments
         over_grid, over_draws = {}, {}
+        # the members once for all runs (a transfer function each: 0.3 s per hundred)
+        grid_batch, draws_batch = (StageBatch.over_model_set(self.stage, mset)
+                                   for mset in (self.grid, self.draws))
         for label, (case, model, K, on_draws) in runs.items():
             kwargs = dict(controller=K, case=case, frequencies_Hz=experiments.frequencies_Hz,
                           amplitude_um=experiments.range_um, delay_samples=self.delay_samples)
-            over_grid[label] = tracking_over_set(self.stage, self.grid, model, **kwargs)
+            over_grid[label] = tracking_over_set(self.stage, self.grid, model, **kwargs,
+                                                 batch=grid_batch)
             if on_draws:
-                over_draws[label] = tracking_over_set(self.stage, self.draws, model, **kwargs)
+                over_draws[label] = tracking_over_set(self.stage, self.draws, model, **kwargs,
+                                                      batch=draws_batch)
         return SetTrackingRuns(self, over_grid, over_draws, time.perf_counter() - start)
 
 

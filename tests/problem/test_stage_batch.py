@@ -79,6 +79,14 @@ def test_batch_steps_are_each_members_simulation_exactly(stage, make_u):
             assert np.array_equal(sim.state[0][i], one.state[0])
             assert np.array_equal(sim.state[1][i], one.state[1])
     assert sim.k == len(u) and sim.seeds == tuple(seeds)
+    # the signals by sample (across blocks for the chirp) and the counts, without records
+    for name, column in (("v_y", "v_y_V"), ("u_dac", "u_c_V")):
+        assert np.array_equal(sim.samples(name), np.array([getattr(r, column) for r in records]).T)
+    assert sim.saturation_counts().tolist() == [
+        sum(s.count for s in (r.input_saturation, r.output_saturation, r.adc_saturation))
+        for r in records]
+    with pytest.raises(ValueError, match="name must be one of"):
+        sim.samples("x_um")
 
 
 def test_batch_members_may_differ_in_noise_plant_and_hysteresis():

@@ -353,3 +353,40 @@ def test_compiled_batch_loop_over_several_noise_blocks_is_the_single_run(stage, 
             assert_same_run(one, member)
     if limited:
         assert runs[0].record.output_saturation.occurred
+
+
+@pytest.mark.parametrize("kind", ["sections, limited", "state space", "open loop"])
+def test_batch_tracking_errors_are_the_per_member_results(stage, kind):
+    # the compiled loop's signals read in place (three noise blocks, saturating members)
+    # and the other paths: each member's error and count as its LoopResult gives them
+    from piezolib.problem.stage_batch import StageBatch
+    f, periods = (10.0, 9) if kind.startswith("sections") else (50.0, 4)
+    v = reference(peak=14.0 if kind.endswith("limited") else 3.0, frequency_Hz=f,
+                  periods=periods)                     # u_c beyond 12 V: limited
+    controller = {"sections, limited": sections(), "open loop": None,
+                  "state space": loop.discrete_controller(paper.controller())}[kind]
+    batch = StageBatch.of_seeds(stage, [5, 8])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", StageSaturationWarning)
+        runs = loop.run_loop(batch, v, feedforward=DAHL, controller=controller)
+        errors, counts = loop.batch_tracking_errors(batch, v, f, feedforward=DAHL,
+                                                    controller=controller, range_um=12.0)
+    assert errors.tolist() == [r.tracking_error_percent(f, range_um=12.0) for r in runs]
+    assert counts.tolist() == [r.saturation_count for r in runs]
+    assert (counts > 0).all() if kind.endswith("limited") else not counts.any()
+    default = loop.batch_tracking_errors(batch, v, f, feedforward=DAHL, controller=controller,
+                                         discard_periods=3)[0]
+    assert default.tolist() == [r.tracking_error_percent(f, 3) for r in runs]
+
+
+def test_batch_tracking_errors_bad_input(stage):
+    from piezolib.problem.stage_batch import StageBatch
+    batch, v = StageBatch([stage]), reference(periods=4)
+    with pytest.raises(TypeError, match="batch must be a StageBatch"):
+        loop.batch_tracking_errors(stage, v, 20.0)
+    with pytest.raises(ValueError, match="sections_dtype"):
+        loop.batch_tracking_errors(batch, v, 20.0, controller=sections(), sections_dtype="f16")
+    with pytest.raises(ValueError, match="leaves no samples"):
+        loop.batch_tracking_errors(batch, v, 20.0, discard_periods=4)
+    with pytest.raises(ValueError, match="frequency_Hz"):
+        loop.batch_tracking_errors(batch, v, -1.0)

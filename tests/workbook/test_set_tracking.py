@@ -188,3 +188,17 @@ def test_the_reference_checks_can_fail(runs):
     lines = runs.findings(STABILITY)
     assert lines[0].startswith(f"{LABELS[0]}: exact parametric margin of the continuous loop ±4.5 %")
     assert any("stricter goal" in line for line in lines)
+
+
+def test_a_prebuilt_batch_gives_the_same_runs():
+    mset = random_model_set(STAGE.settings.plant, 0.05, 4, seed=2)
+    alone = tracking_over_set(STAGE, mset, MODEL, K, frequencies_Hz=[50.0])
+    shared = tracking_over_set(STAGE, mset, MODEL, K, frequencies_Hz=[50.0],
+                               batch=StageBatch.over_model_set(STAGE, mset))
+    pd.testing.assert_frame_equal(alone.errors, shared.errors)
+    pd.testing.assert_frame_equal(alone.saturated, shared.saturated)
+    with pytest.raises(ValueError, match="one member per member of mset"):
+        tracking_over_set(STAGE, mset, MODEL, K, frequencies_Hz=[50.0],
+                          batch=StageBatch.of_seeds(STAGE, [1]))
+    with pytest.raises(TypeError, match="batch must be a StageBatch"):
+        tracking_over_set(STAGE, mset, MODEL, K, frequencies_Hz=[50.0], batch=STAGE)
