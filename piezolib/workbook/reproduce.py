@@ -18,11 +18,13 @@ cell tagged ``parameters`` (as papermill does), the figures and tables go to
 ``runs/<study>/`` and the executed notebooks to ``runs/<study>/notebooks/``.
 """
 
+import contextlib
 import errno
 import importlib
 import os
 import subprocess
 import sys
+import tempfile
 import time
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from pathlib import Path
@@ -30,6 +32,7 @@ from pathlib import Path
 from piezolib import files, progress
 from piezolib._checks import check_path, check_positive, check_type
 from piezolib.workbook import study as studies
+from piezolib.workbook import warm_kernels
 from piezolib.workbook.outputs import (data_dir, notebooks_dir, project_root,
                                        study_figures_dir, study_results_dir)
 
@@ -281,9 +284,12 @@ def run_notebook(path, timeout=600, study=None, save_to=None, env=None):
     def note_cell(cell, cell_index, **_):
         started.update(index=cell_index, source=cell.source)
 
+    # a run's kernels fork from its warm server (run(), warm_kernels) unless given an env
+    warm = ({"kernel_manager_class": warm_kernels.kernel_manager_class()}
+            if env is None and os.environ.get(warm_kernels.SOCKET_ENV) else {})
     client = NotebookClient(nb, timeout=timeout, kernel_name="python3",
                             resources={"metadata": {"path": str(path.parent)}},
-                            on_cell_start=note_cell)
+                            on_cell_start=note_cell, **warm)
     try:
         # the kernel process's own log (a TCP-transport notice) is noise here;
         # cell output, including stderr, still reaches the notebook
@@ -338,24 +344,51 @@ def run(selection=None, timeout=600, keep_going=False, data=True, stream=sys.std
         if any(p.name.startswith(prefixes) for p in notebooks)]
     counter = _Counter(stream, len(steps) + len(designs) + len(notebooks))
     start_all = time.perf_counter()
-    try:
-        failures = _run_data_steps(steps, counter, stream)
-        if not failures or keep_going:
-            failures += _run_design_steps(designs, chosen, counter)
-        if not failures or keep_going:
-            for wave in notebook_waves(notebooks):
-                failures += _run_wave(wave, jobs, counter, keep_going, stream,
-                                      dict(timeout=timeout, study=spec, save_to=save_to))
-                if failures and not keep_going:
-                    break
-    finally:
-        counter.close()
+    with contextlib.ExitStack() as stack:
+        # the kernels' imports, paid once: the server imports them while the data is checked
+        if notebooks and warm_kernels.available() and os.environ.get(
+                warm_kernels.SOCKET_ENV, "") != "0":
+            folder = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="piezolib-")))
+            warm = stack.enter_context(warm_kernels.WarmKernels(folder))
+            stack.enter_context(_environment(warm_kernels.SOCKET_ENV, str(warm.socket_path)))
+        failures = _run_steps(steps, designs, notebooks, chosen, counter, stream, jobs,
+                              keep_going, dict(timeout=timeout, study=spec, save_to=save_to))
     out = chosen.output_dir
     tables = study_results_dir(chosen.name)
     print(f"{'all done' if not failures else f'{failures} step(s) failed'} in "
           f"{time.perf_counter() - start_all:.1f} s; study {chosen.name}: figures in "
           f"{out / 'figures'}, tables in {tables}"
           + (f", executed notebooks in {save_to}" if save_to else ""), file=stream, flush=True)
+    return failures
+
+
+@contextlib.contextmanager
+def _environment(name, value):
+    """``os.environ[name] = value`` inside the block, restored after it."""
+    before = os.environ.get(name)
+    os.environ[name] = value
+    try:
+        yield
+    finally:
+        if before is None:
+            os.environ.pop(name, None)
+        else:
+            os.environ[name] = before
+
+
+def _run_steps(steps, designs, notebooks, chosen, counter, stream, jobs, keep_going, options):
+    """Data steps, design steps, then the notebooks' waves; return the number of failures."""
+    try:
+        failures = _run_data_steps(steps, counter, stream)
+        if not failures or keep_going:
+            failures += _run_design_steps(designs, chosen, counter)
+        if not failures or keep_going:
+            for wave in notebook_waves(notebooks):
+                failures += _run_wave(wave, jobs, counter, keep_going, stream, options)
+                if failures and not keep_going:
+                    break
+    finally:
+        counter.close()
     return failures
 
 
