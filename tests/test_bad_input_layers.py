@@ -1135,6 +1135,7 @@ EXEMPT = {
     "mixed_end_points.end_points_path": "no arguments",
     "hysteresis_fits.write_workbook_dahl": "no arguments (writes a committed artifact)",
     "paths.project_root": "no arguments", "paths.data_dir": "no arguments",
+    "warm_kernels.available": "no arguments",
     "fsm_benchmark.data_folder": "no arguments",
     "fsm_mimo.record_path": "no arguments",
     "fsm_control.axis_record_path": "no arguments",

@@ -15,6 +15,7 @@ style        the workbook's figure style: rcParams, named colours, the units rul
 plotting     saving figures under the paper's numbering
 figures      one function per paper figure, grouped by notebook
 reproduce    headless run of the whole workbook (``python -m piezolib reproduce``)
+warm_kernels  reproduce's kernels, forked from one process that has imported the workbook
 cli          the command line (``python -m piezolib {reproduce,data}``)
 outputs      where each study's outputs go
 session      the one call that starts a notebook: study, claim table, figure style
@@ -37,4 +38,4 @@ __all__ = ["study", "pipeline", "loop", "experiments", "report", "style", "plott
            "weighting_findings", "tracking_setup", "tracking_study",
            "case_comparison", "fsm_findings", "your_stage",
            "your_stage_hysteresis", "your_stage_control", "your_stage_claims", "sweep_spec",
-           "design_run"]
+           "design_run", "warm_kernels"]
