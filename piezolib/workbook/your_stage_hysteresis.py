@@ -160,6 +160,14 @@ class HysteresisChoice(_Shown):
         out.append("start states: " + ", ".join(f"{name} {s!r}" for name, s in starts.items())
                    + f"; validated on {', '.join(self.validation_names)}; chosen: "
                    f"{self.chosen_name}")
+        hammerstein = self.fits["Hammerstein"]
+        if hammerstein.extrapolation_scores:
+            ends = hammerstein.extrapolation_scores
+            out.append(f"Hammerstein operator: {hammerstein.operator} (held out after the "
+                       "middle: " + ", ".join(f"{k} {v:.3g} %" for k, v in
+                                              hammerstein.operator_scores.items())
+                       + "; beyond the inner 80 % of the range: "
+                       + ", ".join(f"{k} {v:.3g} %" for k, v in ends.items()) + ")")
         return tuple(out)
 
     def _tables(self):
@@ -189,8 +197,9 @@ def fit_hysteresis(loops, fit_loops, validation_loops, *, gamma_a, plays, ceilin
 
     The Dahl model (Bliman-Sorine form, output offset, from rest), a PI
     model with ``plays`` plays (its start chosen by the data) and a
-    Hammerstein model (the same plays followed by linear dynamics of unit DC
-    gain at the loops' rate, order chosen by validation:
+    Hammerstein model (the same plays, or a Preisach grid where it predicts
+    and extrapolates as well, followed by linear dynamics of unit DC gain at
+    the loops' rate, operator and order chosen by validation:
     :func:`piezolib.hysteresis.fit_hammerstein`) are fitted to
     ``fit_loops``; the smallest pooled RMS error on ``validation_loops`` (the
     ones not fitted) decides.  With no validation record that was not fitted,

@@ -64,6 +64,10 @@ def test_fit_hysteresis_has_the_hammerstein_model_among_its_candidates(monkeypat
     assert choice.chosen_name == "Hammerstein"
     assert choice.validation_rms("Hammerstein") < 0.2 * choice.validation_rms("PI")
     assert "Hammerstein" in str(choice)
+    # the Hammerstein fit's operator (PI plays or a Preisach grid) is said, with its scores
+    hammerstein = choice.fits["Hammerstein"]
+    assert f"Hammerstein operator: {hammerstein.operator} (" in str(choice)
+    assert set(hammerstein.extrapolation_scores) == set(hy.OPERATORS)
 
 
 def test_fit_hysteresis_validates_on_the_records_not_fitted(monkeypatch):
