@@ -453,12 +453,17 @@ def simulate_discrete(model, u):
     if np.linalg.cond(V) > 1e10:
         raise ValueError("model must have a diagonalisable A (its eigenvectors are "
                          "nearly dependent)")
-    Bm = np.linalg.solve(V, model.B)                   # (n, n_u)
-    Cm = model.C @ V                                   # (n_y, n)
-    drive = np.einsum("nu,tu...->tn...", Bm, u.astype(complex))
+    # A is real, so its complex modes come in conjugate pairs whose states are conjugate:
+    # one mode of each pair is run and counted twice (2 Re), half the filtering work
+    keep = lam.imag >= 0
+    Bm = np.linalg.solve(V, model.B)[keep]             # (m, n_u)
+    Cm = (model.C @ V)[:, keep] * np.where(lam[keep].imag > 0, 2.0, 1.0)   # (n_y, m)
+    N, n_u, rest = u.shape[0], u.shape[1], u.shape[2:]
+    flat = np.moveaxis(u, 0, 1).reshape(n_u, -1)       # (n_u, N R): one product per matrix
+    drive = (Bm @ flat).reshape(-1, N, flat.shape[1] // N)
     states = np.empty_like(drive)
-    for i, pole in enumerate(lam):
+    for i, pole in enumerate(lam[keep]):
         # x[k+1] = pole x[k] + drive[k]  ->  x = z^-1 / (1 - pole z^-1) drive
-        states[:, i] = scipy.signal.lfilter([0.0, 1.0], [1.0, -pole], drive[:, i], axis=0)
-    y = np.einsum("yn,tn...->ty...", Cm, states).real
-    return y + np.einsum("yu,tu...->ty...", model.D, u)
+        states[i] = scipy.signal.lfilter([0.0, 1.0], [1.0, -pole], drive[i], axis=0)
+    y = (Cm @ states.reshape(states.shape[0], -1)).real + model.D @ flat
+    return np.moveaxis(y.reshape((model.noutputs, N) + rest), 0, 1)

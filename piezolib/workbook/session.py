@@ -23,10 +23,13 @@ the cell (:func:`piezolib.progress.route_logs`): a solver's INFO lines
 appear in a collapsed log under its progress bar, not as stderr blocks.
 """
 
+import re
 import time
 from collections.abc import Mapping
 
+import control as ct
 import pandas as pd
+from joblib.hashing import NumpyHasher
 
 from piezolib import notebook_display, progress
 from piezolib.problem.hysteresis_fits import share_stored_model_check
@@ -110,6 +113,26 @@ class Session:
         """Write a table of claims to the study's results folder
         (:func:`piezolib.workbook.report.save_results`); return its path."""
         return report.save_results(frame, name, self.study.name)
+
+    @staticmethod
+    def cached(func, *args):
+        """``func(*args)`` through the workbook's disk cache, keyed on the arguments, the
+        function's source and the library's (:func:`piezolib.workbook.pipeline.checked_cache_call`):
+        a product computed by an earlier run of the notebook is read, not computed again.
+
+        Examples
+        --------
+        >>> import os, tempfile
+        >>> from unittest import mock
+        >>> with (tempfile.TemporaryDirectory() as folder,
+        ...       mock.patch.dict(os.environ, {"PIEZOLIB_CACHE": folder})):
+        ...     first, again = Session.cached(divmod, 7, 2), Session.cached(divmod, 7, 2)
+        >>> first, again
+        ((3, 1), (3, 1))
+        """
+        if not callable(func):
+            raise TypeError(f"func must be a callable, got {func!r}")
+        return _disk_cached(_call, func, _Arguments(args))
 
     def elapsed(self):
         """Seconds since the session started."""
@@ -332,6 +355,39 @@ def _disk_cached(func, *args):
     """``func(*args)`` through the pipeline's disk cache, keyed on the library's source too."""
     from piezolib.workbook import pipeline
     return pipeline.checked_cache_call(func, *args, pipeline.library_fingerprint())[0]
+
+
+_GENERIC_NAME = re.compile(r"^sys\[\d*\]$")
+
+
+class _ModelHasher(NumpyHasher):
+    """joblib's hasher, blind to the generic names python-control numbers its systems with
+    (``sys[41]``: a counter of the process, so the same model would key another entry)."""
+
+    def reducer_override(self, obj):
+        if not isinstance(obj, (ct.StateSpace, ct.TransferFunction)):
+            return NotImplemented
+        name = None if _GENERIC_NAME.match(obj.name) else obj.name
+        labels = (obj.input_labels, obj.output_labels, name)
+        if isinstance(obj, ct.StateSpace):
+            return ct.ss, (obj.A, obj.B, obj.C, obj.D, obj.dt, obj.state_labels, *labels)
+        return ct.tf, (obj.num_array, obj.den_array, obj.dt, *labels)
+
+
+class _Arguments:
+    """The arguments of a cached call, pickled (so keyed by the cache) as their digest."""
+
+    def __init__(self, args, digest=None):
+        self.args = args
+        self.digest = _ModelHasher().hash(args) if digest is None else digest
+
+    def __reduce__(self):
+        return _Arguments, ((), self.digest)
+
+
+def _call(func, arguments, fingerprint):
+    """``func(*arguments.args)``; the library ``fingerprint`` is part of the key only."""
+    return func(*arguments.args)
 
 
 def claim_lines(rows):

@@ -135,3 +135,17 @@ def test_the_block_row_limit_allows_order_max_rows_minus_8_and_refuses_one_row_m
         fit_frf(G, f, FS, MAX_ROWS - 7)                          # default n_rows = MAX_ROWS + 1
     with pytest.raises(ValueError, match="n_rows"):
         fit_frf(G, f, FS, 8, n_rows=MAX_ROWS + 1)
+
+
+def test_simulate_discrete_with_real_and_complex_modes_on_records_of_any_shape():
+    # one mode of each conjugate pair is run twice over (2 Re): real poles and a
+    # 4-D input (time, inputs, realisations, periods) must still give the time loop
+    true = ct.ss(ct.tf([[[1.0, 0.3]], [[0.5, -0.2, 0.1]]],
+                       [[[1.0, -1.2, 0.72]], [[1.0, -0.5, 0.06]]], 1 / FS))
+    u = np.random.default_rng(3).standard_normal((300, 1, 2, 2))
+    y = simulate_discrete(true, u)
+    assert y.shape == (300, 2, 2, 2)
+    for r in range(2):
+        for p in range(2):
+            ref = ct.forced_response(true, U=u[:, :, r, p].T).outputs
+            np.testing.assert_allclose(y[:, :, r, p], np.atleast_2d(ref).T, atol=1e-12)

@@ -105,3 +105,33 @@ def test_a_notebook_run_headless_saves_static_outputs(monkeypatch):
     for cell in nb.cells[2:]:                                   # pyplot figure, the control
         assert [o.output_type for o in cell.outputs][-1] in ("display_data", "execute_result")
         assert "image/png" in cell.outputs[-1].data
+
+
+_CALLS = []
+
+
+def _counted(sys):
+    _CALLS.append(sys.name)
+    return sys.nstates
+
+
+def test_cached_reads_a_product_again_whatever_python_control_numbered_its_systems(
+        tmp_path, monkeypatch):
+    import control as ct
+
+    monkeypatch.setenv("PIEZOLIB_CACHE", str(tmp_path))
+    _CALLS.clear()
+    first = ct.ss([[-1.0]], [[1.0]], [[1.0]], [[0.0]])
+    ct.tf([1], [1, 1])                                  # moves the generic-name counter on
+    again = ct.ss([[-1.0]], [[1.0]], [[1.0]], [[0.0]])
+    assert first.name != again.name                     # sys[n] and sys[n + 2]
+    assert session.Session.cached(_counted, first) == 1
+    assert session.Session.cached(_counted, again) == 1
+    assert len(_CALLS) == 1                              # the second call was read from disk
+    other = ct.ss([[-2.0]], [[1.0]], [[1.0]], [[0.0]])
+    session.Session.cached(_counted, other)      # another model is another entry
+    named = ct.ss([[-1.0]], [[1.0]], [[1.0]], [[0.0]], name="plant")
+    session.Session.cached(_counted, named)      # a chosen name is part of the key
+    assert len(_CALLS) == 3
+    with pytest.raises(TypeError, match="func"):
+        session.Session.cached("not a function", 1)
