@@ -433,7 +433,7 @@ def _run_batch(batch, v_r, feedforward, controller, delay_samples, sections_dtyp
 
 def batch_tracking_errors(batch, v_r, frequency_Hz, *, feedforward=None, controller=None,
                           delay_samples=COMPUTATION_DELAY_SAMPLES, sections_dtype="float32",
-                          discard_periods=DISCARD_PERIODS, range_um=None):
+                          discard_periods=DISCARD_PERIODS, range_um=None, workspace=None):
     """The tracking error % and the limited samples of every member of a batch, without
     a :class:`LoopResult` per member.
 
@@ -457,6 +457,10 @@ def batch_tracking_errors(batch, v_r, frequency_Hz, *, feedforward=None, control
     discard_periods : int
     range_um : float, optional
         As in :meth:`LoopResult.tracking_error_percent`.
+    workspace : ndarray, optional
+        A 1-D float64 array the compiled loop keeps its signals in when it is large
+        enough (:meth:`~piezolib.problem.stage_batch.StageBatchSimulation.run_sections_loop`):
+        pass the same one to a series of calls.
 
     Returns
     -------
@@ -489,7 +493,8 @@ def batch_tracking_errors(batch, v_r, frequency_Hz, *, feedforward=None, control
                              f"{batch.fs:g} Hz")
         u_f, _ = _feedforward_signal(feedforward, v_r)
         sim = _run_sections(batch, v_r, u_f, SectionFilterBatch(controller, sections_dtype,
-                                                                batch.size), delay)[0]
+                                                                batch.size), delay,
+                            workspace)[0]
         v_y, counts = sim.samples("v_y"), sim.saturation_counts()
     else:
         results = _run_batch(batch, v_r, feedforward, controller, delay_samples,
@@ -522,12 +527,12 @@ def _state_space_batch_step(Kd, size):
     return step
 
 
-def _run_sections(batch, v_r, u_f, sections, delay):
+def _run_sections(batch, v_r, u_f, sections, delay, workspace=None):
     """The compiled loop of a section controller on a batch (:meth:`StageBatchSimulation.
     run_sections_loop`: :func:`_closed_loop_batch`'s arithmetic); (simulation, u_b of
     shape (n, N)), a ValueError when the loop diverged."""
     sim = batch.start()
-    u_b, diverged = sim.run_sections_loop(v_r, u_f, sections, delay, _DIVERGED_V)
+    u_b, diverged = sim.run_sections_loop(v_r, u_f, sections, delay, _DIVERGED_V, workspace)
     if diverged >= 0:
         ub = u_b[diverged]
         bad = [batch.seeds[i] for i in np.flatnonzero(~(np.abs(ub) < _DIVERGED_V))]

@@ -38,7 +38,7 @@ from piezolib.hysteresis.common import check_hysteresis_model
 from piezolib.problem import paper
 from piezolib.problem.hysteresis_fits import workbook_dahl_fit, workbook_pi_fit
 from piezolib.problem.stage import StageSaturationWarning, VirtualStage
-from piezolib.problem.stage_batch import StageBatch
+from piezolib.problem.stage_batch import StageBatch, StageBatchSimulation
 from piezolib.robust.export import SOSController
 from piezolib.uncertainty.margin import parametric_stability_margin
 from piezolib.uncertainty.modelset import (ModelSet, check_model_set, model_set,
@@ -251,9 +251,13 @@ def tracking_over_set(stage, mset, model, controller=None, case="III", frequenci
                else StageBatch([batch.stages[k] for k in members]) for members in chunks]
     errors = np.full((mset.size, len(frequencies_Hz)), np.nan)
     saturated = np.zeros((mset.size, len(frequencies_Hz)), dtype=int)
-    for j, f in enumerate(frequencies_Hz):
-        periods = tracking_periods(f, discard_periods, min_measured_s)
-        v_r = tracking_reference(f, periods, amplitude_um, stage.fs)[1]
+    references = [tracking_reference(f, tracking_periods(f, discard_periods, min_measured_s),
+                                     amplitude_um, stage.fs)[1] for f in frequencies_Hz]
+    # one signal log for every run, as large as the longest run of the largest batch needs:
+    # fresh memory costs page faults (seconds of system time over a set)
+    workspace = np.empty(StageBatchSimulation.workspace_size(
+        max(map(len, references)), max(map(len, chunks), default=0)))
+    for j, (f, v_r) in enumerate(zip(frequencies_Hz, references)):
         for members, some in zip(chunks, batches):
             with warnings.catch_warnings():
                 # counted per member: a warning per batch would say less
@@ -261,7 +265,8 @@ def tracking_over_set(stage, mset, model, controller=None, case="III", frequenci
                 errors[members, j], saturated[members, j] = batch_tracking_errors(
                     some, v_r, f, feedforward=model,
                     controller=controller if case == "III" else None, delay_samples=delay,
-                    discard_periods=discard_periods, range_um=amplitude_um)
+                    discard_periods=discard_periods, range_um=amplitude_um,
+                    workspace=workspace)
             samples += len(members) * len(v_r)
     columns = pd.Index(frequencies_Hz, name="frequency_Hz")
     index = pd.RangeIndex(mset.size, name="member")

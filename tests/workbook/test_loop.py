@@ -390,3 +390,18 @@ def test_batch_tracking_errors_bad_input(stage):
         loop.batch_tracking_errors(batch, v, 20.0, discard_periods=4)
     with pytest.raises(ValueError, match="frequency_Hz"):
         loop.batch_tracking_errors(batch, v, -1.0)
+
+
+def test_a_workspace_holds_the_log_and_gives_the_same_numbers(stage):
+    from piezolib.problem.stage_batch import StageBatch, StageBatchSimulation
+    batch, v = StageBatch.of_seeds(stage, [2, 6]), reference(frequency_Hz=10.0, periods=9)
+    kwargs = dict(feedforward=DAHL, controller=sections(), range_um=12.0)
+    fresh = loop.batch_tracking_errors(batch, v, 10.0, **kwargs)
+    workspace = np.full(StageBatchSimulation.workspace_size(v.size, 2), np.nan)
+    for space in (workspace, workspace, np.empty(10)):        # reused, then too small
+        again = loop.batch_tracking_errors(batch, v, 10.0, **kwargs, workspace=space)
+        assert again[0].tolist() == fresh[0].tolist() and again[1].tolist() == fresh[1].tolist()
+    assert np.isfinite(workspace[:v.size]).all()             # the log was kept there
+    for bad in (np.empty(10, np.float32), [0.0] * 10, np.empty((2, 5))):
+        with pytest.raises(TypeError, match="workspace"):
+            loop.batch_tracking_errors(batch, v, 10.0, **kwargs, workspace=bad)
