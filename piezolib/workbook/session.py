@@ -357,17 +357,18 @@ def _disk_cached(func, *args):
     return pipeline.checked_cache_call(func, *args, pipeline.library_fingerprint())[0]
 
 
-_GENERIC_NAME = re.compile(r"^sys\[\d*\]$")
+_GENERIC_NAME = re.compile(r"sys\[\d+\]")
 
 
 class _ModelHasher(NumpyHasher):
-    """joblib's hasher, blind to the generic names python-control numbers its systems with
-    (``sys[41]``: a counter of the process, so the same model would key another entry)."""
+    """joblib's hasher, blind to the numbers of the generic names python-control gives its
+    systems (``sys[41]``, ``sys[41]$sampled``: a counter of the process, so the same model
+    would key another entry in another run)."""
 
     def reducer_override(self, obj):
         if not isinstance(obj, (ct.StateSpace, ct.TransferFunction)):
             return NotImplemented
-        name = None if _GENERIC_NAME.match(obj.name) else obj.name
+        name = _GENERIC_NAME.sub("sys[]", obj.name)
         labels = (obj.input_labels, obj.output_labels, name)
         if isinstance(obj, ct.StateSpace):
             return ct.ss, (obj.A, obj.B, obj.C, obj.D, obj.dt, obj.state_labels, *labels)

@@ -128,10 +128,14 @@ def test_cached_reads_a_product_again_whatever_python_control_numbered_its_syste
     assert session.Session.cached(_counted, first) == 1
     assert session.Session.cached(_counted, again) == 1
     assert len(_CALLS) == 1                              # the second call was read from disk
+    sampled = [ct.sample_system(sys, 0.1) for sys in (first, again)]   # sys[n]$sampled
+    session.Session.cached(_counted, sampled[0])
+    session.Session.cached(_counted, sampled[1])
+    assert len(_CALLS) == 2
     other = ct.ss([[-2.0]], [[1.0]], [[1.0]], [[0.0]])
     session.Session.cached(_counted, other)      # another model is another entry
     named = ct.ss([[-1.0]], [[1.0]], [[1.0]], [[0.0]], name="plant")
     session.Session.cached(_counted, named)      # a chosen name is part of the key
-    assert len(_CALLS) == 3
+    assert len(_CALLS) == 4
     with pytest.raises(TypeError, match="func"):
         session.Session.cached("not a function", 1)
