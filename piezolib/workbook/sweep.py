@@ -39,7 +39,7 @@ import numpy as np
 import pandas as pd
 
 from piezolib import files, progress
-from piezolib._checks import check_type
+from piezolib._checks import check_path, check_type
 from piezolib.workbook import outputs
 from piezolib.workbook import study as studies
 from piezolib.workbook import sweep_spec as specs
@@ -531,7 +531,7 @@ def seed_records(spec, folder=None):
     0
     """
     spec = specs.load_spec(spec)
-    folder = committed_points_dir(spec.name) if folder is None else Path(folder)
+    folder = committed_points_dir(spec.name) if folder is None else check_path("folder", folder)
     evaluation = f"{evaluate_point.__module__}.{evaluate_point.__qualname__}"
     copied = 0
     for point in spec.points():
