@@ -7,6 +7,8 @@ from piezolib.problem import fsm_mimo, fsm_models
 
 #: The precision the notebook states for the 3 x 3 mu_RP (its claim rows' precision).
 MU_PRECISION = 0.01
+#: ... and relative to a mu_RP far above 1 (the loops together, not the design).
+MU_RELATIVE = 0.005
 
 
 @pytest.mark.slow
@@ -25,7 +27,10 @@ def test_the_dk_design_lands_on_the_committed_mu():
     a = fsm_mimo.verify_mirror(nominal, committed).table()
     b = fsm_mimo.verify_mirror(nominal, fresh).table()
     for name in a.columns:
+        # the three SISO loops together are far from robust (mu_RP about 36): there the
+        # precision is relative, as two SISO designs whose own mu agree to 0.01 gave 35.53
+        # and 35.59 (0.16 %)
         assert float(b.loc["mu_RP upper", name]) == pytest.approx(
-            float(a.loc["mu_RP upper", name]), abs=MU_PRECISION)
+            float(a.loc["mu_RP upper", name]), abs=MU_PRECISION, rel=MU_RELATIVE)
         assert bool(b.loc["stable with every model", name]) == bool(
             a.loc["stable with every model", name])
