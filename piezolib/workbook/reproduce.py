@@ -72,12 +72,12 @@ GATHERING = ("07_",)
 #: notebooks of a wave first so that two kernels finish close together (a notebook not listed
 #: counts as the median, and equal ones go by name).
 EXPECTED_SECONDS = {
-    "00_published_design_audit.ipynb": 8.1, "01_identification.ipynb": 8.8,
-    "02_uncertainty.ipynb": 8.3, "03_dahl_hysteresis.ipynb": 15.1,
-    "04_weighting_design.ipynb": 6.5, "05_mu_synthesis.ipynb": 11.6,
-    "06_tracking_experiments.ipynb": 16.0, "08_your_own_stage.ipynb": 12.4,
-    "09_mixed_mu.ipynb": 14.7, "10_real_piezo_benchmark.ipynb": 26.8, "11_sweeps.ipynb": 20.2,
-    "12_tracking_over_the_set.ipynb": 21.7, "07_reproduction_report.ipynb": 3.8}
+    "00_published_design_audit.ipynb": 2.7, "01_identification.ipynb": 3.5,
+    "02_uncertainty.ipynb": 5.6, "03_dahl_hysteresis.ipynb": 10.7,
+    "04_weighting_design.ipynb": 3.7, "05_mu_synthesis.ipynb": 8.0,
+    "06_tracking_experiments.ipynb": 8.9, "08_your_own_stage.ipynb": 9.4,
+    "09_mixed_mu.ipynb": 11.6, "10_real_piezo_benchmark.ipynb": 23.7, "11_sweeps.ipynb": 1.3,
+    "12_tracking_over_the_set.ipynb": 15.2, "07_reproduction_report.ipynb": 1.5}
 
 #: Environment variables a headless run sets for its kernels unless already set:
 #: figures are saved, not drawn (Agg); threaded BLAS on small problems is slower on
