@@ -349,8 +349,7 @@ def run(selection=None, timeout=600, keep_going=False, data=True, stream=sys.std
         if notebooks and warm_kernels.available() and os.environ.get(
                 warm_kernels.SOCKET_ENV, "") != "0":
             folder = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="piezolib-")))
-            warm = stack.enter_context(warm_kernels.WarmKernels(folder))
-            stack.enter_context(_environment(warm_kernels.SOCKET_ENV, str(warm.socket_path)))
+            stack.enter_context(warm_kernels.WarmKernels(folder))
         failures = _run_steps(steps, designs, notebooks, chosen, counter, stream, jobs,
                               keep_going, dict(timeout=timeout, study=spec, save_to=save_to))
     out = chosen.output_dir
@@ -360,20 +359,6 @@ def run(selection=None, timeout=600, keep_going=False, data=True, stream=sys.std
           f"{out / 'figures'}, tables in {tables}"
           + (f", executed notebooks in {save_to}" if save_to else ""), file=stream, flush=True)
     return failures
-
-
-@contextlib.contextmanager
-def _environment(name, value):
-    """``os.environ[name] = value`` inside the block, restored after it."""
-    before = os.environ.get(name)
-    os.environ[name] = value
-    try:
-        yield
-    finally:
-        if before is None:
-            os.environ.pop(name, None)
-        else:
-            os.environ[name] = before
 
 
 def _run_steps(steps, designs, notebooks, chosen, counter, stream, jobs, keep_going, options):

@@ -21,6 +21,7 @@ or when the server cannot start, kernels start as usual.
 """
 
 import array
+import functools
 import json
 import os
 import signal
@@ -56,7 +57,8 @@ def available():
 
 
 class WarmKernels:
-    """The warm server as a context manager: started on entry, stopped with its kernels on exit.
+    """The warm server as a context manager: started on entry, stopped with its kernels on exit;
+    inside, :data:`SOCKET_ENV` names its socket (the kernels started then fork from it).
 
     Parameters
     ----------
@@ -67,21 +69,26 @@ class WarmKernels:
     --------
     >>> import tempfile, pathlib
     >>> with tempfile.TemporaryDirectory() as tmp:                 # doctest: +SKIP
-    ...     with WarmKernels(pathlib.Path(tmp)) as warm:
-    ...         os.environ[SOCKET_ENV] = str(warm.socket_path)    # kernels started now fork
+    ...     with WarmKernels(pathlib.Path(tmp)):
+    ...         pass                                              # kernels started here fork
     """
 
     def __init__(self, folder):
+        from unittest import mock
+
         self.socket_path = folder / "warm-kernels.sock"
         self.process = None
+        self._environment = mock.patch.dict(os.environ, {SOCKET_ENV: str(self.socket_path)})
 
     def __enter__(self):
         self.process = subprocess.Popen(
             [sys.executable, "-m", "piezolib.workbook.warm_kernels", "serve",
              str(self.socket_path)], stdin=subprocess.DEVNULL)
+        self._environment.start()
         return self
 
     def __exit__(self, *exc):
+        self._environment.stop()
         if self.process is not None and self.process.poll() is None:
             self.process.terminate()          # the server kills the kernels it forked
             try:
@@ -93,6 +100,7 @@ class WarmKernels:
         return False
 
 
+@functools.cache
 def kernel_manager_class():
     """A jupyter_client KernelManager whose kernels start through the launcher."""
     from jupyter_client.manager import AsyncKernelManager
