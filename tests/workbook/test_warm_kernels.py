@@ -16,6 +16,12 @@ from piezolib.workbook import reproduce, warm_kernels
 pytestmark = pytest.mark.skipif(not warm_kernels.available(), reason="POSIX fork only")
 
 
+@pytest.fixture(autouse=True)
+def warm(monkeypatch):
+    """The warm server is opt-in: these tests ask for it."""
+    monkeypatch.setenv(warm_kernels.SOCKET_ENV, "1")
+
+
 def write_notebook(path, *sources):
     nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(s) for s in sources])
     nbformat.write(nb, path)
